@@ -1,0 +1,102 @@
+"""Generation and loading of the compiled kernel for one list of physics terms.
+
+Numba compiles calls to known functions only, so the list of terms is baked into the kernel: the
+template ``_kernel_template.py`` gets its TERMS block replaced by direct calls to each term's ``force``
+and ``update`` functions at the term's parameter/state offsets. The generated module is written to a
+cache directory under a content hash and imported from there, so numba's on-disk cache
+(``cache=True``) keeps the machine code across processes: only the first run of a new term list pays
+the compile time (a few seconds).
+
+Cache directory: ``$SUSP_SIM_CACHE`` if set, else ``$XDG_CACHE_HOME/susp_sim_ros`` or
+``~/.cache/susp_sim_ros``; a temporary directory if none of these is writable.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import sys
+import tempfile
+import threading
+from pathlib import Path
+from types import ModuleType
+
+from .layout import KernelLayout
+from .terms import PhysicsTerm
+
+_TEMPLATE = Path(__file__).with_name("_kernel_template.py")
+_BEGIN, _END = "# @@BEGIN TERMS@@", "# @@END TERMS@@"
+_MASK = {"axle": 1, "damper": 2}
+_loaded: dict[str, ModuleType] = {}
+_lock = threading.Lock()
+
+
+def _cache_dir() -> Path:
+    candidates = []
+    if os.environ.get("SUSP_SIM_CACHE"):
+        candidates.append(Path(os.environ["SUSP_SIM_CACHE"]))
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    candidates.append(Path(base) / "susp_sim_ros")
+    candidates.append(Path(tempfile.gettempdir()) / f"susp_sim_ros-{os.getuid()}")
+    for d in candidates:
+        try:
+            d.mkdir(parents=True, exist_ok=True)
+            probe = d / ".probe"
+            probe.write_text("ok")
+            probe.unlink()
+            return d
+        except OSError:
+            continue
+    raise OSError(f"no writable kernel cache directory among {', '.join(map(str, candidates))}")
+
+
+def _terms_block(terms: tuple[PhysicsTerm, ...], layout: KernelLayout) -> str:
+    lines = []
+    for k, t in enumerate(terms):
+        for kind, fn in (("f", t.force), ("u", t.update)):
+            py = fn.py_func
+            lines.append(f"from {py.__module__} import {py.__name__} as _{kind}{k}")
+    lines += ["", "", "@njit(cache=True)", "def terms_force(p, s, i, c, mask):", "    f = 0.0"]
+    for k, t in enumerate(terms):
+        po, so = layout.param_offsets[k], layout.state_offsets[k]
+        lines.append(f"    if mask & {_MASK[t.component]}:  # {t.name}")
+        lines.append(f"        f += _f{k}(p, {po}, s, {so}, i, c)")
+    lines += ["    return f", "", "", "@njit(cache=True)", "def terms_update(p, s, i, c, dx, mask):"]
+    for k, t in enumerate(terms):
+        po, so = layout.param_offsets[k], layout.state_offsets[k]
+        lines.append(f"    if mask & {_MASK[t.component]}:  # {t.name}")
+        lines.append(f"        _u{k}(p, {po}, s, {so}, i, c, dx)")
+    if not terms:
+        lines.append("    pass")
+    return "\n".join(lines)
+
+
+def kernel_source(terms: tuple[PhysicsTerm, ...]) -> str:
+    """Source text of the kernel module for ``terms`` (the template with its TERMS block filled)."""
+    text = _TEMPLATE.read_text()
+    head, rest = text.split(_BEGIN, 1)
+    _, tail = rest.split(_END, 1)
+    block = _terms_block(terms, KernelLayout.for_terms(terms))
+    return f"{head}{_BEGIN}\n{block}\n{_END}{tail}"
+
+
+def load_kernel(terms: tuple[PhysicsTerm, ...]) -> ModuleType:
+    """The compiled kernel module for ``terms`` (generated, cached on disk, imported once per process)."""
+    source = kernel_source(terms)
+    key = hashlib.sha256(source.encode()).hexdigest()[:16]
+    with _lock:
+        mod = _loaded.get(key)
+        if mod is not None:
+            return mod
+        path = _cache_dir() / f"susp_kernel_{key}.py"
+        if not path.exists() or path.read_text() != source:
+            tmp = path.with_suffix(f".{os.getpid()}.tmp")
+            tmp.write_text(source)
+            os.replace(tmp, path)
+        name = f"susp_kernel_{key}"
+        spec = importlib.util.spec_from_file_location(name, path)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+        _loaded[key] = mod
+        return mod

@@ -1,0 +1,112 @@
+"""The paper's validation maneuvers and vehicle states (model-spec 4; values in config/maneuvers.yaml).
+
+A :class:`Maneuver` is what a test drive feeds the model: speed and steering-wheel angle over time and
+a road profile. ``to_inputs(dt)`` samples it on the model's step.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from ..errors import ConfigError
+from .params import config_dir
+from .road import RoadProfile, cosine_bump
+from .vehicle import make_inputs
+
+MANEUVERS = ("bump_crossing", "sine_steer")
+STATES = ("intact", "front_empty", "rear_empty")
+
+
+def _maneuver_config(path: Path | None = None) -> dict:
+    path = path or config_dir() / "maneuvers.yaml"
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise ConfigError(f"{path}: cannot read maneuver config: {exc}") from None
+    return data
+
+
+def _value(cfg: dict, section: str, key: str, path="config/maneuvers.yaml"):
+    try:
+        return cfg[section][key]["value"]
+    except (KeyError, TypeError):
+        raise ConfigError(f"{path}: missing {section}.{key}.value") from None
+
+
+def vehicle_state(name: str) -> tuple[float, float, float, float]:
+    """Oil levels FL, FR, RL, RR of a named vehicle state (intact, front_empty, rear_empty)."""
+    cfg = _maneuver_config()
+    if name not in cfg.get("states", {}):
+        raise ConfigError(f"unknown vehicle state {name!r}: expected one of {', '.join(cfg['states'])}")
+    return tuple(float(x) for x in cfg["states"][name]["value"])
+
+
+@dataclass(frozen=True)
+class Maneuver:
+    """A drive: ``name``, duration [s], speed(t) [m/s] and steering-wheel angle(t) [rad], road."""
+
+    name: str
+    duration: float
+    speed: float
+    road: RoadProfile
+    steer_amplitude: float = 0.0
+    steer_frequency: float = 0.0
+    steer_start: float = 0.0
+    steer_periods: float = 0.0
+
+    def steering(self, t: np.ndarray) -> np.ndarray:
+        tt = np.asarray(t, float) - self.steer_start
+        on = (tt >= 0) & (tt <= self.steer_periods / max(self.steer_frequency, 1e-300))
+        return np.where(on, self.steer_amplitude * np.sin(2 * np.pi * self.steer_frequency * tt), 0.0)
+
+    def speed_at(self, t: np.ndarray) -> np.ndarray:
+        return np.full(np.shape(t), self.speed)
+
+    def n_steps(self, dt: float) -> int:
+        return int(round(self.duration / dt))
+
+    def to_inputs(self, dt: float) -> np.ndarray:
+        """Per-step inputs; step k uses the inputs at time k*dt (zero-order hold)."""
+        t = dt * np.arange(self.n_steps(dt))
+        v = self.speed_at(t)
+        return make_inputs(t.size, v, self.steering(t), np.gradient(v, dt) if t.size > 1 else 0.0)
+
+    def mirrored(self) -> "Maneuver":
+        return replace(self, steer_amplitude=-self.steer_amplitude, road=self.road.mirrored())
+
+
+def bump_crossing(*, speed=None, height=None, length=None, start=None, settle_time=None,
+                  wheelbase: float = 2.79) -> Maneuver:
+    """Slow crossing of a single cosine bump on both tracks; lasts until ``settle_time`` after the rear
+    axle has left the bump."""
+    cfg = _maneuver_config()
+    g = lambda k, v: float(v if v is not None else _value(cfg, "bump_crossing", k))
+    speed, height, length = g("speed", speed), g("bump_height", height), g("bump_length", length)
+    start, settle = g("bump_start", start), g("settle_time", settle_time)
+    duration = (start + length + wheelbase) / speed + settle
+    return Maneuver("bump_crossing", duration, speed, cosine_bump(height, length, start))
+
+
+def sine_steer(*, speed=None, amplitude=None, frequency=None, periods=None, lead_time=None,
+               settle_time=None, duration=None) -> Maneuver:
+    """Sinusoidal steering at constant speed on a flat road (``duration`` overrides the length)."""
+    cfg = _maneuver_config()
+    g = lambda k, v: float(v if v is not None else _value(cfg, "sine_steer", k))
+    speed, amp, freq = g("speed", speed), g("amplitude", amplitude), g("frequency", frequency)
+    periods, lead, settle = g("periods", periods), g("lead_time", lead_time), g("settle_time", settle_time)
+    if freq <= 0 or periods <= 0:
+        raise ConfigError(f"sine_steer: frequency and periods must be > 0, got {freq}, {periods}")
+    total = duration if duration is not None else lead + periods / freq + settle
+    return Maneuver("sine_steer", total, speed, RoadProfile.flat(), amp, freq, lead, periods)
+
+
+def paper_maneuver(name: str, wheelbase: float = 2.79) -> Maneuver:
+    if name in ("bump", "bump_crossing"):
+        return bump_crossing(wheelbase=wheelbase)
+    if name in ("sine", "sine_steer"):
+        return sine_steer()
+    raise ConfigError(f"unknown maneuver {name!r}: expected bump_crossing (bump) or sine_steer (sine)")

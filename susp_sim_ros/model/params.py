@@ -1,0 +1,317 @@
+"""Vehicle parameter sets and friction variants, loaded from ``config/`` and validated on load.
+
+A vehicle file (``config/vehicles/<name>.yaml``) holds every physical parameter as
+``key: {value: ..., unit: ..., source: ...}``; ``value`` is a number, a ``{front: .., rear: ..}`` pair
+(per wheel of that axle) or a list. Values are SI. A variant file (``config/variants/<name>.yaml``)
+switches the paper's friction scalings and adds physics terms (:mod:`.terms`).
+
+Errors name the file and the key and say what was expected (:class:`ConfigError`).
+"""
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import math
+import os
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import yaml
+
+from ..errors import ConfigError
+from .terms import PhysicsTerm, get_term
+
+AXLES = ("front", "rear")
+CORNER_AXLE = (0, 0, 1, 1)  # FL, FR, RL, RR -> front, rear
+CORNER_NAMES = ("FL", "FR", "RL", "RR")
+
+
+def config_dir() -> Path:
+    """The directory holding ``vehicles/``, ``variants/`` and ``studies/``.
+
+    ``$SUSP_SIM_CONFIG`` if set; else the source checkout's ``config/`` (editable install or running
+    from the tree); else ``<prefix>/share/susp_sim_ros/config`` (pip install, or a ROS 2 workspace via
+    the ament index).
+    """
+    env = os.environ.get("SUSP_SIM_CONFIG")
+    if env:
+        return Path(env)
+    tree = Path(__file__).resolve().parents[2] / "config"
+    if (tree / "vehicles").is_dir():
+        return tree
+    share = Path(sys.prefix) / "share" / "susp_sim_ros" / "config"
+    if share.is_dir():
+        return share
+    try:
+        from ament_index_python.packages import get_package_share_directory
+        return Path(get_package_share_directory("susp_sim_ros")) / "config"
+    except Exception as exc:  # ament_index missing or package not indexed
+        raise ConfigError(f"cannot find the susp_sim_ros config directory (looked in {tree} and "
+                          f"{share}); set SUSP_SIM_CONFIG") from exc
+
+
+def _resolve(kind: str, name_or_path: str | os.PathLike) -> Path:
+    p = Path(name_or_path)
+    if p.suffix in (".yaml", ".yml") or p.exists():
+        if not p.is_file():
+            raise ConfigError(f"{p}: no such {kind} file")
+        return p
+    cand = config_dir() / f"{kind}s" / f"{name_or_path}.yaml"
+    if not cand.is_file():
+        known = sorted(q.stem for q in (config_dir() / f"{kind}s").glob("*.yaml"))
+        raise ConfigError(f"unknown {kind} {str(name_or_path)!r}: expected a YAML path or one of "
+                          f"{', '.join(known)} (in {cand.parent})")
+    return cand
+
+
+def _load_yaml(path: Path) -> dict:
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path}: not valid YAML: {exc}") from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: expected a mapping at the top level, got {type(data).__name__}")
+    return data
+
+
+class _Reader:
+    """Reads ``section.key`` entries of one vehicle file with checks and clear errors."""
+
+    def __init__(self, path: Path, data: dict):
+        self.path, self.data, self.sources = path, data, {}
+
+    def _entry(self, section: str, key: str) -> dict:
+        sec = self.data.get(section)
+        if not isinstance(sec, dict) or key not in sec:
+            raise ConfigError(f"{self.path}: missing parameter {section}.{key}")
+        e = sec[key]
+        if not isinstance(e, dict) or "value" not in e or "unit" not in e or "source" not in e:
+            raise ConfigError(f"{self.path}: {section}.{key} must be a mapping with value, unit and "
+                              f"source, got {e!r}")
+        self.sources[f"{section}.{key}"] = (e["unit"], e["source"])
+        return e
+
+    def _num(self, section: str, key: str, x: Any, positive: bool, nonneg: bool) -> float:
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+            raise ConfigError(f"{self.path}: {section}.{key} must be a finite number, got {x!r}")
+        if positive and x <= 0:
+            raise ConfigError(f"{self.path}: {section}.{key} must be > 0, got {x}")
+        if nonneg and x < 0:
+            raise ConfigError(f"{self.path}: {section}.{key} must be >= 0, got {x}")
+        return float(x)
+
+    def scalar(self, section: str, key: str, positive=False, nonneg=False) -> float:
+        return self._num(section, key, self._entry(section, key)["value"], positive, nonneg)
+
+    def axle(self, section: str, key: str, positive=False, nonneg=False) -> tuple[float, float]:
+        v = self._entry(section, key)["value"]
+        if not isinstance(v, dict) or set(v) != set(AXLES):
+            raise ConfigError(f"{self.path}: {section}.{key}.value must be {{front: .., rear: ..}}, got {v!r}")
+        return tuple(self._num(section, f"{key}.{a}", v[a], positive, nonneg) for a in AXLES)
+
+    def table(self, section: str, key: str, n: int | None = None) -> tuple:
+        v = self._entry(section, key)["value"]
+        if isinstance(v, dict):
+            if set(v) != set(AXLES):
+                raise ConfigError(f"{self.path}: {section}.{key}.value must be {{front: [..], rear: [..]}}")
+            return tuple(self._list(section, f"{key}.{a}", v[a], n) for a in AXLES)
+        return self._list(section, key, v, n)
+
+    def _list(self, section, key, v, n):
+        if not isinstance(v, list) or (n is not None and len(v) != n):
+            raise ConfigError(f"{self.path}: {section}.{key} must be a list of {n or 'some'} numbers, "
+                              f"got {v!r}")
+        return tuple(self._num(section, key, x, False, False) for x in v)
+
+
+@dataclass(frozen=True)
+class VehicleParams:
+    """A vehicle parameter set in SI units. Pairs are (front, rear), per wheel of that axle."""
+
+    name: str
+    gravity: float
+    sprung_mass: float
+    unsprung_mass: tuple[float, float]
+    a: float
+    b: float
+    track: tuple[float, float]
+    cg_height: float
+    roll_inertia: float
+    pitch_inertia: float
+    yaw_inertia: float
+    roll_centre_height: tuple[float, float]
+    pitch_centre_height: float
+    wheel_rate: tuple[float, float]
+    bump_stop_travel: tuple[float, float]
+    rebound_stop_travel: tuple[float, float]
+    stop_rate: float
+    stop_progression: float
+    arb_rate: tuple[float, float]
+    tyre_stiffness: float
+    tyre_damping: float
+    cornering_stiffness: tuple[float, float]
+    mu: float
+    relaxation_length: float
+    slip_fade_speed: float
+    steering_ratio: float
+    drive_front_share: float
+    brake_front_share: float
+    dahl_stiffness: float
+    axle_friction: tuple[float, float]
+    damper_friction_intact: tuple[float, float]
+    damper_friction_empty: tuple[float, float]
+    sv_reference: float
+    sv_plateau: float
+    sv_speed: float
+    sh_longitudinal: tuple[float, float]
+    sh_lateral: tuple[float, float]
+    damper_velocity: tuple[float, ...]
+    damper_measured_intact: tuple[tuple[float, ...], tuple[float, ...]]
+    damper_measured_empty: tuple[tuple[float, ...], tuple[float, ...]]
+    source_file: str = ""
+    sources: Mapping[str, tuple[str, str]] = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def wheelbase(self) -> float:
+        return self.a + self.b
+
+    @property
+    def total_mass(self) -> float:
+        return self.sprung_mass + 2.0 * sum(self.unsprung_mass)
+
+    def replace(self, **changes) -> "VehicleParams":
+        return dataclasses.replace(self, **changes)
+
+    def static_wheel_loads(self) -> np.ndarray:
+        """Static tyre loads FL, FR, RL, RR [N] (sprung share by the lever rule plus unsprung weight)."""
+        g, L = self.gravity, self.wheelbase
+        f = 0.5 * self.sprung_mass * self.b / L * g + self.unsprung_mass[0] * g
+        r = 0.5 * self.sprung_mass * self.a / L * g + self.unsprung_mass[1] * g
+        return np.array([f, f, r, r])
+
+
+def load_vehicle(name_or_path: str | os.PathLike = "passat_b8_like") -> VehicleParams:
+    """Load and validate a vehicle parameter set by name (``config/vehicles/``) or YAML path."""
+    path = _resolve("vehicle", name_or_path)
+    r = _Reader(path, _load_yaml(path))
+    vel = r.table("dampers", "velocity")
+    if any(b <= a for a, b in zip(vel, vel[1:])) or 0.0 not in vel:
+        raise ConfigError(f"{path}: dampers.velocity must be strictly increasing and contain 0.0")
+    vp = VehicleParams(
+        name=str(r.data.get("name", path.stem)),
+        gravity=r.scalar("constants", "gravity", positive=True),
+        sprung_mass=r.scalar("body", "sprung_mass", positive=True),
+        unsprung_mass=r.axle("body", "unsprung_mass", positive=True),
+        a=r.scalar("body", "cg_to_front_axle", positive=True),
+        b=r.scalar("body", "cg_to_rear_axle", positive=True),
+        track=r.axle("body", "track", positive=True),
+        cg_height=r.scalar("body", "cg_height", positive=True),
+        roll_inertia=r.scalar("body", "roll_inertia", positive=True),
+        pitch_inertia=r.scalar("body", "pitch_inertia", positive=True),
+        yaw_inertia=r.scalar("body", "yaw_inertia", positive=True),
+        roll_centre_height=r.axle("body", "roll_centre_height"),
+        pitch_centre_height=r.scalar("body", "pitch_centre_height"),
+        wheel_rate=r.axle("suspension", "wheel_rate", positive=True),
+        bump_stop_travel=r.axle("suspension", "bump_stop_travel", positive=True),
+        rebound_stop_travel=r.axle("suspension", "rebound_stop_travel", positive=True),
+        stop_rate=r.scalar("suspension", "stop_rate", nonneg=True),
+        stop_progression=r.scalar("suspension", "stop_progression", positive=True),
+        arb_rate=r.axle("suspension", "anti_roll_bar_rate", nonneg=True),
+        tyre_stiffness=r.scalar("tyre", "vertical_stiffness", positive=True),
+        tyre_damping=r.scalar("tyre", "vertical_damping", nonneg=True),
+        cornering_stiffness=r.axle("tyre", "cornering_stiffness", positive=True),
+        mu=r.scalar("tyre", "friction_coefficient", positive=True),
+        relaxation_length=r.scalar("tyre", "relaxation_length", positive=True),
+        slip_fade_speed=r.scalar("tyre", "slip_fade_speed", positive=True),
+        steering_ratio=r.scalar("steering", "ratio", positive=True),
+        drive_front_share=r.scalar("drivetrain", "drive_front_share", nonneg=True),
+        brake_front_share=r.scalar("drivetrain", "brake_front_share", nonneg=True),
+        dahl_stiffness=r.scalar("friction", "dahl_stiffness", positive=True),
+        axle_friction=r.axle("friction", "axle_level", nonneg=True),
+        damper_friction_intact=r.axle("friction", "damper_level_intact", positive=True),
+        damper_friction_empty=r.axle("friction", "damper_level_empty", nonneg=True),
+        sv_reference=r.scalar("friction", "velocity_scaling_reference", positive=True),
+        sv_plateau=r.scalar("friction", "velocity_scaling_plateau", positive=True),
+        sv_speed=r.scalar("friction", "velocity_scaling_speed", positive=True),
+        sh_longitudinal=r.axle("friction", "horizontal_scaling_longitudinal", nonneg=True),
+        sh_lateral=r.axle("friction", "horizontal_scaling_lateral", nonneg=True),
+        damper_velocity=vel,
+        damper_measured_intact=r.table("dampers", "measured_intact", len(vel)),
+        damper_measured_empty=r.table("dampers", "measured_empty", len(vel)),
+        source_file=str(path),
+        sources=r.sources,
+    )
+    for share in ("drive_front_share", "brake_front_share"):
+        if getattr(vp, share) > 1.0:
+            raise ConfigError(f"{path}: drivetrain.{share} must be in [0, 1], got {getattr(vp, share)}")
+    return vp
+
+
+@dataclass(frozen=True)
+class TermSetting:
+    """A physics term added by a variant, with per-corner parameter values (FL, FR, RL, RR)."""
+
+    term: PhysicsTerm
+    values: Mapping[str, tuple[float, float, float, float]]
+
+
+@dataclass(frozen=True)
+class FrictionVariant:
+    """Which of the paper's friction scalings are on (Table 5), plus extra physics terms."""
+
+    name: str
+    velocity_scaling: bool = True
+    oil_scaling: bool = True
+    horizontal_scaling: bool = True
+    terms: tuple[TermSetting, ...] = ()
+    source_file: str = ""
+
+
+def corner_values(where: str, spec: Any, term: str, pname: str) -> tuple[float, float, float, float]:
+    """Expand a parameter value given as a number, {front, rear}, or {FL, FR, RL, RR} to four corners."""
+    if isinstance(spec, (int, float)) and not isinstance(spec, bool):
+        return (float(spec),) * 4
+    if isinstance(spec, dict) and set(spec) == set(AXLES):
+        return tuple(float(spec[AXLES[a]]) for a in CORNER_AXLE)
+    if isinstance(spec, dict) and set(spec) == set(CORNER_NAMES):
+        return tuple(float(spec[c]) for c in CORNER_NAMES)
+    raise ConfigError(f"{where}: term {term}: parameter {pname} must be a number, {{front, rear}} or "
+                      f"{{FL, FR, RL, RR}}, got {spec!r}")
+
+
+def load_variant(name_or_path: str | os.PathLike = "full") -> FrictionVariant:
+    """Load a friction variant by name (``config/variants/``) or YAML path."""
+    path = _resolve("variant", name_or_path)
+    d = _load_yaml(path)
+    flags = {}
+    for key in ("velocity_scaling", "oil_scaling", "horizontal_scaling"):
+        v = d.get(key)
+        if not isinstance(v, bool):
+            raise ConfigError(f"{path}: {key} must be true or false, got {v!r}")
+        flags[key] = v
+    settings = []
+    for n, entry in enumerate(d.get("terms") or []):
+        if not isinstance(entry, dict) or "name" not in entry:
+            raise ConfigError(f"{path}: terms[{n}] must be a mapping with a name, got {entry!r}")
+        if entry.get("module"):  # a term defined outside this package registers itself on import
+            try:
+                importlib.import_module(entry["module"])
+            except ImportError as exc:
+                raise ConfigError(f"{path}: terms[{n}]: cannot import module {entry['module']!r}: {exc}") from None
+        try:
+            term = get_term(entry["name"])
+        except KeyError as exc:
+            raise ConfigError(f"{path}: terms[{n}]: {exc.args[0]}") from None
+        given = entry.get("params") or {}
+        unknown = set(given) - {p.name for p in term.params}
+        if unknown:
+            raise ConfigError(f"{path}: term {term.name}: unknown parameters {sorted(unknown)}; it has "
+                              f"{[p.name for p in term.params]}")
+        values = {p.name: corner_values(str(path), given.get(p.name, p.default), term.name, p.name)
+                  for p in term.params}
+        settings.append(TermSetting(term, values))
+    return FrictionVariant(name=str(d.get("name", path.stem)), terms=tuple(settings),
+                           source_file=str(path), **flags)
