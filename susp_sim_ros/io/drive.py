@@ -1,0 +1,246 @@
+"""Recorded test drives (interface.md, "A recorded test drive"): read and write them as time series.
+
+:func:`read_drive` turns an MCAP file into a :class:`TestDrive` (speed, steering, road profile or
+per-wheel heights, measured IMU, ``test_drive`` metadata); :func:`write_drive` writes one in the
+interface format. Times are integer nanoseconds (MCAP log time = ROS time).
+"""
+from __future__ import annotations
+
+import logging
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import RecordingError, SuspInputError
+from ..model.road import RoadProfile
+from . import messages as M
+from .reader import Recording, read_recording
+from .recorder import McapRecorder
+
+log = logging.getLogger(__name__)
+
+SPEED = "/vehicle/speed"
+STEERING = "/vehicle/steering_wheel_angle"
+ROAD_PROFILE = "/road/profile"
+WHEEL_HEIGHTS = "/road/wheel_heights"
+IMU = "/imu/data"
+SIM_IMU = "/sim/imu/data"
+
+
+@dataclass
+class Series:
+    """Samples ``values`` (1-D, or (n, k)) at times ``t_ns`` (int64 nanoseconds)."""
+
+    t_ns: np.ndarray
+    values: np.ndarray
+
+    def __post_init__(self):
+        self.t_ns = np.asarray(self.t_ns, dtype=np.int64)
+        self.values = np.asarray(self.values, dtype=float)
+        if self.values.shape[:1] != self.t_ns.shape:
+            raise SuspInputError(f"Series: {self.t_ns.size} times but values of shape {self.values.shape}")
+
+    def __len__(self) -> int:
+        return int(self.t_ns.size)
+
+
+@dataclass
+class ImuSeries:
+    """IMU samples: ``gyro`` (n, 3) roll/pitch/yaw rate [rad/s], ``accel`` (n, 3) specific force [m/s^2]."""
+
+    t_ns: np.ndarray
+    gyro: np.ndarray
+    accel: np.ndarray
+
+    def __post_init__(self):
+        self.t_ns = np.asarray(self.t_ns, dtype=np.int64)
+        self.gyro = np.asarray(self.gyro, dtype=float).reshape(-1, 3)
+        self.accel = np.asarray(self.accel, dtype=float).reshape(-1, 3)
+        if not (self.gyro.shape[0] == self.accel.shape[0] == self.t_ns.size):
+            raise SuspInputError(f"ImuSeries: {self.t_ns.size} times, gyro {self.gyro.shape}, "
+                                 f"accel {self.accel.shape}")
+
+    def __len__(self) -> int:
+        return int(self.t_ns.size)
+
+    @property
+    def t_s(self) -> np.ndarray:
+        return self.t_ns.astype(float) * 1e-9
+
+
+def parse_oil(text: str | None, what: str = "test_drive metadata damper_oil_level") -> tuple[float, ...]:
+    """``"1,1,0,0"`` -> (1.0, 1.0, 0.0, 0.0); missing -> intact."""
+    if text is None or str(text).strip() == "":
+        return (1.0, 1.0, 1.0, 1.0)
+    try:
+        vals = tuple(float(x) for x in str(text).replace(" ", "").split(","))
+    except ValueError:
+        vals = ()
+    if len(vals) != 4 or not all(np.isfinite(v) and 0.0 <= v <= 1.0 for v in vals):
+        raise RecordingError(f"{what}: expected four comma-separated fractions FL,FR,RL,RR in [0, 1], "
+                             f"got {text!r}")
+    return vals
+
+
+@dataclass
+class TestDrive:
+    """A recorded (or synthetic) test drive: the inputs of the model and what was measured."""
+
+    __test__ = False  # not a pytest test class
+
+    metadata: dict[str, str]
+    speed: Series
+    steering: Series
+    road: RoadProfile | None = None
+    wheel_heights: Series | None = None
+    imu: ImuSeries | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def oil_levels(self) -> tuple[float, float, float, float]:
+        return parse_oil(self.metadata.get("damper_oil_level"))  # type: ignore[return-value]
+
+    @property
+    def t0_ns(self) -> int:
+        starts = [s.t_ns[0] for s in (self.speed, self.steering) if len(s)]
+        return int(min(starts)) if starts else 0
+
+    @property
+    def t_end_ns(self) -> int:
+        ends = [s.t_ns[-1] for s in (self.speed, self.steering, self.wheel_heights) if s is not None and len(s)]
+        return int(max(ends)) if ends else self.t0_ns
+
+    @property
+    def duration_s(self) -> float:
+        return (self.t_end_ns - self.t0_ns) * 1e-9
+
+
+# ---- reading -------------------------------------------------------------------------------------
+def _scalar_series(rec: Recording, topic: str) -> Series:
+    items = rec.decode_topic(topic)
+    t = np.array([t for t, _ in items], dtype=np.int64)
+    v = np.array([float(m.data) for _, m in items], dtype=float)
+    return Series(t, v)
+
+
+def road_from_msg(msg: Any, where: str) -> RoadProfile:
+    """A :class:`RoadProfile` from a decoded ``/road/profile`` message; RecordingError if malformed."""
+    try:
+        dims = list(msg.layout.dim)
+        data = np.asarray(list(msg.data), dtype=float)
+    except AttributeError:
+        raise RecordingError(f"{where}: not a Float64MultiArray") from None
+    if len(dims) != 2 or int(dims[0].size) != 3:
+        raise RecordingError(f"{where}: malformed road profile: expected layout dims [channel 3, sample N], "
+                             f"got {[(d.label, int(d.size)) for d in dims]}")
+    n = int(dims[1].size)
+    if n < 2 or data.size != 3 * n:
+        raise RecordingError(f"{where}: malformed road profile: {data.size} values for N = {n} samples "
+                             f"(want 3*N, N >= 2)")
+    try:
+        return RoadProfile.from_flat_array(data, n)
+    except SuspInputError as exc:
+        raise RecordingError(f"{where}: malformed road profile: {exc}") from None
+
+
+def _imu_series(rec: Recording, topic: str) -> ImuSeries:
+    items = rec.decode_topic(topic)
+    t = np.array([t for t, _ in items], dtype=np.int64)
+    g = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z] for _, m in items],
+                 dtype=float).reshape(-1, 3)
+    a = np.array([[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
+                  for _, m in items], dtype=float).reshape(-1, 3)
+    return ImuSeries(t, g, a)
+
+
+def read_imu(path: str | os.PathLike, topic: str = IMU) -> ImuSeries:
+    """The IMU samples of ``topic`` (``/imu/data`` measured, ``/sim/imu/data`` simulated)."""
+    rec = read_recording(path)
+    if not rec.by_topic(topic):
+        raise RecordingError(f"{path}: no messages on topic {topic} (topics: "
+                             f"{', '.join(sorted(rec.topics())) or 'none'})")
+    return _imu_series(rec, topic)
+
+
+def drive_from_recording(rec: Recording, *, imu_topic: str = IMU) -> TestDrive:
+    path = rec.path
+    if not rec.messages:
+        why = f" (file damaged: {rec.error})" if rec.truncated else ""
+        raise RecordingError(f"{path}: no readable messages{why}")
+    for topic in (SPEED, STEERING):
+        if not rec.by_topic(topic):
+            why = f"; file damaged: {rec.error}" if rec.truncated else ""
+            raise RecordingError(f"{path}: missing topic {topic} (topics: "
+                                 f"{', '.join(sorted(rec.topics())) or 'none'}{why})")
+    speed = _scalar_series(rec, SPEED)
+    steering = _scalar_series(rec, STEERING)
+    road = None
+    prof = rec.decode_topic(ROAD_PROFILE)
+    if prof:
+        road = road_from_msg(prof[0][1], f"{path}: topic {ROAD_PROFILE}")
+    wh = None
+    items = rec.decode_topic(WHEEL_HEIGHTS)
+    if items:
+        vals = [list(m.data) for _, m in items]
+        if any(len(v) != 4 for v in vals):
+            raise RecordingError(f"{path}: topic {WHEEL_HEIGHTS}: expected 4 values [FL, FR, RL, RR] "
+                                 "per message")
+        wh = Series(np.array([t for t, _ in items], dtype=np.int64), np.array(vals, dtype=float))
+    imu = _imu_series(rec, imu_topic) if rec.by_topic(imu_topic) else None
+    metadata = dict(rec.metadata.get("test_drive", {}))
+    extra: dict[str, Any] = {"topics": rec.topics(), "truncated": rec.truncated}
+    if imu_topic != SIM_IMU and rec.by_topic(SIM_IMU):
+        extra["sim_imu"] = _imu_series(rec, SIM_IMU)
+    drive = TestDrive(metadata, speed, steering, road, wh, imu, extra)
+    if "damper_oil_level" in metadata:
+        parse_oil(metadata["damper_oil_level"], f"{path}: test_drive metadata damper_oil_level")
+    return drive
+
+
+def read_drive(path: str | os.PathLike, *, imu_topic: str = IMU) -> TestDrive:
+    """Read a recorded test drive; a truncated file gives its readable prefix (with a warning)."""
+    return drive_from_recording(read_recording(path), imu_topic=imu_topic)
+
+
+# ---- writing -------------------------------------------------------------------------------------
+def drive_messages(drive: TestDrive, *, imu_topic: str = IMU) -> list[tuple[int, str, str, dict, bool]]:
+    """The drive as ``(log_time_ns, topic, msgtype, msg dict, latched)`` in log-time order."""
+    out: list[tuple[int, str, str, dict, bool]] = []
+    t0 = drive.t0_ns
+    if drive.road is not None:
+        out.append((t0, ROAD_PROFILE, M.FLOAT64_ARRAY,
+                    M.road_profile_msg(drive.road.s, drive.road.zl, drive.road.zr), True))
+    for t, v in zip(drive.speed.t_ns.tolist(), drive.speed.values.tolist()):
+        out.append((t, SPEED, M.FLOAT64, {"data": v}, False))
+    for t, v in zip(drive.steering.t_ns.tolist(), drive.steering.values.tolist()):
+        out.append((t, STEERING, M.FLOAT64, {"data": v}, False))
+    if drive.wheel_heights is not None:
+        for t, v in zip(drive.wheel_heights.t_ns.tolist(), drive.wheel_heights.values.tolist()):
+            out.append((t, WHEEL_HEIGHTS, M.FLOAT64_ARRAY, M.wheel_heights_msg(v), False))
+    if drive.imu is not None:
+        for t, g, a in zip(drive.imu.t_ns.tolist(), drive.imu.gyro.tolist(), drive.imu.accel.tolist()):
+            out.append((t, imu_topic, M.IMU, {
+                "header": {"stamp": M.stamp(t), "frame_id": "base_link"},
+                "orientation_covariance": [-1.0] + [0.0] * 8,
+                "angular_velocity": {"x": g[0], "y": g[1], "z": g[2]},
+                "linear_acceleration": {"x": a[0], "y": a[1], "z": a[2]}}, False))
+    out.sort(key=lambda r: r[0])  # stable: the road profile stays first at t0
+    return out
+
+
+def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = False,
+                imu_topic: str = IMU) -> int:
+    """Write ``drive`` in the interface format; returns the number of messages written."""
+    meta = {"vehicle": "passat_b8_like", "maneuver": "", "damper_oil_level": "1,1,1,1", "source": "measured"}
+    meta.update({str(k): str(v) for k, v in drive.metadata.items()})
+    msgs = drive_messages(drive, imu_topic=imu_topic)
+    with McapRecorder(path, metadata=meta, overwrite=overwrite) as rec:
+        for t, topic, mt, msg, latched in msgs:
+            rec.write(topic, mt, t, msg, latched=latched)
+    return len(msgs)
+
+
+__all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "read_imu", "parse_oil",
+           "drive_from_recording", "drive_messages", "road_from_msg", "SPEED", "STEERING", "ROAD_PROFILE",
+           "WHEEL_HEIGHTS", "IMU", "SIM_IMU"]

@@ -1,0 +1,149 @@
+"""Offline "lockstep" runs: a recorded test drive through the node's :class:`SimCore`, without DDS.
+
+The recorded input messages are fed in log-time order into the same core the node uses (step to the
+message time, then apply the input), so the outputs equal what the node publishes when the recording is
+replayed with ``/clock`` (sim time), at any replay rate. With ``out_path`` the simulated MCAP is written:
+the inputs received, every ``/sim`` topic and the ``test_drive`` metadata with ``source:
+simulated:<variant>`` (the node's recording holds the same, plus ``/diagnostics``).
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from .io import messages as M
+from .io.drive import ROAD_PROFILE, SPEED, STEERING, WHEEL_HEIGHTS, ImuSeries, Series, TestDrive
+from .io.recorder import McapRecorder
+from .model.layout import OUTPUT_LABELS, output_index
+from .model.maneuvers import Maneuver
+from .model.vehicle import Model
+from .sim_core import SimCore, sample_messages
+
+_GYRO = [output_index(k) for k in ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")]
+_ACC = [output_index(k) for k in ("AX_SF", "AY_SF", "AZ_SF")]
+
+_ROAD, _SPEED, _STEER, _WH = 0, 1, 2, 3
+
+
+@dataclass
+class LockstepResult:
+    """Outputs at the publish ticks: ``t_ns`` (n,), ``outputs`` (n, len(OUTPUT_LABELS)), ``imu`` (the
+    ``/sim/imu/data`` samples)."""
+
+    t_ns: np.ndarray
+    outputs: np.ndarray
+    imu: ImuSeries
+    metadata: dict[str, str]
+    healthy: bool = True
+    rejections: dict[str, int] = field(default_factory=dict)
+    out_path: str | None = None
+    labels: tuple[str, ...] = OUTPUT_LABELS
+
+    def __getitem__(self, label: str) -> np.ndarray:
+        return self.outputs[:, output_index(label)]
+
+
+def simulated_metadata(drive_meta: dict[str, str], vehicle: str, variant: str,
+                       oil: Sequence[float]) -> dict[str, str]:
+    meta = {str(k): str(v) for k, v in drive_meta.items()}
+    if "source" in meta:
+        meta["input_source"] = meta["source"]
+    meta.update({"vehicle": str(vehicle), "friction_variant": str(variant),
+                 "damper_oil_level": ",".join(f"{float(x):g}" for x in oil),
+                 "source": f"simulated:{variant}"})
+    meta.setdefault("maneuver", "")
+    return meta
+
+
+def _events(drive: TestDrive) -> list[tuple[int, int, int]]:
+    """(t_ns, kind, index) of every input message, in log-time order (road profile first at t0)."""
+    ev: list[tuple[int, int, int]] = []
+    if drive.road is not None:
+        ev.append((drive.t0_ns, _ROAD, 0))
+    for kind, s in ((_SPEED, drive.speed), (_STEER, drive.steering), (_WH, drive.wheel_heights)):
+        if s is not None:
+            ev.extend(zip(s.t_ns.tolist(), [kind] * len(s), range(len(s))))
+    ev.sort(key=lambda e: (e[0], e[1]))
+    return ev
+
+
+def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: str = "full",
+                 oil: Sequence[float] | None = None, step_s: float = 0.001, publish_rate_hz: float = 100.0,
+                 out_path: str | os.PathLike | None = None, overwrite: bool = False,
+                 input_timeout_s: float = 0.5, model: Model | None = None) -> LockstepResult:
+    """Run ``drive`` through a :class:`SimCore` as fast as possible (see the module docstring)."""
+    oil = tuple(drive.oil_levels() if oil is None else oil)
+    model = model or Model(vehicle, variant)
+    core = SimCore(model, step_s=step_s, publish_rate_hz=publish_rate_hz, oil=oil,
+                   input_timeout_s=input_timeout_s)
+    variant_name = getattr(model.variant, "name", variant) if model is not None else variant
+    meta = simulated_metadata(drive.metadata, vehicle, variant_name if isinstance(variant_name, str) else variant,
+                              oil)
+    rec = McapRecorder(out_path, metadata=meta, overwrite=overwrite) if out_path is not None else None
+    ts: list[int] = []
+    ys: list[np.ndarray] = []
+    road_msg = None
+    if drive.road is not None:
+        road_msg = M.road_profile_msg(drive.road.s, drive.road.zl, drive.road.zr)
+    sp, st = drive.speed.values.tolist(), drive.steering.values.tolist()
+    wh = drive.wheel_heights.values if drive.wheel_heights is not None else None
+    try:
+        def emit(samples):
+            for smp in samples:
+                ts.append(smp.t_ns)
+                ys.append(smp.y)
+                if rec is not None:
+                    for topic, mt, msg in sample_messages(smp):
+                        rec.write(topic, mt, smp.t_ns, msg)
+
+        for t, kind, i in _events(drive):
+            emit(core.advance_to(t))
+            if kind == _SPEED:
+                core.set_speed(t, sp[i])
+                if rec is not None:
+                    rec.write(SPEED, M.FLOAT64, t, {"data": sp[i]})
+            elif kind == _STEER:
+                core.set_steering(t, st[i])
+                if rec is not None:
+                    rec.write(STEERING, M.FLOAT64, t, {"data": st[i]})
+            elif kind == _WH:
+                core.set_wheel_heights(t, wh[i])
+                if rec is not None:
+                    rec.write(WHEEL_HEIGHTS, M.FLOAT64_ARRAY, t, M.wheel_heights_msg(wh[i]))
+            else:
+                n = len(drive.road)
+                core.set_road_profile(t, road_msg["data"], [("channel", 3), ("sample", n)])
+                if rec is not None:
+                    rec.write(ROAD_PROFILE, M.FLOAT64_ARRAY, t, road_msg, latched=True)
+        emit(core.advance_to(drive.t_end_ns))
+    finally:
+        if rec is not None:
+            rec.close()
+    t_arr = np.array(ts, dtype=np.int64)
+    Y = np.array(ys).reshape(-1, len(OUTPUT_LABELS))
+    imu = ImuSeries(t_arr, Y[:, _GYRO], Y[:, _ACC])
+    return LockstepResult(t_arr, Y, imu, meta, core.healthy, dict(core.rejections),
+                          None if out_path is None else str(out_path))
+
+
+def maneuver_drive(maneuver: Maneuver, oil: Sequence[float] = (1.0, 1.0, 1.0, 1.0), *,
+                   rate_hz: float = 100.0, t0_ns: int = 1_000_000_000,
+                   vehicle: str = "passat_b8_like") -> TestDrive:
+    """A paper maneuver as a test drive: speed and steering messages at ``rate_hz`` from ``t0_ns``
+    (ROS time 0 means "no clock yet" to a sim-time node, so the default starts at 1 s), its road."""
+    n = int(round(maneuver.duration * rate_hz)) + 1
+    k = np.arange(n)
+    t_rel = k / rate_hz
+    t_ns = t0_ns + np.round(k * (1e9 / rate_hz)).astype(np.int64)
+    road = maneuver.road if len(maneuver.road) >= 2 else None
+    meta = {"vehicle": vehicle, "maneuver": maneuver.name,
+            "damper_oil_level": ",".join(f"{float(x):g}" for x in oil),
+            "source": "synthetic:susp_sim_ros.lockstep.maneuver_drive"}
+    return TestDrive(meta, Series(t_ns, maneuver.speed_at(t_rel)), Series(t_ns.copy(), maneuver.steering(t_rel)),
+                     road, None, None, {})
+
+
+__all__ = ["LockstepResult", "run_lockstep", "maneuver_drive", "simulated_metadata"]
