@@ -1,0 +1,266 @@
+"""Import real measurements from CSV into a recorded test drive (MCAP, interface.md).
+
+CSV layout
+==========
+
+Two plain-text files, comma-separated, UTF-8, one header row naming the columns (any order, names are
+case-insensitive, surrounding spaces ignored). Numbers are decimal (``12``, ``-0.5``, ``1.5e-3``); no
+thousands separators, no ``nan``/``inf``. Lines starting with ``#`` are comments (allowed anywhere, e.g.
+for the measurement's provenance). Every other line must be a complete, valid row: a blank line, a row
+with a missing or extra field, a cell that is not a finite number, or a time that does not increase
+raises :class:`~susp_sim_ros.errors.CsvImportError` naming the file, the line and the column. Nothing is
+skipped silently, and an unknown column is an error too (a misspelt column would otherwise vanish).
+
+**Drive file** (one row per sample; all channels share the row's time):
+
+=================================  ========================================  ======================
+column (one unit suffix per line)  meaning                                   required
+=================================  ========================================  ======================
+``time_s``                         time since the start of the drive [s],    yes
+                                   >= 0, strictly increasing
+``steering_wheel_angle_rad|_deg``  steering-wheel angle, positive = left     yes
+``speed_m_s|speed_km_h``           longitudinal speed over ground            yes
+``roll_rate_rad_s|_deg_s``         measured roll rate (about x, REP-103)     yes
+``pitch_rate_rad_s|_deg_s``        measured pitch rate (about y)             yes
+``yaw_rate_rad_s|_deg_s``          measured yaw rate (about z)               yes
+``accel_x_m_s2`` (y, z)            specific force incl. gravity (REP-145)    all three or none
+``wheel_height_fl_m`` (fr, rl, rr) road height under each wheel (four-poster all four or none
+                                   style, overrides the road file)
+=================================  ========================================  ======================
+
+**Road file** (optional; flat road without it): columns ``s_m`` (path coordinate of the front axle's
+travel, strictly increasing), ``z_left_m``, ``z_right_m`` (elevation of the left/right wheel tracks). The
+front axle is at ``s = 0`` when the drive starts (interface.md, ``/road/profile``).
+
+Example::
+
+    # VW Passat, test track, 2024-05-02, rear dampers drained
+    time_s,steering_wheel_angle_deg,speed_km_h,roll_rate_deg_s,pitch_rate_deg_s,yaw_rate_deg_s
+    0.000,0.0,8.0,0.01,-0.02,0.00
+    0.005,0.0,8.0,0.00,-0.01,0.01
+
+Everything is converted to SI and written with :func:`susp_sim_ros.io.drive.write_drive`; the
+``test_drive`` metadata gets ``vehicle``, ``maneuver``, ``damper_oil_level``, ``source`` (``measured`` by
+default) and ``notes`` (the CSV's ``#`` comment lines plus the file names).
+"""
+from __future__ import annotations
+
+import csv
+import math
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..errors import CsvImportError
+
+_NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+
+# quantity -> {column name: factor to SI}
+DRIVE_QUANTITIES: dict[str, dict[str, float]] = {
+    "time": {"time_s": 1.0},
+    "steering": {"steering_wheel_angle_rad": 1.0, "steering_wheel_angle_deg": math.pi / 180},
+    "speed": {"speed_m_s": 1.0, "speed_km_h": 1 / 3.6},
+    "roll_rate": {"roll_rate_rad_s": 1.0, "roll_rate_deg_s": math.pi / 180},
+    "pitch_rate": {"pitch_rate_rad_s": 1.0, "pitch_rate_deg_s": math.pi / 180},
+    "yaw_rate": {"yaw_rate_rad_s": 1.0, "yaw_rate_deg_s": math.pi / 180},
+    "accel_x": {"accel_x_m_s2": 1.0},
+    "accel_y": {"accel_y_m_s2": 1.0},
+    "accel_z": {"accel_z_m_s2": 1.0},
+    "wheel_height_fl": {"wheel_height_fl_m": 1.0},
+    "wheel_height_fr": {"wheel_height_fr_m": 1.0},
+    "wheel_height_rl": {"wheel_height_rl_m": 1.0},
+    "wheel_height_rr": {"wheel_height_rr_m": 1.0},
+}
+DRIVE_REQUIRED = ("time", "steering", "speed", "roll_rate", "pitch_rate", "yaw_rate")
+DRIVE_GROUPS = (("accel_x", "accel_y", "accel_z"),
+                ("wheel_height_fl", "wheel_height_fr", "wheel_height_rl", "wheel_height_rr"))
+ROAD_QUANTITIES: dict[str, dict[str, float]] = {"s": {"s_m": 1.0}, "z_left": {"z_left_m": 1.0},
+                                                "z_right": {"z_right_m": 1.0}}
+ROAD_REQUIRED = ("s", "z_left", "z_right")
+
+
+@dataclass
+class CsvTable:
+    """Parsed columns in SI units keyed by quantity, the source lines of the rows, and the comments."""
+
+    path: str
+    columns: dict[str, np.ndarray]
+    lines: np.ndarray
+    comments: list[str]
+
+
+def _column_map(path: str, header: Sequence[str], quantities: Mapping[str, Mapping[str, float]],
+                required: Sequence[str], groups: Sequence[Sequence[str]], line: int) -> dict[str, tuple[int, float, str]]:
+    """Header -> {quantity: (field index, factor, column name)} with errors naming the column."""
+    lookup = {name: (q, f) for q, names in quantities.items() for name, f in names.items()}
+    found: dict[str, tuple[int, float, str]] = {}
+    for k, raw in enumerate(header):
+        name = raw.strip().lower()
+        if name == "":
+            raise CsvImportError(f"{path}:{line}: column {k + 1} has an empty name")
+        if name not in lookup:
+            raise CsvImportError(f"{path}:{line}: unknown column {raw.strip()!r} (column {k + 1}); known: "
+                                 f"{', '.join(sorted(lookup))}")
+        q, f = lookup[name]
+        if q in found:
+            raise CsvImportError(f"{path}:{line}: column {raw.strip()!r} (column {k + 1}) gives "
+                                 f"{q.replace('_', ' ')} again (already column {found[q][0] + 1}, "
+                                 f"{found[q][2]!r})")
+        found[q] = (k, f, raw.strip())
+    for q in required:
+        if q not in found:
+            raise CsvImportError(f"{path}:{line}: missing column {' or '.join(quantities[q])} "
+                                 f"(header has: {', '.join(h.strip() for h in header)})")
+    for g in groups:
+        have = [q for q in g if q in found]
+        if have and len(have) != len(g):
+            missing = [next(iter(quantities[q])) for q in g if q not in found]
+            raise CsvImportError(f"{path}:{line}: missing column {', '.join(missing)}: "
+                                 f"{', '.join(next(iter(quantities[q])) for q in g)} come all together or not at all")
+    return found
+
+
+def parse_csv(text: str, path: str, quantities: Mapping[str, Mapping[str, float]], required: Sequence[str],
+              groups: Sequence[Sequence[str]] = (), increasing: str | None = None,
+              nonneg: Sequence[str] = ()) -> CsvTable:
+    """Parse CSV ``text`` (``path`` names it in errors) into SI columns; see the module docstring."""
+    comments: list[str] = []
+    header: list[str] | None = None
+    cmap: dict[str, tuple[int, float, str]] = {}
+    rows: list[list[float]] = []
+    lines: list[int] = []
+    order: list[str] = []
+    physical = text.splitlines()
+    for lineno, raw in enumerate(physical, start=1):
+        stripped = raw.strip()
+        if stripped.startswith("#"):
+            comments.append(stripped[1:].strip())
+            continue
+        if stripped == "":
+            if lineno == len(physical):
+                break
+            raise CsvImportError(f"{path}:{lineno}: blank line (every non-comment line must be a "
+                                 f"{'header' if header is None else 'data row'})")
+        try:
+            fields = next(csv.reader([raw]))
+        except csv.Error as exc:
+            raise CsvImportError(f"{path}:{lineno}: malformed CSV: {exc}") from None
+        if header is None:
+            header = fields
+            cmap = _column_map(path, header, quantities, required, groups, lineno)
+            order = list(cmap)
+            continue
+        if len(fields) != len(header):
+            raise CsvImportError(f"{path}:{lineno}: expected {len(header)} fields "
+                                 f"({', '.join(h.strip() for h in header)}), got {len(fields)}")
+        row = []
+        for q in order:
+            k, factor, name = cmap[q]
+            cell = fields[k].strip()
+            if not _NUMBER.match(cell):
+                what = "empty cell" if cell == "" else f"{cell!r} is not a decimal number"
+                raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): {what}")
+            x = float(cell) * factor
+            if not math.isfinite(x):
+                raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): {cell!r} "
+                                     f"overflows to a non-finite value")
+            if q in nonneg and x < 0:
+                raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): must be >= 0, "
+                                     f"got {cell}")
+            if q == increasing and rows and x <= rows[-1][order.index(q)]:
+                raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): {cell} does not "
+                                     f"increase (previous row, line {lines[-1]}, has "
+                                     f"{rows[-1][order.index(q)] / factor:g})")
+            row.append(x)
+        rows.append(row)
+        lines.append(lineno)
+    if header is None:
+        raise CsvImportError(f"{path}: empty file: no header row")
+    if len(rows) < 2:
+        raise CsvImportError(f"{path}: needs at least 2 data rows, got {len(rows)}")
+    arr = np.array(rows, dtype=float)
+    return CsvTable(path, {q: arr[:, j] for j, q in enumerate(order)}, np.array(lines), comments)
+
+
+def _read_text(path: str | os.PathLike) -> str:
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CsvImportError(f"{path}: no such file") from None
+    except UnicodeDecodeError as exc:
+        raw = Path(path).read_bytes()
+        line = raw[:exc.start].count(b"\n") + 1
+        raise CsvImportError(f"{path}:{line}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:
+        raise CsvImportError(f"{path}: cannot read: {exc.strerror or exc}") from None
+
+
+def read_drive_csv(path: str | os.PathLike, text: str | None = None) -> CsvTable:
+    """Parse a drive CSV (module docstring); ``text`` instead of reading ``path`` (tests)."""
+    text = _read_text(path) if text is None else text
+    return parse_csv(text, str(path), DRIVE_QUANTITIES, DRIVE_REQUIRED, DRIVE_GROUPS, increasing="time",
+                     nonneg=("time",))
+
+
+def read_road_csv(path: str | os.PathLike, text: str | None = None):
+    """Parse a road CSV into a :class:`~susp_sim_ros.model.road.RoadProfile`."""
+    from ..model.road import RoadProfile
+    text = _read_text(path) if text is None else text
+    t = parse_csv(text, str(path), ROAD_QUANTITIES, ROAD_REQUIRED, increasing="s")
+    return RoadProfile(t.columns["s"], t.columns["z_left"], t.columns["z_right"])
+
+
+def csv_to_drive(drive_csv: str | os.PathLike, road_csv: str | os.PathLike | None = None, *,
+                 vehicle: str = "passat_b8_like", maneuver: str = "", damper_oil_level: str = "1,1,1,1",
+                 source: str = "measured", notes: str = "", drive_text: str | None = None,
+                 road_text: str | None = None):
+    """A :class:`~susp_sim_ros.io.drive.TestDrive` from the CSV files (nothing written)."""
+    from ..io.drive import ImuSeries, Series, TestDrive, parse_oil
+    parse_oil(damper_oil_level, "damper_oil_level")
+    tab = read_drive_csv(drive_csv, drive_text)
+    c = tab.columns
+    t_ns = np.round(c["time"] * 1e9).astype(np.int64)
+    dup = np.nonzero(np.diff(t_ns) <= 0)[0]
+    if dup.size:
+        k = int(dup[0]) + 1
+        raise CsvImportError(f"{drive_csv}:{tab.lines[k]}: column 'time_s': equal to the previous row's "
+                             f"time at nanosecond resolution")
+    gyro = np.column_stack([c["roll_rate"], c["pitch_rate"], c["yaw_rate"]])
+    if "accel_x" in c:
+        accel = np.column_stack([c["accel_x"], c["accel_y"], c["accel_z"]])
+    else:
+        accel = np.zeros_like(gyro)
+    road = read_road_csv(road_csv, road_text) if road_csv is not None else None
+    wh = None
+    if "wheel_height_fl" in c:
+        wh = Series(t_ns, np.column_stack([c[f"wheel_height_{w}"] for w in ("fl", "fr", "rl", "rr")]))
+    note_parts = [f"imported from {Path(drive_csv).name}" + (f" and {Path(road_csv).name}" if road_csv else "")]
+    note_parts += tab.comments
+    if "accel_x" not in c:
+        note_parts.append("no accelerometer columns: linear_acceleration written as 0")
+    if notes:
+        note_parts.append(notes)
+    meta = {"vehicle": vehicle, "maneuver": maneuver, "damper_oil_level": damper_oil_level,
+            "source": source, "notes": "; ".join(note_parts)}
+    return TestDrive(meta, Series(t_ns, c["speed"]), Series(t_ns, c["steering"]), road, wh,
+                     ImuSeries(t_ns, gyro, accel), {"csv_lines": tab.lines})
+
+
+def import_csv(drive_csv: str | os.PathLike, out: str | os.PathLike, road_csv: str | os.PathLike | None = None,
+               *, overwrite: bool = False, **metadata) -> dict:
+    """Convert the CSV files to a test-drive MCAP at ``out``; returns a summary dict."""
+    from ..io.drive import write_drive
+    drive = csv_to_drive(drive_csv, road_csv, **metadata)
+    n = write_drive(out, drive, overwrite=overwrite)
+    return {"out": str(out), "messages": n, "samples": len(drive.imu),
+            "duration_s": float((drive.imu.t_ns[-1] - drive.imu.t_ns[0]) * 1e-9),
+            "road_samples": 0 if drive.road is None else len(drive.road),
+            "metadata": drive.metadata}
+
+
+__all__ = ["CsvTable", "parse_csv", "read_drive_csv", "read_road_csv", "csv_to_drive", "import_csv",
+           "DRIVE_QUANTITIES", "ROAD_QUANTITIES"]
