@@ -1,0 +1,384 @@
+"""``susp_sim_node``: the ROS 2 node, a thin adapter around :class:`~susp_sim_ros.sim_core.SimCore`.
+
+Subscribes to the test-drive input topics (interface.md), publishes ``/sim/imu/data``, ``/sim/odom``,
+``/sim/suspension`` and ``/diagnostics``, optionally records everything to an MCAP file.
+
+Timing:
+
+- wall time (default): a dedicated thread wakes at each publish tick (absolute deadlines, no drift),
+  steps the core to "now" and publishes; publish-period jitter, lateness and deadline misses (a tick
+  published more than one period late) are measured and reported on ``/diagnostics``;
+- sim time (``use_sim_time:=true``, a replay with ``/clock``): a ROS timer on the sim clock; the core
+  steps exactly as far as ``/clock`` moved, so replays at any rate give the same outputs.
+
+Every input first steps the core to the current time, then replaces the held value, so inputs take
+effect at the instant they arrive. The callbacks only take inputs, step the shared core and publish.
+
+Parameters (all with defaults; ``--ros-args --params-file config/susp_sim_node.yaml``):
+``vehicle``, ``friction_variant``, ``damper_oil_level`` [FL, FR, RL, RR], ``step_s`` [s],
+``publish_rate_hz`` [Hz], ``record_path`` (empty: no recording), ``record_overwrite``,
+``input_timeout_s`` [s], ``diagnostics_rate_hz`` [Hz]. ``damper_oil_level``, ``friction_variant`` and
+``vehicle`` may be changed while running; the others are fixed at start.
+"""
+from __future__ import annotations
+
+import math
+import sys
+import threading
+import time
+from collections import deque
+
+import numpy as np
+import rclpy
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
+
+from diagnostic_msgs.msg import DiagnosticArray
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import Imu
+from std_msgs.msg import Float64, Float64MultiArray
+
+from .errors import SuspInputError
+from .io import messages as M
+from .io.recorder import McapRecorder
+from .lockstep import simulated_metadata
+from .model.vehicle import Model, check_oil
+from .sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, SimCore
+
+NODE_NAME = "susp_sim_node"
+INPUT_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
+LATCHED_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+OUTPUT_QOS = QoSProfile(depth=50, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
+
+DEFAULTS = {
+    "vehicle": ("passat_b8_like", "vehicle parameter set name (config/vehicles) or YAML path"),
+    "friction_variant": ("full", "friction variant: full, no_horizontal, no_velocity, dahl_only or a YAML path"),
+    "damper_oil_level": ([1.0, 1.0, 1.0, 1.0], "damper oil level FL, FR, RL, RR in [0, 1] (1 = intact)"),
+    "step_s": (0.001, "fixed internal integration step [s]"),
+    "publish_rate_hz": (100.0, "publish rate of /sim topics [Hz]"),
+    "record_path": ("", "MCAP file to record to (empty: no recording)"),
+    "record_overwrite": (False, "overwrite an existing record_path"),
+    "input_timeout_s": (0.5, "an input not refreshed for this long is reported stale [s]"),
+    "diagnostics_rate_hz": (1.0, "publish rate of /diagnostics [Hz]"),
+}
+RUNTIME = ("damper_oil_level", "friction_variant", "vehicle")
+
+
+def fill(msg, d: dict):
+    """Copy a plain-dict message (io.messages builders) into an rclpy message object."""
+    for k, v in d.items():
+        if isinstance(v, dict):
+            fill(getattr(msg, k), v)
+        elif k == "dim":
+            msg.dim = [_dim(x) for x in v]
+        else:
+            setattr(msg, k, v)
+    return msg
+
+
+def _dim(x: dict):
+    from std_msgs.msg import MultiArrayDimension
+    return MultiArrayDimension(label=x["label"], size=int(x["size"]), stride=int(x["stride"]))
+
+
+class TimingStats:
+    """Publish timing in wall-time mode: period deviation (jitter), lateness, deadline misses."""
+
+    def __init__(self, period_ns: int, keep: int = 100_000):
+        self.period_ns = period_ns
+        self.jitter_ns: deque[int] = deque(maxlen=keep)
+        self.late_ns: deque[int] = deque(maxlen=keep)
+        self.deadline_misses = 0
+        self.ticks = 0
+        self._last_pub: int | None = None
+
+    def record(self, tick_ns: int, published_ns: int) -> None:
+        self.ticks += 1
+        late = published_ns - tick_ns
+        self.late_ns.append(late)
+        if late > self.period_ns:
+            self.deadline_misses += 1
+        if self._last_pub is not None:
+            self.jitter_ns.append(abs(published_ns - self._last_pub - self.period_ns))
+        self._last_pub = published_ns
+
+    def summary(self) -> dict[str, float]:
+        j = np.asarray(self.jitter_ns, dtype=float) * 1e-6
+        lt = np.asarray(self.late_ns, dtype=float) * 1e-6
+        q = lambda a, p: float(np.percentile(a, p)) if a.size else 0.0
+        return {"jitter_p50_ms": q(j, 50), "jitter_p99_ms": q(j, 99), "jitter_max_ms": float(j.max()) if j.size else 0.0,
+                "lateness_p50_ms": q(lt, 50), "lateness_p99_ms": q(lt, 99),
+                "deadline_misses": self.deadline_misses, "ticks": self.ticks}
+
+
+class SuspSimNode(Node):
+    """The simulation node (see the module docstring). ``start_thread=False`` leaves wall-time
+    stepping to the caller (:meth:`tick`), for deterministic in-process tests."""
+
+    def __init__(self, *, start_thread: bool = True, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        for name, (default, text) in DEFAULTS.items():
+            if not self.has_parameter(name):
+                self.declare_parameter(name, default, ParameterDescriptor(description=text))
+        p = {name: self.get_parameter(name).value for name in DEFAULTS}
+        self.sim_time = bool(self.get_parameter("use_sim_time").value)
+        oil = check_oil(p["damper_oil_level"], "parameter damper_oil_level")
+        self._vehicle, self._variant = str(p["vehicle"]), str(p["friction_variant"])
+        model = Model(self._vehicle, self._variant)
+        self.core = SimCore(model, step_s=float(p["step_s"]), publish_rate_hz=float(p["publish_rate_hz"]),
+                            oil=oil, input_timeout_s=float(p["input_timeout_s"]))
+        self.lock = threading.RLock()
+        self.timing = TimingStats(self.core.period_ns)
+        self.recorder: McapRecorder | None = None
+        if p["record_path"]:
+            meta = simulated_metadata({"maneuver": "live", "node": NODE_NAME}, self._vehicle, self._variant, oil)
+            self.recorder = McapRecorder(p["record_path"], metadata=meta, overwrite=bool(p["record_overwrite"]))
+        self._imu, self._odom, self._susp = Imu(), Odometry(), Float64MultiArray()
+        self.pub_imu = self.create_publisher(Imu, SIM_IMU, OUTPUT_QOS)
+        self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
+        self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
+        self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
+        self.create_subscription(Float64, "/vehicle/speed", self._on_speed, INPUT_QOS)
+        self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self._on_steering, INPUT_QOS)
+        self.create_subscription(Float64MultiArray, "/road/profile", self._on_profile, LATCHED_QOS)
+        self.create_subscription(Float64MultiArray, "/road/wheel_heights", self._on_heights, INPUT_QOS)
+        self.add_on_set_parameters_callback(self._on_params)
+        self._stale: set[str] = set()
+        self._wall0 = time.monotonic()
+        self._sim0_ns: int | None = None
+        self.published = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        if self.sim_time:
+            self.create_timer(self.core.period_ns * 1e-9, self._on_sim_timer)
+        elif start_thread:
+            self._thread = threading.Thread(target=self._realtime_loop, name="susp_sim_tick", daemon=True)
+            self._thread.start()
+        self.create_timer(1.0 / float(p["diagnostics_rate_hz"]), self.publish_diagnostics)
+        self.get_logger().info(
+            f"{NODE_NAME}: vehicle {self._vehicle}, variant {self._variant}, oil {oil.tolist()}, "
+            f"step {self.core.step_ns * 1e-9} s, publish {1e9 / self.core.period_ns:g} Hz, "
+            f"{'sim' if self.sim_time else 'wall'} time"
+            + (f", recording to {p['record_path']}" if self.recorder else ""))
+
+    # -- time -----------------------------------------------------------------------------------------
+    def now_ns(self) -> int:
+        return self.get_clock().now().nanoseconds
+
+    def _record(self, topic: str, msgtype: str, t_ns: int, msg, latched: bool = False) -> None:
+        if self.recorder is not None:
+            self.recorder.write(topic, msgtype, t_ns, serialize_message(msg), latched=latched)
+
+    # -- inputs ---------------------------------------------------------------------------------------
+    def _input(self, topic: str, msgtype: str, msg, apply, latched: bool = False) -> None:
+        t = self.now_ns()
+        with self.lock:
+            if t > 0:
+                if not self.core.started:
+                    self.core.start(t)
+                    self._sim0_ns = t
+                    self._wall0 = time.monotonic()
+                else:
+                    self._publish_samples(self.core.advance_to(t))
+            reason = apply(t)
+            self._record(topic, msgtype, max(t, 0), msg, latched)
+        if reason:
+            self.get_logger().warning(reason, throttle_duration_sec=1.0)
+
+    def _on_speed(self, msg: Float64) -> None:
+        self._input("/vehicle/speed", M.FLOAT64, msg, lambda t: self.core.set_speed(t, msg.data))
+
+    def _on_steering(self, msg: Float64) -> None:
+        self._input("/vehicle/steering_wheel_angle", M.FLOAT64, msg,
+                    lambda t: self.core.set_steering(t, msg.data))
+
+    def _on_profile(self, msg: Float64MultiArray) -> None:
+        dims = [(d.label, d.size) for d in msg.layout.dim]
+        self._input("/road/profile", M.FLOAT64_ARRAY, msg,
+                    lambda t: self.core.set_road_profile(t, msg.data, dims), latched=True)
+
+    def _on_heights(self, msg: Float64MultiArray) -> None:
+        self._input("/road/wheel_heights", M.FLOAT64_ARRAY, msg,
+                    lambda t: self.core.set_wheel_heights(t, msg.data))
+
+    # -- stepping and publishing ----------------------------------------------------------------------
+    def _publish_samples(self, samples) -> None:
+        for s in samples:
+            imu = fill(self._imu, M.imu_msg(s.t_ns, s.y))
+            odom = fill(self._odom, M.odom_msg(s.t_ns, s.y))
+            susp = fill(self._susp, M.suspension_msg(s.y))
+            self.pub_imu.publish(imu)
+            self.pub_odom.publish(odom)
+            self.pub_susp.publish(susp)
+            self.published += 1
+            if self.recorder is not None:
+                self._record(SIM_IMU, M.IMU, s.t_ns, imu)
+                self._record(SIM_ODOM, M.ODOMETRY, s.t_ns, odom)
+                self._record(SIM_SUSPENSION, M.FLOAT64_ARRAY, s.t_ns, susp)
+
+    def tick(self, t_ns: int | None = None) -> int:
+        """Step to ``t_ns`` (default: now) and publish the samples passed; returns how many."""
+        t = self.now_ns() if t_ns is None else int(t_ns)
+        with self.lock:
+            if not self.core.started:
+                if t <= 0:
+                    return 0
+                self.core.start(t)
+                self._sim0_ns = t
+                self._wall0 = time.monotonic()
+                return 0
+            samples = self.core.advance_to(t)
+            self._publish_samples(samples)
+        return len(samples)
+
+    def _on_sim_timer(self) -> None:
+        if self.core.started:  # sim time starts with the first input (lockstep does the same)
+            self.tick()
+
+    def _realtime_loop(self) -> None:
+        """Wall-time stepping: wake at each tick (absolute deadline), step, publish, measure."""
+        period = self.core.period_ns
+        ctx = self.context
+        with self.lock:
+            if not self.core.started:
+                t0 = time.time_ns()
+                self.core.start(t0)
+                self._sim0_ns = t0
+                self._wall0 = time.monotonic()
+        while not self._stop.is_set() and ctx.ok():
+            nxt = self.core.next_tick_ns
+            wait = (nxt - time.time_ns()) * 1e-9
+            if wait > 0:
+                if self._stop.wait(wait):
+                    break
+            now = time.time_ns()
+            with self.lock:
+                samples = self.core.advance_to(now)
+                self._publish_samples(samples)
+            done = time.time_ns()
+            for s in samples:
+                self.timing.record(s.t_ns, done)
+            if not samples and now - nxt > period:
+                self.timing.deadline_misses += 1
+
+    # -- parameters -----------------------------------------------------------------------------------
+    def _on_params(self, params) -> SetParametersResult:
+        new = {p.name: p.value for p in params}
+        fixed = [n for n in new if n in DEFAULTS and n not in RUNTIME
+                 and new[n] != self.get_parameter(n).value]
+        if fixed:
+            return SetParametersResult(successful=False,
+                                       reason=f"parameter(s) {', '.join(fixed)} are fixed after start; "
+                                              f"run-time changes: {', '.join(RUNTIME)}")
+        try:
+            oil = check_oil(new["damper_oil_level"], "parameter damper_oil_level") \
+                if "damper_oil_level" in new else None
+            model = None
+            vehicle = str(new.get("vehicle", self._vehicle))
+            variant = str(new.get("friction_variant", self._variant))
+            if (vehicle, variant) != (self._vehicle, self._variant):
+                model = Model(vehicle, variant)
+        except (SuspInputError, ValueError, TypeError) as exc:
+            self.get_logger().warning(f"rejected parameter change: {exc}")
+            return SetParametersResult(successful=False, reason=str(exc))
+        with self.lock:
+            if oil is not None:
+                self.core.set_oil(oil)
+            if model is not None:
+                self.core.set_model(model)
+                self._vehicle, self._variant = vehicle, variant
+        self.get_logger().info(f"parameters changed: {', '.join(f'{k}={v}' for k, v in new.items())}")
+        return SetParametersResult(successful=True)
+
+    # -- diagnostics ----------------------------------------------------------------------------------
+    def diagnostics(self) -> list[dict]:
+        t = self.now_ns()
+        with self.lock:
+            core = self.core
+            stale = core.stale_inputs(t) if core.started else []
+            rej = dict(core.rejections)
+            last_rej = core.last_rejection
+            healthy = core.healthy
+            sim_s = core.sim_time_s
+            oil = core.oil.tolist()
+        for topic in set(stale) - self._stale:
+            self.get_logger().warning(f"input {topic} is stale (no message for more than "
+                                      f"{core.timeout_ns * 1e-9:g} s); holding its last value")
+        for topic in self._stale - set(stale):
+            self.get_logger().info(f"input {topic} is fresh again")
+        self._stale = set(stale)
+        wall = time.monotonic() - self._wall0
+        rtf = sim_s / wall if wall > 0 and core.started else 0.0
+        tm = self.timing.summary()
+        inputs = {"level": 1 if stale else 0, "name": f"{NODE_NAME}: inputs",
+                  "message": ("stale: " + ", ".join(stale)) if stale else ("waiting for inputs" if not core.started else "fresh"),
+                  "values": {"stale": ",".join(stale), "rejected_total": sum(rej.values()),
+                             **{f"rejected_{k}": v for k, v in rej.items()}, "last_rejection": last_rej}}
+        timing = {"level": 1 if tm["deadline_misses"] else 0, "name": f"{NODE_NAME}: timing",
+                  "message": f"real-time factor {rtf:.3f}, {tm['deadline_misses']} deadline misses",
+                  "values": {"real_time_factor": f"{rtf:.6f}", "sim_time_s": f"{sim_s:.6f}",
+                             "mode": "sim_time" if self.sim_time else "wall_time",
+                             **{k: (f"{v:.6f}" if isinstance(v, float) else v) for k, v in tm.items()}}}
+        model = {"level": 0 if healthy else 2, "name": f"{NODE_NAME}: model",
+                 "message": "numerically healthy" if healthy else "numerically unhealthy: stepping stopped",
+                 "values": {"healthy": healthy, "vehicle": self._vehicle, "friction_variant": self._variant,
+                            "damper_oil_level": ",".join(f"{x:g}" for x in oil),
+                            "published_samples": self.published}}
+        return [inputs, timing, model]
+
+    def publish_diagnostics(self) -> None:
+        t = self.now_ns()
+        d = M.diagnostics_msg(t, self.diagnostics())
+        msg = DiagnosticArray()
+        fill(msg.header, d["header"])
+        from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+        msg.status = [DiagnosticStatus(level=bytes([s["level"]]), name=s["name"], message=s["message"],
+                                       hardware_id=s["hardware_id"],
+                                       values=[KeyValue(key=kv["key"], value=kv["value"]) for kv in s["values"]])
+                      for s in d["status"]]
+        self.pub_diag.publish(msg)
+        with self.lock:
+            self._record(DIAGNOSTICS, M.DIAGNOSTIC_ARRAY, max(t, 0), msg)
+
+    # -- shutdown -------------------------------------------------------------------------------------
+    def close(self) -> None:
+        """Stop the tick thread and finalise the recording (idempotent)."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=2.0)
+        with self.lock:
+            if self.recorder is not None:
+                self.recorder.close()
+
+    def destroy_node(self):
+        self.close()
+        return super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console entry point ``susp_sim_node [--ros-args ...]``. Exit 0 on SIGINT/SIGTERM."""
+    rclpy.init(args=args if args is not None else sys.argv)
+    node = None
+    try:
+        node = SuspSimNode()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except SuspInputError as exc:
+        print(f"{NODE_NAME}: error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
