@@ -23,6 +23,7 @@ Parameters (all with defaults; ``--ros-args --params-file config/susp_sim_node.y
 from __future__ import annotations
 
 import math
+import os
 import sys
 import threading
 import time
@@ -64,7 +65,10 @@ DEFAULTS = {
     "record_overwrite": (False, "overwrite an existing record_path"),
     "input_timeout_s": (0.5, "an input not refreshed for this long is reported stale [s]"),
     "diagnostics_rate_hz": (1.0, "publish rate of /diagnostics [Hz]"),
+    "realtime_priority": (10, "SCHED_FIFO priority of the wall-time tick thread (0: normal scheduling; "
+                              "falls back to normal scheduling when not permitted)"),
 }
+SWITCH_INTERVAL_S = 0.0001
 RUNTIME = ("damper_oil_level", "friction_variant", "vehicle")
 
 
@@ -83,6 +87,12 @@ def fill(msg, d: dict):
 def _dim(x: dict):
     from std_msgs.msg import MultiArrayDimension
     return MultiArrayDimension(label=x["label"], size=int(x["size"]), stride=int(x["stride"]))
+
+
+def warm_up(model: Model) -> None:
+    """Run the compiled kernel once on a throwaway stepper (JIT compile before real time starts)."""
+    from .model.vehicle import Stepper
+    Stepper(model, dt=0.001).advance(2, 1.0, 0.0)
 
 
 class TimingStats:
@@ -132,6 +142,8 @@ class SuspSimNode(Node):
         self.core = SimCore(model, step_s=float(p["step_s"]), publish_rate_hz=float(p["publish_rate_hz"]),
                             oil=oil, input_timeout_s=float(p["input_timeout_s"]))
         self.lock = threading.RLock()
+        self._rt_priority = int(p["realtime_priority"])
+        warm_up(model)
         self.timing = TimingStats(self.core.period_ns)
         self.recorder: McapRecorder | None = None
         if p["record_path"]:
@@ -206,12 +218,14 @@ class SuspSimNode(Node):
                     lambda t: self.core.set_wheel_heights(t, msg.data))
 
     # -- stepping and publishing ----------------------------------------------------------------------
-    def _publish_samples(self, samples) -> None:
+    def _publish_samples(self, samples, stamps: list | None = None) -> None:
         for s in samples:
             imu = fill(self._imu, M.imu_msg(s.t_ns, s.y))
             odom = fill(self._odom, M.odom_msg(s.t_ns, s.y))
             susp = fill(self._susp, M.suspension_msg(s.y))
             self.pub_imu.publish(imu)
+            if stamps is not None:
+                stamps.append(time.time_ns())
             self.pub_odom.publish(odom)
             self.pub_susp.publish(susp)
             self.published += 1
@@ -243,6 +257,11 @@ class SuspSimNode(Node):
         """Wall-time stepping: wake at each tick (absolute deadline), step, publish, measure."""
         period = self.core.period_ns
         ctx = self.context
+        if self._rt_priority > 0:
+            try:
+                os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(self._rt_priority))
+            except (OSError, AttributeError) as exc:
+                self.get_logger().info(f"tick thread: no real-time scheduling ({exc}); using normal priority")
         with self.lock:
             if not self.core.started:
                 t0 = time.time_ns()
@@ -256,11 +275,11 @@ class SuspSimNode(Node):
                 if self._stop.wait(wait):
                     break
             now = time.time_ns()
+            stamps: list[int] = []
             with self.lock:
                 samples = self.core.advance_to(now)
-                self._publish_samples(samples)
-            done = time.time_ns()
-            for s in samples:
+                self._publish_samples(samples, stamps)
+            for s, done in zip(samples, stamps):
                 self.timing.record(s.t_ns, done)
             if not samples and now - nxt > period:
                 self.timing.deadline_misses += 1
@@ -282,6 +301,7 @@ class SuspSimNode(Node):
             variant = str(new.get("friction_variant", self._variant))
             if (vehicle, variant) != (self._vehicle, self._variant):
                 model = Model(vehicle, variant)
+                warm_up(model)
         except (SuspInputError, ValueError, TypeError) as exc:
             self.get_logger().warning(f"rejected parameter change: {exc}")
             return SetParametersResult(successful=False, reason=str(exc))
@@ -361,6 +381,9 @@ class SuspSimNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``susp_sim_node [--ros-args ...]``. Exit 0 on SIGINT/SIGTERM."""
+    # The tick thread must get the GIL promptly when its deadline comes, not after the default 5 ms
+    # switch interval of a busy executor thread.
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
     rclpy.init(args=args if args is not None else sys.argv)
     node = None
     try:
