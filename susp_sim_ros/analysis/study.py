@@ -1,0 +1,379 @@
+"""The paper-style validation study over a folder of recorded test drives.
+
+For every drive (``*.mcap``) in a folder: simulate it with all four friction variants of the paper's
+Table 5 in lockstep (:func:`susp_sim_ros.lockstep.run_lockstep`, the very code path that equals the
+node replaying the drive), validate each simulation against the measured IMU
+(:mod:`.validation`), and write
+
+- the paper's tables: pitch-rate RMSE for bump crossings (bump window), roll-rate RMSE for sine
+  steering (steering window), deg/s, variants x vehicle states;
+- overlay plots, measured vs each variant, one PNG per maneuver and state;
+- a Markdown report (``report.md``) and the full result as JSON (``study.json``).
+
+The maneuver of a drive comes from its ``test_drive`` metadata (``maneuver`` starting with
+``bump_crossing`` or ``sine_steer``), the vehicle state from ``damper_oil_level``. Drives of other
+maneuvers are validated and reported but stay out of the paper tables.
+
+Speed: the four variants share one compiled kernel; a lockstep run of a bundled drive takes a few tens
+of milliseconds, so the whole study over ``bags/`` takes a few seconds (most of it plotting). Batch runs
+(:func:`~susp_sim_ros.model.simulate_batch`) would only pay off for hundreds of drives.
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import RecordingError, SuspInputError
+from . import validation as va
+
+VARIANTS = ("full", "no_horizontal", "no_velocity", "dahl_only")
+VARIANT_LABEL = {"full": "Model 1 full", "no_horizontal": "Model 2 no horizontal",
+                 "no_velocity": "Model 3 no velocity", "dahl_only": "Model 4 Dahl only"}
+MANEUVERS = ("bump_crossing", "sine_steer")
+STATES = ("intact", "front_empty", "rear_empty")
+STATE_OIL = {"intact": (1.0, 1.0, 1.0, 1.0), "front_empty": (0.0, 0.0, 1.0, 1.0),
+             "rear_empty": (1.0, 1.0, 0.0, 0.0)}
+PAPER_RATIO = 65.0  # paper: rear dampers oil-empty, bump crossing, RMSE dahl_only / full
+COLORS = {"full": "tab:blue", "no_horizontal": "tab:orange", "no_velocity": "tab:green",
+          "dahl_only": "tab:red"}
+
+
+def classify_maneuver(text: str) -> str | None:
+    """``bump_crossing``/``sine_steer`` from the free-text metadata ``maneuver``; ``None`` otherwise."""
+    t = (text or "").strip().lower()
+    if t.startswith("bump"):
+        return "bump_crossing"
+    if t.startswith("sine"):
+        return "sine_steer"
+    return None
+
+
+def classify_state(oil: Sequence[float]) -> str:
+    """Vehicle state name of oil levels FL, FR, RL, RR; ``oil_<levels>`` for other combinations."""
+    for name, levels in STATE_OIL.items():
+        if tuple(float(x) for x in oil) == levels:
+            return name
+    return "oil_" + "_".join(f"{x:g}" for x in oil)
+
+
+@dataclass
+class DriveResult:
+    """One drive of the study: what it is, and each variant's validation."""
+
+    path: str
+    maneuver: str | None
+    state: str
+    vehicle: str
+    source: str
+    signal: str
+    window: str
+    results: dict[str, va.ValidationResult] = field(default_factory=dict)
+    sims: dict = field(default_factory=dict, repr=False)
+    drive: object = field(default=None, repr=False)
+    plot: str | None = None
+
+    def rmse(self, variant: str) -> float:
+        return self.results[variant].rmse_deg_s(self.window, self.signal)
+
+    def as_dict(self) -> dict:
+        return {"file": self.path, "maneuver": self.maneuver, "state": self.state, "vehicle": self.vehicle,
+                "source": self.source, "signal": self.signal, "window": self.window,
+                "rmse_deg_s": {v: self.rmse(v) for v in self.results},
+                "validation": {v: r.as_dict() for v, r in self.results.items()}, "plot": self.plot}
+
+
+def _find_drives(folder: Path) -> list[Path]:
+    if not folder.is_dir():
+        raise SuspInputError(f"--study {folder}: not a directory")
+    drives = sorted(folder.glob("*.mcap"))
+    if not drives:
+        raise SuspInputError(f"--study {folder}: no recorded test drives (*.mcap) in it")
+    return drives
+
+
+def simulate_and_validate(path: Path, drive, variants: Sequence[str], models: dict, progress=None) -> DriveResult:
+    """Lockstep-simulate one drive with every variant and validate each against its measured IMU."""
+    from ..lockstep import run_lockstep
+
+    if drive.imu is None or len(drive.imu) < 2:
+        raise RecordingError(f"{path}: no measured IMU samples on /imu/data: nothing to validate against")
+    meta = drive.metadata
+    maneuver = classify_maneuver(meta.get("maneuver", ""))
+    vehicle = meta.get("vehicle") or "passat_b8_like"
+    signal = va.MANEUVER_SIGNAL.get(maneuver, "pitch_rate")
+    wheelbase = _model(models, vehicle, variants[0]).vehicle.wheelbase
+    windows = va.analysis_windows(drive, wheelbase)
+    window = va.MANEUVER_WINDOW.get(maneuver, "whole")
+    if window not in windows:
+        window = "whole"
+    res = DriveResult(str(path), maneuver, classify_state(drive.oil_levels()), vehicle,
+                      meta.get("source", ""), signal, window, drive=drive)
+    for v in variants:
+        sim = run_lockstep(drive, vehicle=vehicle, variant=v, model=_model(models, vehicle, v))
+        if not sim.healthy or len(sim.imu) < 2:
+            raise RecordingError(f"{path}: the {v} simulation produced no valid output "
+                                 f"(rejected inputs: {sim.rejections or 'none'})")
+        try:
+            r = va.validate(drive.imu.t_ns, drive.imu.gyro, sim.imu.t_ns, sim.imu.gyro, windows=windows,
+                            names=(f"{path} /imu/data", f"{v} simulation"))
+        except RecordingError as exc:
+            raise RecordingError(f"{path}: {exc}") from None
+        if window not in r.metrics:
+            raise RecordingError(f"{path}: analysis window {window!r} has no overlap with the {v} "
+                                 f"simulation: {r.skipped.get(window, '')}")
+        res.results[v] = r
+        res.sims[v] = sim.imu
+        if progress is not None:
+            progress.update(1)
+    return res
+
+
+def _model(models: dict, vehicle: str, variant: str):
+    from ..model import Model
+    key = (vehicle, variant)
+    if key not in models:
+        models[key] = Model(vehicle, variant)
+    return models[key]
+
+
+def tables(drives: Sequence[DriveResult], variants: Sequence[str] = VARIANTS) -> dict:
+    """``{maneuver: {state: {variant: rmse_deg_s}}}``; several drives of one cell are averaged."""
+    cells: dict = {}
+    for d in drives:
+        if d.maneuver is None:
+            continue
+        for v in variants:
+            cells.setdefault(d.maneuver, {}).setdefault(d.state, {}).setdefault(v, []).append(d.rmse(v))
+    out = {m: {s: {v: float(np.mean(x)) for v, x in by_v.items()} for s, by_v in sorted(by_s.items(), key=lambda kv: _state_key(kv[0]))}
+           for m, by_s in cells.items()}
+    return {m: out[m] for m in MANEUVERS if m in out} | {m: out[m] for m in out if m not in MANEUVERS}
+
+
+def _state_key(s: str):
+    return (STATES.index(s), s) if s in STATES else (len(STATES), s)
+
+
+# ---- plots ---------------------------------------------------------------------------------------------
+def plot_drive(d: DriveResult, path: Path) -> None:
+    """Measured vs each variant (top) and each variant's error (bottom) of the table signal, deg/s."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ax_i = va.SIGNAL_AXIS[d.signal]
+    imu = d.drive.imu
+    t0 = int(imu.t_ns[0])
+    fig, (ax, ax_e) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, height_ratios=[2, 1])
+    ax.plot((imu.t_ns - t0) * 1e-9, np.degrees(imu.gyro[:, ax_i]), color="0.55", lw=0.8,
+            label="measured (/imu/data)")
+    for v, sim in d.sims.items():
+        ts = (sim.t_ns - t0) * 1e-9
+        ax.plot(ts, np.degrees(sim.gyro[:, ax_i]), color=COLORS.get(v), lw=1.2,
+                label=f"{VARIANT_LABEL.get(v, v)}: RMSE {d.rmse(v):.3f} deg/s")
+        grid = va.common_grid(va.overlap((int(imu.t_ns[0]), int(imu.t_ns[-1])),
+                                         (int(sim.t_ns[0]), int(sim.t_ns[-1]))), 100.0)
+        err = va.resample(sim.t_ns, np.degrees(sim.gyro[:, ax_i]), grid) - \
+            va.resample(imu.t_ns, np.degrees(imu.gyro[:, ax_i]), grid)
+        ax_e.plot((grid - t0) * 1e-9, err, color=COLORS.get(v), lw=1.0)
+    w = d.results[next(iter(d.results))].windows[d.window]
+    for a in (ax, ax_e):
+        a.axvspan((w.start_ns - t0) * 1e-9, (w.end_ns - t0) * 1e-9, color="0.92", zorder=0)
+        a.grid(True, lw=0.3)
+    name = d.signal.replace("_", " ")
+    ax.set_ylabel(f"{name} [deg/s]")
+    ax_e.set_ylabel("simulated - measured [deg/s]")
+    ax_e.set_xlabel("time since the first IMU sample [s]")
+    ax.set_title(f"{d.maneuver or 'drive'}, {d.state}: {name}, measured vs friction variants "
+                 f"(shaded: {d.window} window)", fontsize=10)
+    ax.legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+# ---- report --------------------------------------------------------------------------------------------
+def _fmt(x: float) -> str:
+    return "n/a" if x is None or not math.isfinite(x) else f"{x:.3f}"
+
+
+def findings(tab: dict, variants: Sequence[str] = VARIANTS) -> dict:
+    """Per maneuver and state: the dahl_only/full ratio and the spread max/min over variants."""
+    out: dict = {}
+    for m, by_s in tab.items():
+        for s, row in by_s.items():
+            vals = [row[v] for v in variants if v in row]
+            f = {"spread_max_over_min": (max(vals) / min(vals)) if vals and min(vals) > 0 else math.inf}
+            if "full" in row and "dahl_only" in row and row["full"] > 0:
+                f["dahl_only_over_full"] = row["dahl_only"] / row["full"]
+            out.setdefault(m, {})[s] = f
+    return out
+
+
+def write_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: dict, elapsed_s: float,
+                 variants: Sequence[str] = VARIANTS) -> None:
+    lines = ["# Validation study: friction variants against recorded test drives", "",
+             f"{len(drives)} drives, {len(variants)} friction variants each, simulated in lockstep "
+             f"(step 1 ms, output 100 Hz) and compared with the measured IMU; {elapsed_s:.1f} s in all.",
+             "RMSE in deg/s over the analysis window of the maneuver (see below). Model 1 = `full`, "
+             "2 = `no_horizontal`, 3 = `no_velocity`, 4 = `dahl_only` (paper Table 5).", ""]
+    sources = sorted({d.source for d in drives})
+    synthetic = [d for d in drives if d.source.startswith("synthetic:")]
+    if synthetic:
+        lines += ["> **The drives are synthetic**, not measurements (`source: " + ", ".join(sources) + "`). "
+                  "Hidden physics of the generator: " + synthetic[0].drive.metadata.get("hidden_physics", "?"),
+                  ""]
+    for m in tab:
+        sig = va.MANEUVER_SIGNAL.get(m, "pitch_rate").replace("_", " ")
+        lines += [f"## {m}: {sig} RMSE [deg/s]", "",
+                  "| state | " + " | ".join(f"{VARIANT_LABEL.get(v, v)}" for v in variants)
+                  + " | dahl_only / full | max / min |",
+                  "|---|" + "---|" * (len(variants) + 2)]
+        for s, row in tab[m].items():
+            f = found[m][s]
+            lines.append(f"| {s} | " + " | ".join(_fmt(row.get(v)) for v in variants)
+                         + f" | {_fmt(f.get('dahl_only_over_full'))} | {_fmt(f['spread_max_over_min'])} |")
+        lines.append("")
+    lines += ["## Findings against the paper", ""]
+    bi = found.get("bump_crossing", {}).get("intact")
+    br = found.get("bump_crossing", {}).get("rear_empty")
+    if bi:
+        ok = bi["spread_max_over_min"] < 1.5
+        lines.append(f"- Intact car, bump crossing: the variants are {'nearly equal' if ok else 'NOT equal'} "
+                     f"(max/min RMSE {bi['spread_max_over_min']:.2f}); the paper: no visible difference, "
+                     "hydraulic damping masks friction on the intact car.")
+    for m in tab:
+        if "intact" not in tab[m]:
+            continue
+        row = tab[m]["intact"]
+        peaks = [float(np.max(np.abs(np.degrees(d.drive.imu.gyro[:, va.SIGNAL_AXIS[d.signal]]))))
+                 for d in drives if d.maneuver == m and d.state == "intact"]
+        spread = max(row.values()) - min(row.values())
+        rel = spread / max(peaks) if peaks and max(peaks) > 0 else math.inf
+        lines.append(f"- Intact car, {m}: the variants' RMSE differ by at most {spread:.3f} deg/s, "
+                     f"{100 * rel:.1f} % of the measured peak {va.MANEUVER_SIGNAL[m].replace('_', ' ')} "
+                     f"({max(peaks, default=math.nan):.1f} deg/s)"
+                     + (": hardly visible in the overlay plot." if rel < 0.05 else "."))
+    if br and "dahl_only_over_full" in br:
+        r = br["dahl_only_over_full"]
+        row = tab["bump_crossing"]["rear_empty"]
+        lines.append(f"- Rear dampers oil-empty, bump crossing: `dahl_only` has {r:.1f} times the RMSE of "
+                     f"`full` ({row['dahl_only']:.3f} vs {row['full']:.3f} deg/s); the paper reports 65 times.")
+        lines += ["", "Why the ratio differs from the paper's 65: a ratio of RMSEs is set by its denominator. "
+                  "The paper's 65 means its full model reproduced the measured rear-empty bump crossing almost "
+                  "exactly. Here `full` keeps an error floor of everything it does not model: "
+                  + ("the generator's hidden physics (amplitude-dependent friction, about +22 N per rear wheel "
+                     "at the bump's stroke amplitudes, and small mass/inertia/spring differences) plus sensor "
+                     "noise, bias and bandwidth of the IMU. Without the hidden physics the same chain gives "
+                     "a ratio of about 6; with the amplitude-dependent friction alone about 2.6 (see "
+                     "bags/README.md). The numerator, `dahl_only` missing the oil and velocity scaling of the "
+                     "damper friction (10 N instead of up to 44 N per rear damper), is of the same size as "
+                     "in the paper; the denominator is not, by design: the bundled drives must keep the "
+                     "amplitude-dependent friction clearly visible for the discrepancy finder."
+                     if synthetic else
+                     "sensor noise and bias, parameter errors and physics no variant has (e.g. the "
+                     "amplitude dependence of friction the paper names as its outlook)."), ""]
+    lines += ["## Analysis windows", ""]
+    for d in drives:
+        w = d.results[next(iter(d.results))].windows[d.window]
+        lines.append(f"- `{Path(d.path).name}`: {d.window} window {w.start_ns / 1e9:.2f}-{w.end_ns / 1e9:.2f} s "
+                     f"(log time): {w.why}")
+    lines += ["", "## Per drive: agreement of the table signal (`full` / `dahl_only`)", "",
+              "| drive | signal | RMSE | max error | correlation | phase lag [ms] |", "|---|---|---|---|---|---|"]
+    for d in drives:
+        cells = []
+        for k in ("rmse", "max_error", "correlation", "phase_lag_s"):
+            vals = []
+            for v in ("full", "dahl_only"):
+                if v in d.results:
+                    x = getattr(d.results[v].metrics[d.window][d.signal], k)
+                    vals.append(_fmt(x * 1e3 if k == "phase_lag_s" else x))
+            cells.append(" / ".join(vals))
+        lines.append(f"| `{Path(d.path).name}` | {d.signal} | " + " | ".join(cells) + " |")
+    lines += ["", "## Plots (measured vs each variant)", ""]
+    for d in drives:
+        if d.plot:
+            lines += [f"### {d.maneuver or Path(d.path).stem}, {d.state}", "", f"![{Path(d.plot).name}]({Path(d.plot).name})", ""]
+    path.write_text("\n".join(lines) + "\n")
+
+
+# ---- the study -----------------------------------------------------------------------------------------
+def run_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: bool = True,
+              progress: bool = True) -> dict:
+    """Run the study over ``folder``; write plots, ``report.md`` and ``study.json`` into ``out_dir``.
+
+    Returns the JSON-ready dict (``tables``, ``elapsed_s``, ``findings``, ``drives``, ...)."""
+    from ..io.drive import read_drive
+
+    t_start = time.perf_counter()
+    folder, out = Path(folder), Path(out_dir)
+    paths = _find_drives(folder)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SuspInputError(f"--out {out}: cannot create the directory: {exc.strerror or exc}") from None
+    from tqdm import tqdm
+    bar = tqdm(total=len(paths) * len(variants), desc="study", unit="run", file=sys.stderr,
+               disable=not progress, dynamic_ncols=True)
+    models: dict = {}
+    results: list[DriveResult] = []
+    try:
+        for p in paths:
+            bar.set_postfix_str(p.name)
+            drive = read_drive(p)
+            results.append(simulate_and_validate(p, drive, variants, models, bar))
+    finally:
+        bar.close()
+    if plots:
+        for d in results:
+            name = f"{d.maneuver}_{d.state}" if d.maneuver else Path(d.path).stem
+            if any(r.plot and Path(r.plot).stem == name for r in results):
+                name = Path(d.path).stem
+            d.plot = str(out / f"{name}.png")
+            plot_drive(d, Path(d.plot))
+    tab = tables(results, variants)
+    found = findings(tab, variants)
+    elapsed = time.perf_counter() - t_start
+    report = out / "report.md"
+    write_report(report, results, tab, found, elapsed, variants)
+    result = {"tables": tab, "elapsed_s": elapsed, "unit": "deg/s",
+              "signals": {m: va.MANEUVER_SIGNAL[m] for m in MANEUVERS},
+              "windows": {m: va.MANEUVER_WINDOW[m] for m in MANEUVERS},
+              "findings": found, "paper_ratio_rear_empty_bump": PAPER_RATIO,
+              "drives": [d.as_dict() for d in results], "report": str(report),
+              "plots": [d.plot for d in results if d.plot], "variants": list(variants)}
+    (out / "study.json").write_text(json.dumps(result, indent=1, default=_jsonable))
+    result["elapsed_s"] = time.perf_counter() - t_start
+    return result
+
+
+def _jsonable(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    return str(x)
+
+
+def summary_text(result: dict) -> str:
+    """Human summary: the tables and the headline findings."""
+    lines = []
+    for m, by_s in result["tables"].items():
+        sig = result["signals"].get(m, "")
+        lines.append(f"{m} ({sig.replace('_', ' ')} RMSE, deg/s)")
+        vs = result["variants"]
+        lines.append("  " + f"{'state':<13}" + "".join(f"{v:>15}" for v in vs))
+        for s, row in by_s.items():
+            lines.append("  " + f"{s:<13}" + "".join(f"{row.get(v, math.nan):>15.3f}" for v in vs))
+    f = result["findings"].get("bump_crossing", {})
+    if "rear_empty" in f and "dahl_only_over_full" in f["rear_empty"]:
+        lines.append(f"bump_crossing rear_empty: dahl_only / full = {f['rear_empty']['dahl_only_over_full']:.2f} "
+                     f"(paper: {PAPER_RATIO:g})")
+    if "intact" in f:
+        lines.append(f"bump_crossing intact: max / min over variants = {f['intact']['spread_max_over_min']:.2f}")
+    lines.append(f"report: {result['report']}  ({result['elapsed_s']:.1f} s)")
+    return "\n".join(lines)

@@ -1,0 +1,115 @@
+"""``susp validate``: compare a simulated recording with a measured one, or run the paper-style study.
+
+    susp validate --measured drive.mcap --simulated sim.mcap [--json]
+    susp validate --study bags --out report/ [--json]
+
+The first form aligns both recordings in time (log time), resamples them onto a common grid without
+extrapolating, and reports RMSE, maximum error, mean error, correlation and phase lag of roll, pitch and
+yaw rate (deg/s) over the whole overlap and over the measured drive's analysis windows (bump, steering).
+The simulated IMU is ``/sim/imu/data`` if the file has it, else ``/imu/data`` (``--simulated-topic``).
+
+The second form (see :mod:`susp_sim_ros.analysis.study`) simulates every drive in the folder with all four
+friction variants in lockstep and writes tables, overlay plots and a Markdown report. Its JSON holds
+``{"tables": {MANEUVER: {STATE: {VARIANT: rmse_deg_s}}}, "elapsed_s": ..., ...}`` (interface.md).
+
+Exit 2 with a message naming the file for unreadable, truncated-beyond-use, junk or topic-less
+recordings and for recordings without time overlap.
+"""
+from __future__ import annotations
+
+import time
+
+from ..analysis import validation as va
+from ..errors import RecordingError, SuspInputError
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--measured", help="recorded test drive (MCAP) with the measured /imu/data")
+    p.add_argument("--simulated", help="simulated recording (MCAP) with /sim/imu/data (or /imu/data)")
+    p.add_argument("--simulated-topic", default="auto",
+                   help="IMU topic of --simulated (default: /sim/imu/data if present, else /imu/data)")
+    p.add_argument("--rate", type=float, default=None,
+                   help="common resampling rate [Hz] (default: the lower rate of the two recordings)")
+    p.add_argument("--study", metavar="DIR", help="run the paper-style study over every *.mcap in DIR")
+    p.add_argument("--out", metavar="DIR", help="output directory of the study (report, plots, JSON)")
+    p.add_argument("--variants", default=",".join(("full", "no_horizontal", "no_velocity", "dahl_only")),
+                   help="comma-separated friction variants of the study")
+    p.add_argument("--no-plots", action="store_true", help="study without PNG plots")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
+def run(args) -> dict:
+    if args.study is not None:
+        if args.measured or args.simulated:
+            raise SuspInputError("give either --study DIR --out DIR or --measured A --simulated B, not both")
+        if not args.out:
+            raise SuspInputError("--study needs --out DIR for the report, plots and tables")
+        return _study(args)
+    if not (args.measured and args.simulated):
+        raise SuspInputError("give --measured A --simulated B, or --study DIR --out DIR")
+    return _pair(args)
+
+
+def _study(args) -> dict:
+    from ..analysis.study import run_study, summary_text
+    variants = tuple(v.strip() for v in args.variants.split(",") if v.strip())
+    if not variants:
+        raise SuspInputError("--variants: give at least one friction variant")
+    res = run_study(args.study, args.out, variants=variants, plots=not args.no_plots,
+                    progress=not args.no_progress)
+    res["summary"] = summary_text(res)
+    return res
+
+
+def _simulated_imu(path: str, topic: str):
+    from ..io.drive import IMU, SIM_IMU, read_imu
+    from ..io.reader import read_recording
+    if topic != "auto":
+        return topic, read_imu(path, topic)
+    rec = read_recording(path)
+    for t in (SIM_IMU, IMU):
+        if rec.by_topic(t):
+            return t, read_imu(path, t)
+    why = f"; file damaged: {rec.error}" if rec.truncated else ""
+    raise RecordingError(f"{path}: no IMU messages on {SIM_IMU} or {IMU} (topics: "
+                         f"{', '.join(sorted(rec.topics())) or 'none'}{why})")
+
+
+def _pair(args) -> dict:
+    from ..io.drive import read_drive
+    t_start = time.perf_counter()
+    drive = read_drive(args.measured)
+    if drive.imu is None or len(drive.imu) < 2:
+        raise RecordingError(f"{args.measured}: no measured IMU samples on /imu/data (topics: "
+                             f"{', '.join(sorted(drive.extra.get('topics', {}))) or 'none'})")
+    topic, sim = _simulated_imu(args.simulated, args.simulated_topic)
+    if len(sim) < 2:
+        raise RecordingError(f"{args.simulated}: fewer than 2 IMU samples on {topic}")
+    windows = va.analysis_windows(drive)
+    try:
+        res = va.validate(drive.imu.t_ns, drive.imu.gyro, sim.t_ns, sim.gyro, windows=windows,
+                          rate_hz=args.rate, names=(f"{args.measured} /imu/data", f"{args.simulated} {topic}"))
+    except RecordingError as exc:
+        raise RecordingError(f"{args.measured} vs {args.simulated}: {exc}") from None
+    if not res.metrics:
+        raise va.NoOverlapError(f"{args.measured} vs {args.simulated}: no analysis window overlaps both "
+                                f"recordings: {res.skipped}")
+    out = {"measured": str(args.measured), "simulated": str(args.simulated), "simulated_topic": topic,
+           "measured_truncated": bool(drive.extra.get("truncated", False)),
+           "source_measured": drive.metadata.get("source", ""), **res.as_dict(),
+           "rmse_deg_s": {w: {s: m.rmse for s, m in ms.items()} for w, ms in res.metrics.items()},
+           "elapsed_s": time.perf_counter() - t_start}
+    lines = [f"{args.measured} (measured) vs {args.simulated} ({topic})"
+             + (" [measured file truncated: readable prefix used]" if out["measured_truncated"] else "")]
+    for w, ms in res.metrics.items():
+        win = res.windows[w]
+        lines.append(f"  {w} window {win.start_ns / 1e9:.2f}-{win.end_ns / 1e9:.2f} s:")
+        for s, m in ms.items():
+            lag = "n/a" if m.phase_lag_s != m.phase_lag_s else f"{m.phase_lag_s * 1e3 + 0.0:+.1f} ms"
+            corr = "n/a" if m.correlation != m.correlation else f"{m.correlation:.3f}"
+            lines.append(f"    {s:<10} RMSE {m.rmse:.3f} deg/s, max {m.max_error:.3f} deg/s, "
+                         f"correlation {corr}, lag {lag}")
+    for w, why in res.skipped.items():
+        lines.append(f"  {w} window skipped: {why}")
+    out["summary"] = "\n".join(lines)
+    return out
