@@ -58,6 +58,28 @@ class _Unbuffered:
     def tell(self) -> int:
         return self._pos
 
+    def write_raw(self, topic: str, msgtype: str, schema_text: str | None, log_time_ns: int,
+                  publish_time_ns: int, sequence: int, data: bytes,
+                  channel_metadata: Mapping[str, str] | None = None) -> None:
+        """Copy a stored message as it is (schema text, channel metadata, times and sequence kept),
+        e.g. when recovering a file; ``schema_text=None`` uses the embedded definition."""
+        if self.closed:
+            raise RecordingError(f"{self.path}: recorder is closed")
+        if topic not in self._channels:
+            if msgtype not in self._schemas:
+                text = schema_text if schema_text is not None else full_definition(msgtype)
+                self._schemas[msgtype] = self._writer.register_schema(msgtype, SchemaEncoding.ROS2, text.encode())
+            meta = dict(channel_metadata) if channel_metadata else {"offered_qos_profiles": qos_yaml(False)}
+            cid = self._writer.register_channel(topic, MessageEncoding.CDR, self._schemas[msgtype], meta)
+            self._channels[topic] = (cid, msgtype)
+            self._sequence[topic] = 0
+        cid = self._channels[topic][0]
+        self._writer.add_message(cid, log_time=int(log_time_ns), data=bytes(data),
+                                 publish_time=int(publish_time_ns), sequence=int(sequence))
+        self._sequence[topic] = int(sequence)
+        self.message_count += 1
+        self._pending += 1
+
     def flush(self) -> None:
         pass
 
@@ -142,6 +164,28 @@ class McapRecorder:
         now = time.monotonic()
         if now - self._last_flush >= self._flush_interval:
             self.flush()
+
+    def write_raw(self, topic: str, msgtype: str, schema_text: str | None, log_time_ns: int,
+                  publish_time_ns: int, sequence: int, data: bytes,
+                  channel_metadata: Mapping[str, str] | None = None) -> None:
+        """Copy a stored message as it is (schema text, channel metadata, times and sequence kept),
+        e.g. when recovering a file; ``schema_text=None`` uses the embedded definition."""
+        if self.closed:
+            raise RecordingError(f"{self.path}: recorder is closed")
+        if topic not in self._channels:
+            if msgtype not in self._schemas:
+                text = schema_text if schema_text is not None else full_definition(msgtype)
+                self._schemas[msgtype] = self._writer.register_schema(msgtype, SchemaEncoding.ROS2, text.encode())
+            meta = dict(channel_metadata) if channel_metadata else {"offered_qos_profiles": qos_yaml(False)}
+            cid = self._writer.register_channel(topic, MessageEncoding.CDR, self._schemas[msgtype], meta)
+            self._channels[topic] = (cid, msgtype)
+            self._sequence[topic] = 0
+        cid = self._channels[topic][0]
+        self._writer.add_message(cid, log_time=int(log_time_ns), data=bytes(data),
+                                 publish_time=int(publish_time_ns), sequence=int(sequence))
+        self._sequence[topic] = int(sequence)
+        self.message_count += 1
+        self._pending += 1
 
     def flush(self) -> None:
         """Close the chunk in progress and push it to the file (it survives a SIGKILL from now on)."""

@@ -1,0 +1,144 @@
+"""``susp replay``: play a recorded test drive onto its topics, with ``/clock``.
+
+Messages go out in log-time order at ``--rate`` times real time, each preceded by a ``/clock`` message
+carrying its log time; during gaps ``/clock`` keeps ticking every ``--clock-period`` of recording time, so
+a node with ``use_sim_time:=true`` steps exactly as far as the recording's time moved. Topics whose
+recorded QoS is transient-local (``/road/profile``) are published latched. By default the recording's
+``/sim/...`` and ``/diagnostics`` topics are not replayed (they are outputs of a node, not inputs);
+``--topics`` selects topics explicitly. ``--loop`` starts over (``/clock`` jumps back; the node
+restarts its simulation). A progress bar goes to stderr.
+"""
+from __future__ import annotations
+
+import importlib
+import math
+import sys
+import time
+
+from ..errors import RecordingError, SuspInputError
+from ..io.reader import read_recording
+
+OUTPUT_PREFIXES = ("/sim/", "/diagnostics", "/clock", "/rosout", "/parameter_events")
+
+
+def add_arguments(p) -> None:
+    p.add_argument("recording", help="MCAP test drive to play")
+    p.add_argument("--rate", type=float, default=1.0, help="playback speed factor (default 1.0)")
+    p.add_argument("--loop", action="store_true", help="play again and again until interrupted")
+    p.add_argument("--loops", type=int, default=0, help="with --loop: stop after this many plays (0: forever)")
+    p.add_argument("--topics", nargs="+", help="replay only these topics")
+    p.add_argument("--no-clock", action="store_true", help="do not publish /clock")
+    p.add_argument("--clock-period", type=float, default=0.01,
+                   help="publish /clock at least every this much recording time [s] (default 0.01)")
+    p.add_argument("--wait-subscribers", type=float, default=2.0,
+                   help="wait up to this long [s] for a subscriber before playing (default 2)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _msg_class(msgtype: str):
+    try:
+        pkg, _, name = msgtype.split("/")
+        return getattr(importlib.import_module(f"{pkg}.msg"), name)
+    except (ValueError, ImportError, AttributeError):
+        raise RecordingError(f"message type {msgtype} is not available in this ROS installation") from None
+
+
+def _timeline(msgs, t0: int, t1: int, clock_ns: int):
+    """(t_ns, message or None for a clock-only tick) in time order."""
+    k = 0
+    t_clock = t0
+    for m in msgs:
+        while clock_ns > 0 and t_clock + clock_ns < m.log_time_ns:
+            t_clock += clock_ns
+            yield t_clock, None
+        yield m.log_time_ns, m
+        t_clock = max(t_clock, m.log_time_ns)
+        k += 1
+    while clock_ns > 0 and t_clock + clock_ns <= t1:
+        t_clock += clock_ns
+        yield t_clock, None
+
+
+def run(args) -> dict:
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        raise SuspInputError(f"--rate: expected a factor > 0, got {args.rate}")
+    rec = read_recording(args.recording)
+    topics = rec.topics()
+    if args.topics:
+        missing = [t for t in args.topics if t not in topics]
+        if missing:
+            raise RecordingError(f"{args.recording}: no topic(s) {', '.join(missing)} (topics: "
+                                 f"{', '.join(sorted(topics))})")
+        play = set(args.topics)
+    else:
+        play = {t for t in topics if not t.startswith(OUTPUT_PREFIXES)}
+    msgs = sorted((m for m in rec.messages if m.topic in play), key=lambda m: m.log_time_ns)
+    if not msgs:
+        raise RecordingError(f"{args.recording}: no messages to replay on {', '.join(sorted(play)) or 'any topic'}")
+
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from rosgraph_msgs.msg import Clock
+
+    rclpy.init(args=["--ros-args"])
+    node = rclpy.create_node("susp_replay")
+    pubs = {}
+    for topic in sorted(play):
+        latched = rec.latched(topic)
+        qos = QoSProfile(depth=1 if latched else 100, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+        pubs[topic] = node.create_publisher(_msg_class(topics[topic]), topic, qos)
+    clock_pub = None if args.no_clock else node.create_publisher(Clock, "/clock", 100)
+    t0, t1 = msgs[0].log_time_ns, msgs[-1].log_time_ns
+    deadline = time.monotonic() + args.wait_subscribers
+    while time.monotonic() < deadline and not any(p.get_subscription_count() for p in pubs.values()):
+        time.sleep(0.02)
+    progress = None
+    if not args.no_progress:
+        from tqdm import tqdm
+        progress = tqdm(total=round((t1 - t0) * 1e-9, 2), unit="s", file=sys.stderr, desc="replay",
+                        bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
+    played = loops = 0
+    clock_ns = int(round(args.clock_period * 1e9)) if clock_pub is not None else 0
+    wall0 = time.monotonic()
+    interrupted = False
+    try:
+        while True:
+            start = time.monotonic()
+            last_shown = t0
+            for t, m in _timeline(msgs, t0, t1, clock_ns):
+                wait = start + (t - t0) * 1e-9 / args.rate - time.monotonic()
+                if wait > 0:
+                    time.sleep(wait)
+                if clock_pub is not None:
+                    c = Clock()
+                    c.clock.sec, c.clock.nanosec = divmod(t, 1_000_000_000)
+                    clock_pub.publish(c)
+                if m is not None:
+                    pubs[m.topic].publish(m.data)
+                    played += 1
+                if progress is not None and t - last_shown >= 100_000_000:
+                    progress.update(round((t - last_shown) * 1e-9, 2))
+                    last_shown = t
+            loops += 1
+            if progress is not None:
+                progress.update(round((t1 - last_shown) * 1e-9, 2))
+            if not args.loop or (args.loops and loops >= args.loops):
+                break
+            if progress is not None:
+                progress.reset()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        interrupted = True
+    finally:
+        if progress is not None:
+            progress.close()
+        time.sleep(0.2)  # let the last messages leave
+        node.destroy_node()
+        rclpy.try_shutdown()
+    wall = time.monotonic() - wall0
+    return {"recording": str(args.recording), "messages": played, "loops": loops, "rate": args.rate,
+            "topics": sorted(play), "duration_s": (t1 - t0) * 1e-9, "wall_s": wall,
+            "interrupted": interrupted,
+            "summary": f"replayed {played} messages on {len(play)} topics from {args.recording} "
+                       f"({loops} play(s), rate {args.rate:g}x, {wall:.1f} s)"}
