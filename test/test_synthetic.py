@@ -78,7 +78,8 @@ def test_drive_is_reproducible_from_the_seed_and_labelled_synthetic():
 
 
 def test_bundled_drives_are_what_the_generator_makes():
-    """bags/ holds exactly the output of `susp generate` with the seed in its metadata."""
+    """bags/ holds the output of `susp generate` with the seed in its metadata (byte for byte on the same
+    software; to floating-point rounding across revisions of the compiled kernel)."""
     from susp_sim_ros.io.drive import read_drive
     files = sorted(BAGS.glob("*.mcap"))
     assert {f.name for f in files} >= {n for n, _, _ in syn.bundle_names()}
@@ -86,7 +87,7 @@ def test_bundled_drives_are_what_the_generator_makes():
     d = read_drive(BAGS / "bump_crossing_rear_empty.mcap")
     g = syn.generate_drive("bump_crossing", "rear_empty", seed=int(d.metadata["seed"]))
     np.testing.assert_array_equal(d.imu.t_ns, g.imu.t_ns)
-    np.testing.assert_allclose(d.imu.gyro, g.imu.gyro, rtol=0, atol=0)
+    np.testing.assert_allclose(d.imu.gyro, g.imu.gyro, rtol=0, atol=1e-9)  # noise is 7e-4 rad/s
     np.testing.assert_array_equal(d.steering.values, g.steering.values)
     assert d.metadata["hidden_physics"] == g.metadata["hidden_physics"]
 
