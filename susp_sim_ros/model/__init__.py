@@ -1,5 +1,6 @@
 """Pure physics core: parameters, friction terms, the compiled five-mass vehicle kernel, maneuvers and
 virtual rigs. Imports numpy, numba, pyyaml only; never rclpy."""
+from . import extra_terms  # noqa: F401  (registers the library terms by name)
 from .layout import OUTPUT_LABELS, WHEELS
 from .params import FrictionVariant, VehicleParams, config_dir, load_variant, load_vehicle
 from .road import RoadProfile, cosine_bump

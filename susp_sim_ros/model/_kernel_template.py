@@ -64,8 +64,8 @@ MASK_DAMPER = 2
 MASK_ALL = 3
 
 # scratch slots per corner (w[k*4 + i])
-_W_ZR, _W_ZRD, _W_SLOPE, _W_D, _W_DD, _W_FZ, _W_WF, _W_FX, _W_FS = 0, 4, 8, 12, 16, 20, 24, 28, 32
-N_SCRATCH = 36
+_W_ZR, _W_ZRD, _W_SLOPE, _W_D, _W_DD, _W_FZ, _W_WF, _W_FX, _W_FS, _W_CELL = 0, 4, 8, 12, 16, 20, 24, 28, 32, 36
+N_SCRATCH = 40
 
 # @@BEGIN TERMS@@
 @njit(cache=True)
@@ -80,21 +80,21 @@ def terms_update(p, s, i, c, dx, mask):
 
 
 @njit(cache=True, inline="always")
-def _interp_curve(p, off, x):
-    """Piecewise-linear curve p[off:off+N_GRID] over the velocity grid, linear beyond its ends."""
-    if x <= p[P_GRID]:
-        k = 0
-    elif x >= p[P_GRID + N_GRID - 1]:
-        k = N_GRID - 2
-    else:
-        lo, hi = 0, N_GRID - 1
-        while hi - lo > 1:
-            mid = (lo + hi) >> 1
-            if p[P_GRID + mid] <= x:
-                lo = mid
-            else:
-                hi = mid
-        k = lo
+def _grid_cell(p, x, k):
+    """Cell k of the velocity grid holding x (linear extrapolation cells at the ends), found by
+    walking from the previous cell ``k``: velocities change little per step, so this is O(1)."""
+    if k < 0 or k > N_GRID - 2:
+        k = N_GRID // 2
+    while k > 0 and x < p[P_GRID + k]:
+        k -= 1
+    while k < N_GRID - 2 and x >= p[P_GRID + k + 1]:
+        k += 1
+    return k
+
+
+@njit(cache=True, inline="always")
+def _interp_cell(p, off, x, k):
+    """Piecewise-linear curve p[off:off+N_GRID] over the velocity grid, evaluated in cell k."""
     x0 = p[P_GRID + k]
     y0 = p[off + k]
     return y0 + (p[off + k + 1] - y0) * (x - x0) / (p[P_GRID + k + 1] - x0)
@@ -130,53 +130,54 @@ def spring_force(p, i, d):
 
 
 @njit(cache=True, inline="always")
-def hydraulic_force(p, i, dd):
-    """Hydraulic damper force [N] at deflection velocity dd [m/s], blended by the corner's oil level."""
+def hydraulic_force(p, i, dd, k):
+    """Hydraulic damper force [N] at deflection velocity dd [m/s], blended by the corner's oil level;
+    ``k`` is the grid cell of dd (:func:`_grid_cell`)."""
     oil = p[_OIL + i]
     f = 0.0
     if oil > 0.0:
-        f += oil * _interp_curve(p, P_H_INTACT + i * N_GRID, dd)
+        f += oil * _interp_cell(p, P_H_INTACT + i * N_GRID, dd, k)
     if oil < 1.0:
-        f += (1.0 - oil) * _interp_curve(p, P_H_EMPTY + i * N_GRID, dd)
+        f += (1.0 - oil) * _interp_cell(p, P_H_EMPTY + i * N_GRID, dd, k)
     return f
 
 
 @njit(cache=True, inline="always")
 def fill_context(p, i, c, d, dd, fx, fy, fz, v, dt):
     """Corner context for the physics terms, including the paper's friction scalings (model-spec 1)."""
-    c[_C_D] = d
-    c[_C_DD] = dd
-    c[_C_FX] = fx
-    c[_C_FY] = fy
-    c[_C_FZ] = fz
+    c[i, _C_D] = d
+    c[i, _C_DD] = dd
+    c[i, _C_FX] = fx
+    c[i, _C_FY] = fy
+    c[i, _C_FZ] = fz
     oil = p[_OIL + i]
-    c[_C_OIL] = oil
-    c[_C_AXLE] = 0.0 if i < 2 else 1.0
-    c[_C_SIDE] = float(i % 2)
-    c[_C_V] = v
-    c[_C_DT] = dt
+    c[i, _C_OIL] = oil
+    c[i, _C_AXLE] = 0.0 if i < 2 else 1.0
+    c[i, _C_SIDE] = float(i % 2)
+    c[i, _C_V] = v
+    c[i, _C_DT] = dt
     sv = 1.0
-    if p[_USE_V] > 0.5:
+    if p[_USE_V] > 0.5 and abs(dd) > p[_SV_REF]:
         sv = 1.0 + (p[_SV_INF] - 1.0) * (1.0 - math.exp(-(abs(dd) - p[_SV_REF]) / p[_SV_VS]))
-        if sv < 1.0:
-            sv = 1.0
-    c[_C_SV] = sv
+    c[i, _C_SV] = sv
     soil = 1.0
     if p[_USE_OIL] > 0.5:
         soil = 1.0 + (p[_SOIL_EMPTY + i] - 1.0) * (1.0 - oil)
-    c[_C_SOIL] = soil
+    c[i, _C_SOIL] = soil
     sh = 1.0
     if p[_USE_H] > 0.5:
         sh = 1.0 + p[_SH_X + i] * abs(fx) + p[_SH_Y + i] * abs(fy)
-    c[_C_SH] = sh
+    c[i, _C_SH] = sh
 
 
-@njit(cache=True)
-def step(p, s, u, rs, rzl, rzr, rn, mode, dt, c, w, y):
-    """Advance one vehicle by one step ``dt`` [s]; inputs ``u`` (layout.U_INDEX); writes outputs ``y``.
+@njit(cache=True, inline="always")
+def step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
+    """Advance one vehicle by one step ``dt`` [s] with the inputs of row ``k`` of ``U``
+    (layout.U_INDEX); writes outputs ``y``.
 
     ``p`` parameters, ``s`` state (updated in place), road tracks ``rs``/``rzl``/``rzr`` with ``rn``
-    valid samples (``mode`` 0), or per-wheel road heights from ``u`` (``mode`` 1). ``c`` (4 x N_CTX)
+    valid samples (``mode`` 0), or per-wheel road heights from ``U`` (``mode`` 1). Rows of 2-D
+    arrays are indexed, never sliced: a slice is a new array object with reference counting. ``c`` (4 x N_CTX)
     and ``w`` are scratch. Returns False when the state stopped being finite.
     """
     g = p[_G]
@@ -184,9 +185,9 @@ def step(p, s, u, rs, rzl, rzr, rn, mode, dt, c, w, y):
     m = p[_M_TOT]
     a = p[_A]
     b = p[_B]
-    v = u[_U_V]
-    ax = u[_U_AX]
-    delta = u[_U_SWA] / p[_STEER_RATIO]
+    v = U[k, _U_V]
+    ax = U[k, _U_AX]
+    delta = U[k, _U_SWA] / p[_STEER_RATIO]
     z = s[_Z]
     phi = s[_PHI]
     th = s[_THETA]
@@ -201,7 +202,7 @@ def step(p, s, u, rs, rzl, rzr, rn, mode, dt, c, w, y):
     # -- road under each wheel --------------------------------------------------------------------
     for i in range(4):
         if mode == 1:
-            zr = u[_U_ZR + i]
+            zr = U[k, _U_ZR + i]
             zrd = (zr - s[_ZR_PREV + i]) / dt
             slope = zrd / v if v > p[_V_FADE] else 0.0
         else:
@@ -239,11 +240,12 @@ def step(p, s, u, rs, rzl, rzr, rn, mode, dt, c, w, y):
 
     # -- suspension forces ---------------------------------------------------------------------------
     for i in range(4):
-        ci = c[i]
-        fill_context(p, i, ci, w[_W_D + i], w[_W_DD + i], w[_W_FX + i], s[_FYT + i], w[_W_FZ + i], v, dt)
+        fill_context(p, i, c, w[_W_D + i], w[_W_DD + i], w[_W_FX + i], s[_FYT + i], w[_W_FZ + i], v, dt)
         f_spring = spring_force(p, i, w[_W_D + i])
-        f_damper = hydraulic_force(p, i, w[_W_DD + i])
-        f_terms = terms_force(p, s, i, ci, MASK_ALL)
+        cell = _grid_cell(p, w[_W_DD + i], int(w[_W_CELL + i]))
+        w[_W_CELL + i] = cell
+        f_damper = hydraulic_force(p, i, w[_W_DD + i], cell)
+        f_terms = terms_force(p, s, i, c, MASK_ALL)
         j = i + 1 if i % 2 == 0 else i - 1
         f_arb = p[_K_ARB + i] * (w[_W_D + i] - w[_W_D + j])
         w[_W_FS + i] = f_spring + f_damper + f_terms + f_arb
@@ -322,7 +324,7 @@ def step(p, s, u, rs, rzl, rzr, rn, mode, dt, c, w, y):
         s[_ZWD + i] = zwd_i
         s[_ZW + i] = zw_i
         d_new = zw_i - (z - p[_X_I + i] * th + p[_Y_I + i] * phi)
-        terms_update(p, s, i, c[i], d_new - w[_W_D + i], MASK_ALL)
+        terms_update(p, s, i, c, d_new - w[_W_D + i], MASK_ALL)
         s[_ZR_PREV + i] = w[_W_ZR + i]
         y[_Y_DEFL + i] = d_new
         y[_Y_DEFL_VEL + i] = zwd_i - (zd - p[_X_I + i] * thd + p[_Y_I + i] * phid)
@@ -352,6 +354,27 @@ def step(p, s, u, rs, rzl, rzr, rn, mode, dt, c, w, y):
     return ok and math.isfinite(z + phi + th + vy + r + zd + phid + thd)
 
 
+@njit(cache=True, _nrt=False, fastmath={"contract", "arcp", "nsz"})
+def _run_steps(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y, c, w, y):
+    # compiled without the reference-counting runtime: with it, every array argument of the inlined
+    # helpers costs an atomic incref/decref pair per step, which made up half of the step time
+    n_sel = sel.shape[0]
+    row = 0
+    count = 0
+    for k in range(U.shape[0]):
+        ok = step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y)
+        count += 1
+        if count == decim:
+            count = 0
+            if row < Y.shape[0]:
+                for j in range(n_sel):
+                    Y[row, j] = y[sel[j]]
+                row += 1
+        if not ok:
+            return k + 1
+    return U.shape[0]
+
+
 @njit(cache=True)
 def run_one(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y):
     """Step one vehicle over every row of ``U`` (n_steps x N_U); every ``decim``-th step's outputs
@@ -360,17 +383,7 @@ def run_one(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y):
     c = np.zeros((4, N_CTX))
     w = np.zeros(N_SCRATCH)
     y = np.zeros(N_Y)
-    n_sel = sel.shape[0]
-    row = 0
-    for k in range(U.shape[0]):
-        ok = step(p, s, U[k], rs, rzl, rzr, rn, mode, dt, c, w, y)
-        if (k + 1) % decim == 0 and row < Y.shape[0]:
-            for j in range(n_sel):
-                Y[row, j] = y[sel[j]]
-            row += 1
-        if not ok:
-            return k + 1
-    return U.shape[0]
+    return _run_steps(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y, c, w, y)
 
 
 @njit(cache=True, parallel=True)
@@ -388,10 +401,12 @@ def rig_run(p, s, i, d, dd, fx, fy, fz, mask, with_spring, out):
     """Virtual rig: prescribe deflection ``d`` [m] and its rate ``dd`` [m/s] at corner ``i`` with the
     body held, quasi-static wheel forces ``fx``, ``fy``, ``fz`` [N]; ``out`` gets the suspension force
     [N] (spring if ``with_spring``, hydraulic damper, and the terms selected by ``mask``)."""
-    c = np.zeros(N_CTX)
+    c = np.zeros((4, N_CTX))
+    cell = -1
     for k in range(d.shape[0]):
         fill_context(p, i, c, d[k], dd[k], fx, fy, fz, 0.0, 0.0)
-        f = hydraulic_force(p, i, dd[k]) + terms_force(p, s, i, c, mask)
+        cell = _grid_cell(p, dd[k], cell)
+        f = hydraulic_force(p, i, dd[k], cell) + terms_force(p, s, i, c, mask)
         if with_spring:
             f += spring_force(p, i, d[k])
         out[k] = f

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import inspect
 import os
 import sys
 import tempfile
@@ -56,12 +57,12 @@ def _terms_block(terms: tuple[PhysicsTerm, ...], layout: KernelLayout) -> str:
         for kind, fn in (("f", t.force), ("u", t.update)):
             py = fn.py_func
             lines.append(f"from {py.__module__} import {py.__name__} as _{kind}{k}")
-    lines += ["", "", "@njit(cache=True)", "def terms_force(p, s, i, c, mask):", "    f = 0.0"]
+    lines += ["", "", "@njit(cache=True, inline=\"always\")", "def terms_force(p, s, i, c, mask):", "    f = 0.0"]
     for k, t in enumerate(terms):
         po, so = layout.param_offsets[k], layout.state_offsets[k]
         lines.append(f"    if mask & {_MASK[t.component]}:  # {t.name}")
         lines.append(f"        f += _f{k}(p, {po}, s, {so}, i, c)")
-    lines += ["    return f", "", "", "@njit(cache=True)", "def terms_update(p, s, i, c, dx, mask):"]
+    lines += ["    return f", "", "", "@njit(cache=True, inline=\"always\")", "def terms_update(p, s, i, c, dx, mask):"]
     for k, t in enumerate(terms):
         po, so = layout.param_offsets[k], layout.state_offsets[k]
         lines.append(f"    if mask & {_MASK[t.component]}:  # {t.name}")
@@ -71,13 +72,26 @@ def _terms_block(terms: tuple[PhysicsTerm, ...], layout: KernelLayout) -> str:
     return "\n".join(lines)
 
 
+def _dependency_digest(terms: tuple[PhysicsTerm, ...]) -> str:
+    """Hash of every source file the kernel compiles in. Numba's cache does not notice a change in a
+    function imported from another file, so a change there must change the kernel's own file."""
+    files = {Path(__file__).with_name("layout.py"), Path(__file__).with_name("terms.py")}
+    for t in terms:
+        for fn in (t.force, t.update):
+            files.add(Path(inspect.getsourcefile(fn.py_func)))
+    h = hashlib.sha256()
+    for f in sorted(files):
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def kernel_source(terms: tuple[PhysicsTerm, ...]) -> str:
     """Source text of the kernel module for ``terms`` (the template with its TERMS block filled)."""
     text = _TEMPLATE.read_text()
     head, rest = text.split(_BEGIN, 1)
     _, tail = rest.split(_END, 1)
     block = _terms_block(terms, KernelLayout.for_terms(terms))
-    return f"{head}{_BEGIN}\n{block}\n{_END}{tail}"
+    return f"{head}{_BEGIN}\n# dependencies: {_dependency_digest(terms)}\n{block}\n{_END}{tail}"
 
 
 def load_kernel(terms: tuple[PhysicsTerm, ...]) -> ModuleType:

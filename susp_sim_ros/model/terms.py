@@ -17,7 +17,8 @@ A term declares:
   ``force(p, po, s, so, i, c) -> float``: force on the body [N] at corner ``i`` (positive up) from the
   term's state at the start of the step. ``p`` is the vehicle's parameter vector and the term's
   parameter ``j`` at corner ``i`` is ``p[po + 4*j + i]``; ``s`` the state vector with state ``k`` at
-  ``s[so + 4*k + i]``; ``c`` the corner context (indices in :data:`layout.C_INDEX`: deflection ``D``
+  ``s[so + 4*k + i]``; ``c`` the corner context, a (4 x N_CTX) array read as ``c[i, k]`` with ``k``
+  from :data:`layout.C_INDEX`: deflection ``D``
   [m], deflection velocity ``DD`` [m/s], wheel forces ``FX``, ``FY``, ``FZ`` [N], oil level ``OIL``,
   ``AXLE`` (0 front, 1 rear), ``SIDE`` (0 left, 1 right), the paper's friction scalings ``SV``,
   ``SOIL``, ``SH`` (already 1 where the variant switches them off), speed ``V`` and step ``DT``).
@@ -87,7 +88,7 @@ class PhysicsTerm:
 def dahl_exact(f, level, sigma, dx):
     """Exact position-domain Dahl update (exponent 1) over a deflection increment ``dx`` [m].
 
-    ``F_new = s*Fc + (F - s*Fc) * exp(-sigma*|dx|/Fc)``, ``s = sign(dx)``; unconditionally stable and
+    ``F_new = s*Fc + (F - s*Fc) * exp(-sigma*|dx|/Fc)`` (evaluated as an increment), ``s = sign(dx)``; unconditionally stable and
     rate independent (model-spec 1). ``f`` is first clipped to the current level, so friction never
     exceeds its level when the level drops.
     """
@@ -97,21 +98,25 @@ def dahl_exact(f, level, sigma, dx):
         f = level
     elif f < -level:
         f = -level
-    if dx == 0.0:
-        return f
     target = level if dx > 0.0 else -level
-    return target + (f - target) * math.exp(-sigma * abs(dx) / level)
+    if dx == 0.0 or f == target:  # no motion, or already saturated to the last bit: exp changes nothing
+        return f
+    # written as an increment with expm1: monotone in dx and accurate for tiny steps
+    f_new = f - (target - f) * math.expm1(-sigma * abs(dx) / level)
+    if (dx > 0.0 and f_new > target) or (dx < 0.0 and f_new < target):
+        return target
+    return f_new
 
 
 # ---- built-in term: axle friction (bearings, ball joints, elastomer mounts) ----------------------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def axle_friction_force(p, po, s, so, i, c):
     return s[so + i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def axle_friction_update(p, po, s, so, i, c, dx):
-    level = p[po + i] * c[_C_SH]
+    level = p[po + i] * c[i, _C_SH]
     s[so + i] = dahl_exact(s[so + i], level, p[po + 4 + i], dx)
 
 
@@ -130,14 +135,14 @@ AXLE_FRICTION = PhysicsTerm(
 
 
 # ---- built-in term: shock-absorber friction (rod seal, piston band) --------------------------------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def damper_friction_force(p, po, s, so, i, c):
     return s[so + i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def damper_friction_update(p, po, s, so, i, c, dx):
-    level = p[po + i] * c[_C_SV] * c[_C_SOIL] * c[_C_SH]
+    level = p[po + i] * c[i, _C_SV] * c[i, _C_SOIL] * c[i, _C_SH]
     s[so + i] = dahl_exact(s[so + i], level, p[po + 4 + i], dx)
 
 
