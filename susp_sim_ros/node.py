@@ -163,6 +163,7 @@ class SuspSimNode(Node):
         self._wall0 = time.monotonic()
         self._sim0_ns: int | None = None
         self.published = 0
+        self.inputs_received = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         if self.sim_time:
@@ -197,6 +198,7 @@ class SuspSimNode(Node):
                 else:
                     self._publish_samples(self.core.advance_to(t))
             reason = apply(t)
+            self.inputs_received += 1
             self._record(topic, msgtype, max(t, 0), msg, latched)
         if reason:
             self.get_logger().warning(reason, throttle_duration_sec=1.0)
