@@ -29,7 +29,10 @@ setup(
     maintainer_email="dev@susp-sim-ros.invalid",
     description="Real-time five-mass vehicle model with phenomenological suspension friction for ROS 2",
     license="Apache-2.0",
-    tests_require=["pytest", "hypothesis", "rosbags"],
+    extras_require={
+        "test": ["pytest", "hypothesis", "rosbags"],
+        "bench": ["commonroad-vehicle-models"],
+    },
     entry_points={
         "console_scripts": [
             "susp = susp_sim_ros.cli.main:main",

@@ -1,0 +1,145 @@
+"""One stepping function for everything: chunked real-time stepping, whole-series runs and batch runs
+give the same numbers; run-time changes of oil level and variant; the physics-term interface."""
+import numpy as np
+import pytest
+
+from susp_sim_ros.errors import ConfigError, SuspInputError
+from susp_sim_ros.model import Model, RoadProfile, Stepper, load_variant, make_inputs, simulate, simulate_batch
+from susp_sim_ros.model.layout import OUTPUT_LABELS, P_INDEX
+from susp_sim_ros.model.maneuvers import bump_crossing, sine_steer, vehicle_state
+from susp_sim_ros.model.rigs import damper_rig
+
+DT = 1e-3
+
+
+def test_chunked_stepper_equals_whole_series(model_full):
+    man = bump_crossing()
+    U = man.to_inputs(DT)
+    whole = simulate(model_full, U, dt=DT, road=man.road, oil=vehicle_state("rear_empty"))
+    st = Stepper(model_full, dt=DT, road=man.road, oil=vehicle_state("rear_empty"))
+    rng = np.random.default_rng(1)
+    k, rows = 0, []
+    while k < U.shape[0]:
+        n = int(min(rng.integers(1, 40), U.shape[0] - k))
+        y = st.advance(n, man.speed, 0.0)
+        k += n
+        rows.append((k, y.copy()))
+    for k, y in rows[::25]:
+        np.testing.assert_array_equal(y, whole.y[k - 1])  # bit for bit: the same compiled step
+
+
+def test_batch_equals_single_runs(model_full):
+    man = sine_steer(duration=4.0)
+    U = man.to_inputs(DT)
+    oils = [(1, 1, 1, 1), (0, 0, 1, 1), (1, 1, 0, 0), (0.3, 0.7, 0.2, 0.9)]
+    P = np.stack([model_full.params(o) for o in oils])
+    t, Y, done = simulate_batch(model_full, P, U, dt=DT, roads=[man.road], decim=5,
+                                outputs=["ROLL_RATE", "YAW_RATE"])
+    assert np.all(done == U.shape[0])
+    for b, oil in enumerate(oils):
+        single = simulate(model_full, U, dt=DT, road=man.road, oil=oil, decim=5, outputs=["ROLL_RATE", "YAW_RATE"])
+        np.testing.assert_array_equal(Y[b], single.y)
+        np.testing.assert_allclose(t, single.t)
+
+
+def test_batch_mixes_drives_and_roads(model_full):
+    bump, sine = bump_crossing(), sine_steer(duration=bump_crossing().duration)
+    n = min(bump.n_steps(DT), sine.n_steps(DT))
+    U = np.stack([bump.to_inputs(DT)[:n], sine.to_inputs(DT)[:n]])
+    P = np.tile(model_full.params(), (2, 1))
+    _, Y, _ = simulate_batch(model_full, P, U, dt=DT, roads=[bump.road, sine.road], u_row=[0, 1],
+                             road_row=[0, 1], outputs=["PITCH_RATE"])
+    for b, man in enumerate((bump, sine)):
+        single = simulate(model_full, U[b], dt=DT, road=man.road, outputs=["PITCH_RATE"])
+        np.testing.assert_array_equal(Y[b], single.y)
+
+
+def test_oil_change_at_run_time_takes_effect_next_step(model_full):
+    man = bump_crossing()
+    a = Stepper(model_full, dt=DT, road=man.road)
+    b = Stepper(model_full, dt=DT, road=man.road)
+    for st in (a, b):
+        st.advance(2000, man.speed, 0.0)
+    b.set_oil(vehicle_state("rear_empty"))
+    ya = a.advance(1, man.speed, 0.0).copy()
+    yb = b.advance(1, man.speed, 0.0).copy()
+    i = OUTPUT_LABELS.index("F_DAMPER_RL")
+    assert ya[i] != yb[i]
+    with pytest.raises(SuspInputError, match="damper_oil_level"):
+        b.set_oil([1, 1, 1.5, 0])
+
+
+def test_variant_change_keeps_body_state(models):
+    man = bump_crossing()
+    st = Stepper(models["full"], dt=DT, road=man.road)
+    st.advance(2500, man.speed, 0.0)
+    s_before = st.S.copy()
+    st.set_model(models["dahl_only"])
+    np.testing.assert_array_equal(st.S, s_before)  # same terms: everything carries over
+    assert st.P[P_INDEX["USE_V"]] == 0.0
+
+
+def test_non_finite_state_stops_cleanly(model_full):
+    P = model_full.params()
+    P[P_INDEX["M_S"]] = 1e-300  # absurd: the body explodes
+    res = simulate(model_full, make_inputs(1000, 10.0, 0.1), dt=DT, road=RoadProfile.flat(), P=P)
+    assert not res.ok and res.steps_done < 1000
+
+
+def test_physics_term_interface_extra_viscous_damping(tmp_path):
+    """A term added by a variant file: on the damper rig it adds exactly c*v to the damper force."""
+    f = tmp_path / "visc.yaml"
+    f.write_text("name: visc\nvelocity_scaling: true\noil_scaling: true\nhorizontal_scaling: true\n"
+                 "terms:\n  - name: extra_viscous_damping\n    params: {c: {front: 500.0, rear: 0.0}}\n")
+    base, visc = Model(variant="full"), Model(variant=str(f))
+    assert [t.name for t in visc.terms][-1] == "extra_viscous_damping"
+    fb = np.array(damper_rig(base, "front", 1.0).force_velocity)
+    fv = np.array(damper_rig(visc, "front", 1.0).force_velocity)
+    np.testing.assert_allclose(fv[:, 1] - fb[:, 1], 500.0 * fv[:, 0], rtol=1e-6, atol=1e-6)
+    rb = np.array(damper_rig(base, "rear", 1.0).force_velocity)
+    rv = np.array(damper_rig(visc, "rear", 1.0).force_velocity)
+    np.testing.assert_allclose(rv, rb, rtol=1e-12)
+    # and in the vehicle it damps the ring-out
+    man = bump_crossing()
+    q = lambda m: simulate(m, man.to_inputs(DT), dt=DT, road=man.road, oil=vehicle_state("front_empty"),
+                           outputs=["PITCH_RATE"]).y[:, 0]
+    k0 = int((man.road.s[-1] + visc.vehicle.wheelbase) / man.speed / DT)  # rear axle leaves the bump
+    ring = slice(k0, k0 + 1500)
+    assert np.sum(q(visc)[ring] ** 2) < 0.8 * np.sum(q(base)[ring] ** 2)
+
+
+@pytest.mark.parametrize("text,match", [
+    ("name: x\nvelocity_scaling: yes-ish\noil_scaling: true\nhorizontal_scaling: true\n", "velocity_scaling"),
+    ("name: x\nvelocity_scaling: true\noil_scaling: true\nhorizontal_scaling: true\nterms: [{name: nope}]\n",
+     "unknown physics term 'nope'"),
+    ("name: x\nvelocity_scaling: true\noil_scaling: true\nhorizontal_scaling: true\n"
+     "terms: [{name: extra_viscous_damping, params: {k: 1}}]\n", "unknown parameters"),
+    ("- just a list\n", "mapping"),
+])
+def test_variant_errors_name_file_and_key(tmp_path, text, match):
+    f = tmp_path / "bad.yaml"
+    f.write_text(text)
+    with pytest.raises(ConfigError, match=match) as e:
+        load_variant(str(f))
+    assert "bad.yaml" in str(e.value)
+
+
+def test_vehicle_errors_name_file_and_key(tmp_path):
+    from susp_sim_ros.model import config_dir, load_vehicle
+    src = (config_dir() / "vehicles" / "passat_b8_like.yaml").read_text()
+    f = tmp_path / "car.yaml"
+    f.write_text(src.replace("sprung_mass: {value: 1400.0", "sprung_mass: {value: -3"))
+    with pytest.raises(ConfigError, match=r"car.yaml: body.sprung_mass must be > 0"):
+        load_vehicle(str(f))
+    f.write_text(src.replace("  cg_height:", "  cg_heigth:"))
+    with pytest.raises(ConfigError, match=r"missing parameter body.cg_height"):
+        load_vehicle(str(f))
+    with pytest.raises(ConfigError, match="unknown vehicle 'golf'"):
+        load_vehicle("golf")
+
+
+def test_every_vehicle_parameter_has_unit_and_source(model_full):
+    srcs = model_full.vehicle.sources
+    assert len(srcs) == 39  # every entry of the vehicle file was read, each with unit and source
+    for key, (unit, source) in srcs.items():
+        assert unit and source, key
