@@ -123,3 +123,40 @@ def test_road_csv_and_files_on_disk(tmp_path):
     bad.write_bytes(b"time_s\n\xe9\n")
     with pytest.raises(CsvImportError, match=r"latin1.csv:2: not UTF-8"):
         ci.read_drive_csv(bad)
+
+
+def test_csv_to_mcap_round_trip_and_cli(tmp_path, capsys):
+    """CSV -> MCAP -> read_drive gives back every sample in SI units; the CLI maps errors to exit 2."""
+    from susp_sim_ros.cli.main import main
+    from susp_sim_ros.io.drive import read_drive
+    t = np.arange(0, 2.0, 0.005)
+    drive = tmp_path / "drive.csv"
+    rows = ["# test track, rear dampers drained",
+            "time_s,speed_km_h,steering_wheel_angle_deg,roll_rate_rad_s,pitch_rate_rad_s,yaw_rate_rad_s,"
+            "accel_x_m_s2,accel_y_m_s2,accel_z_m_s2"]
+    rows += [f"{x:.3f},8.0,{10 * math.sin(x):.6f},{0.01 * x:.6f},{-0.02 * x:.6f},0,0,0,9.81" for x in t]
+    drive.write_text("\n".join(rows) + "\n")
+    road = tmp_path / "road.csv"
+    road.write_text("s_m,z_left_m,z_right_m\n1.0,0,0\n1.25,0.06,0.06\n1.5,0,0\n")
+    out = tmp_path / "drive.mcap"
+    assert main(["import-csv", str(drive), "--road", str(road), "--out", str(out), "--oil", "1,1,0,0",
+                 "--maneuver", "bump_crossing_8kmh", "--json"]) == 0
+    capsys.readouterr()
+    d = read_drive(out)
+    assert d.metadata["source"] == "measured" and d.metadata["damper_oil_level"] == "1,1,0,0"
+    assert "rear dampers drained" in d.metadata["notes"]
+    np.testing.assert_array_equal(d.imu.t_ns, np.round(np.round(t, 3) * 1e9).astype(np.int64))
+    np.testing.assert_allclose(d.speed.values, 8.0 / 3.6)
+    np.testing.assert_allclose(d.steering.values, np.radians(np.round(10 * np.sin(t), 6)), atol=1e-12)
+    np.testing.assert_allclose(d.imu.accel[:, 2], 9.81)
+    np.testing.assert_allclose(d.road.zl, [0, 0.06, 0])
+    # refuses to overwrite; a bad cell and a bad oil string are exit 2 with the location
+    assert main(["import-csv", str(drive), "--out", str(out)]) == 2
+    assert "exists" in capsys.readouterr().err
+    rows[5] = rows[5].replace(",0,0,0,9.81", ",0,x,0,9.81")
+    drive.write_text("\n".join(rows) + "\n")
+    assert main(["import-csv", str(drive), "--out", str(tmp_path / "b.mcap")]) == 2
+    err = capsys.readouterr().err
+    assert f"{drive}:6: column 'accel_x_m_s2' (column 7)" in err and "Traceback" not in err
+    assert not (tmp_path / "b.mcap").exists()
+    assert main(["import-csv", str(drive), "--out", str(tmp_path / "c.mcap"), "--oil", "1,1,2"]) == 2
