@@ -19,8 +19,8 @@ Everything is reproducible from one integer seed (numpy ``PCG64``); the drive's 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Sequence
+import sys
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -303,7 +303,7 @@ def generate_bundle(out_dir, *, seed: int = DEFAULT_SEED, overwrite: bool = Fals
     items = names
     if progress:
         from tqdm import tqdm
-        items = tqdm(names, desc="generate", unit="drive", file=__import__("sys").stderr)
+        items = tqdm(names, desc="generate", unit="drive", file=sys.stderr)
     summaries = []
     for name, m, s in items:
         drive = generate_drive(m, s, seed=seed, hidden=hidden, imu=imu)
