@@ -23,7 +23,7 @@ setup(
         ("share/" + package_name + "/config/studies", glob("config/studies/*.yaml")),
     ],
     install_requires=["setuptools", "numpy", "scipy", "pyyaml", "matplotlib", "numba", "mcap",
-                      "mcap-ros2-support", "tqdm"],
+                      "mcap-ros2-support", "tqdm", "dask[distributed]"],
     zip_safe=False,
     maintainer="susp_sim_ros developers",
     maintainer_email="dev@susp-sim-ros.invalid",
