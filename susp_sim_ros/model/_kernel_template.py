@@ -65,7 +65,36 @@ MASK_ALL = 3
 
 # scratch slots per corner (w[k*4 + i])
 _W_ZR, _W_ZRD, _W_SLOPE, _W_D, _W_DD, _W_FZ, _W_WF, _W_FX, _W_FS, _W_CELL = 0, 4, 8, 12, 16, 20, 24, 28, 32, 36
-N_SCRATCH = 40
+_W_VLAST, _W_RELAX = 40, 41
+N_SCRATCH = 42
+
+# reciprocals of constant parameters, computed once per run (:func:`derive`): the step then
+# multiplies instead of dividing, and a parameter changed between runs is always seen
+_D_INV_MS, _D_INV_M, _D_INV_IXX, _D_INV_IYY, _D_INV_IZZ, _D_INV_RATIO = 0, 1, 2, 3, 4, 5
+_D_INV_EP, _D_INV_VS, _D_INV_RELAX, _D_INV_FADE = 6, 7, 8, 9
+_D_INV_MU, _D_DFZ = 10, 14  # 4 each
+_D_INV_CELL = 18  # N_GRID - 1 inverse grid cell widths
+N_DERIVED = _D_INV_CELL + N_GRID - 1
+
+
+@njit(cache=True, inline="always")
+def derive(p, dv):
+    dv[_D_INV_MS] = 1.0 / p[_M_S]
+    dv[_D_INV_M] = 1.0 / p[_M_TOT]
+    dv[_D_INV_IXX] = 1.0 / p[_IXX]
+    dv[_D_INV_IYY] = 1.0 / p[_IYY]
+    dv[_D_INV_IZZ] = 1.0 / p[_IZZ]
+    dv[_D_INV_RATIO] = 1.0 / p[_STEER_RATIO]
+    dv[_D_INV_EP] = 1.0 / p[_STOP_EP]
+    dv[_D_INV_VS] = 1.0 / p[_SV_VS]
+    dv[_D_INV_RELAX] = 1.0 / p[_RELAX_LEN]
+    dv[_D_INV_FADE] = 1.0 / p[_V_FADE]
+    for i in range(4):
+        dv[_D_INV_MU + i] = 1.0 / p[_M_U + i]
+        dv[_D_DFZ + i] = p[_H_RC_AXLE + i] / p[_TRACK + i]
+    for k in range(N_GRID - 1):
+        dv[_D_INV_CELL + k] = 1.0 / (p[P_GRID + k + 1] - p[P_GRID + k])
+
 
 # @@BEGIN TERMS@@
 @njit(cache=True)
@@ -93,11 +122,10 @@ def _grid_cell(p, x, k):
 
 
 @njit(cache=True, inline="always")
-def _interp_cell(p, off, x, k):
+def _interp_cell(p, dv, off, x, k):
     """Piecewise-linear curve p[off:off+N_GRID] over the velocity grid, evaluated in cell k."""
-    x0 = p[P_GRID + k]
     y0 = p[off + k]
-    return y0 + (p[off + k + 1] - y0) * (x - x0) / (p[P_GRID + k + 1] - x0)
+    return y0 + (p[off + k + 1] - y0) * (x - p[P_GRID + k]) * dv[_D_INV_CELL + k]
 
 
 @njit(cache=True, inline="always")
@@ -117,33 +145,33 @@ def road_at(rs, rz, n, x):
 
 
 @njit(cache=True, inline="always")
-def spring_force(p, i, d):
+def spring_force(p, dv, i, d):
     """Wheel-rate spring plus progressive bump/rebound stops [N], deflection d [m] from static."""
     f = p[_K_S + i] * d
     e = d - p[_STOP_BUMP + i]
     if e > 0.0:
-        f += p[_K_STOP] * e * (1.0 + e / p[_STOP_EP])
+        f += p[_K_STOP] * e * (1.0 + e * dv[_D_INV_EP])
     e = -d - p[_STOP_REB + i]
     if e > 0.0:
-        f -= p[_K_STOP] * e * (1.0 + e / p[_STOP_EP])
+        f -= p[_K_STOP] * e * (1.0 + e * dv[_D_INV_EP])
     return f
 
 
 @njit(cache=True, inline="always")
-def hydraulic_force(p, i, dd, k):
+def hydraulic_force(p, dv, i, dd, k):
     """Hydraulic damper force [N] at deflection velocity dd [m/s], blended by the corner's oil level;
     ``k`` is the grid cell of dd (:func:`_grid_cell`)."""
     oil = p[_OIL + i]
     f = 0.0
     if oil > 0.0:
-        f += oil * _interp_cell(p, P_H_INTACT + i * N_GRID, dd, k)
+        f += oil * _interp_cell(p, dv, P_H_INTACT + i * N_GRID, dd, k)
     if oil < 1.0:
-        f += (1.0 - oil) * _interp_cell(p, P_H_EMPTY + i * N_GRID, dd, k)
+        f += (1.0 - oil) * _interp_cell(p, dv, P_H_EMPTY + i * N_GRID, dd, k)
     return f
 
 
 @njit(cache=True, inline="always")
-def fill_context(p, i, c, d, dd, fx, fy, fz, v, dt):
+def fill_context(p, dv, i, c, d, dd, fx, fy, fz, v, dt):
     """Corner context for the physics terms, including the paper's friction scalings (model-spec 1)."""
     c[i, _C_D] = d
     c[i, _C_DD] = dd
@@ -158,7 +186,7 @@ def fill_context(p, i, c, d, dd, fx, fy, fz, v, dt):
     c[i, _C_DT] = dt
     sv = 1.0
     if p[_USE_V] > 0.5 and abs(dd) > p[_SV_REF]:
-        sv = 1.0 + (p[_SV_INF] - 1.0) * (1.0 - math.exp(-(abs(dd) - p[_SV_REF]) / p[_SV_VS]))
+        sv = 1.0 + (p[_SV_INF] - 1.0) * (1.0 - math.exp(-(abs(dd) - p[_SV_REF]) * dv[_D_INV_VS]))
     c[i, _C_SV] = sv
     soil = 1.0
     if p[_USE_OIL] > 0.5:
@@ -171,11 +199,11 @@ def fill_context(p, i, c, d, dd, fx, fy, fz, v, dt):
 
 
 @njit(cache=True, inline="always")
-def step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
+def step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
     """Advance one vehicle by one step ``dt`` [s] with the inputs of row ``k`` of ``U``
     (layout.U_INDEX); writes outputs ``y``.
 
-    ``p`` parameters, ``s`` state (updated in place), road tracks ``rs``/``rzl``/``rzr`` with ``rn``
+    ``p`` parameters (``dv`` their reciprocals, :func:`derive`), ``s`` state (updated in place), road tracks ``rs``/``rzl``/``rzr`` with ``rn``
     valid samples (``mode`` 0), or per-wheel road heights from ``U`` (``mode`` 1). Rows of 2-D
     arrays are indexed, never sliced: a slice is a new array object with reference counting. ``c`` (4 x N_CTX)
     and ``w`` are scratch. Returns False when the state stopped being finite.
@@ -187,7 +215,7 @@ def step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
     b = p[_B]
     v = U[k, _U_V]
     ax = U[k, _U_AX]
-    delta = U[k, _U_SWA] / p[_STEER_RATIO]
+    delta = U[k, _U_SWA] * dv[_D_INV_RATIO]
     z = s[_Z]
     phi = s[_PHI]
     th = s[_THETA]
@@ -227,7 +255,7 @@ def step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
         w[_W_DD + i] = s[_ZWD + i] - (zd - xi * thd + yi * phid)
         ft = kt * (w[_W_ZR + i] - s[_ZW + i]) + ct * (w[_W_ZRD + i] - s[_ZWD + i])
         # geometric load transfer of the axle's lateral force through its roll centre: wheels only
-        dfz = (fyf if i < 2 else fyr) * p[_H_RC_AXLE + i] / p[_TRACK + i]
+        dfz = (fyf if i < 2 else fyr) * dv[_D_DFZ + i]
         if i % 2 == 0:
             dfz = -dfz
         fz = p[_FZ0 + i] + ft + dfz
@@ -240,11 +268,11 @@ def step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
 
     # -- suspension forces ---------------------------------------------------------------------------
     for i in range(4):
-        fill_context(p, i, c, w[_W_D + i], w[_W_DD + i], w[_W_FX + i], s[_FYT + i], w[_W_FZ + i], v, dt)
-        f_spring = spring_force(p, i, w[_W_D + i])
+        fill_context(p, dv, i, c, w[_W_D + i], w[_W_DD + i], w[_W_FX + i], s[_FYT + i], w[_W_FZ + i], v, dt)
+        f_spring = spring_force(p, dv, i, w[_W_D + i])
         cell = _grid_cell(p, w[_W_DD + i], int(w[_W_CELL + i]))
         w[_W_CELL + i] = cell
-        f_damper = hydraulic_force(p, i, w[_W_DD + i], cell)
+        f_damper = hydraulic_force(p, dv, i, w[_W_DD + i], cell)
         f_terms = terms_force(p, s, i, c, MASK_ALL)
         j = i + 1 if i % 2 == 0 else i - 1
         f_arb = p[_K_ARB + i] * (w[_W_D + i] - w[_W_D + j])
@@ -264,15 +292,15 @@ def step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
     fy2 = s[_FYT + 2]
     fy3 = s[_FYT + 3]
     # body: heave, roll, pitch
-    zdd = ((fs0 + fs1) + (fs2 + fs3)) / ms
-    ay = ((fy0 + fy1) + (fy2 + fy3)) / m
+    zdd = ((fs0 + fs1) + (fs2 + fs3)) * dv[_D_INV_MS]
+    ay = ((fy0 + fy1) + (fy2 + fy3)) * dv[_D_INV_M]
     roll_moment = (p[_Y_I] * fs0 + p[_Y_I + 1] * fs1) + (p[_Y_I + 2] * fs2 + p[_Y_I + 3] * fs3)
     pitch_moment = -((p[_X_I] * fs0 + p[_X_I + 1] * fs1) + (p[_X_I + 2] * fs2 + p[_X_I + 3] * fs3))
-    phidd = (roll_moment + ms * (p[_H_CG] - p[_H_RC]) * (ay + g * phi)) / p[_IXX]
-    thdd = (pitch_moment + ms * (p[_H_CG] - p[_H_PC]) * (g * th - ax)) / p[_IYY]
+    phidd = (roll_moment + ms * (p[_H_CG] - p[_H_RC]) * (ay + g * phi)) * dv[_D_INV_IXX]
+    thdd = (pitch_moment + ms * (p[_H_CG] - p[_H_PC]) * (g * th - ax)) * dv[_D_INV_IYY]
     # planar: lateral and yaw
     vyd = ay - v * r
-    rd = (a * (fy0 + fy1) - b * (fy2 + fy3)) / p[_IZZ]
+    rd = (a * (fy0 + fy1) - b * (fy2 + fy3)) * dv[_D_INV_IZZ]
 
     # -- semi-implicit Euler ------------------------------------------------------------------------
     zd += zdd * dt
@@ -302,9 +330,12 @@ def step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
     # -- tyre lateral forces: steady tanh characteristic, first-order relaxation (exact) -------------
     vfade = p[_V_FADE]
     av = abs(v)
-    fade = av / vfade if av < vfade else 1.0
+    fade = av * dv[_D_INV_FADE] if av < vfade else 1.0
     vden = av if av > vfade else vfade
-    relax = 1.0 - math.exp(-av * dt / p[_RELAX_LEN])
+    if av != w[_W_VLAST]:  # constant speed is common: keep the relaxation factor
+        w[_W_VLAST] = av
+        w[_W_RELAX] = -math.expm1(-av * dt * dv[_D_INV_RELAX])
+    relax = w[_W_RELAX]
     alpha_f = (delta - (s[_VY] + a * s[_R]) / vden) * fade
     alpha_r = (-(s[_VY] - b * s[_R]) / vden) * fade
     mu = p[_MU]
@@ -319,7 +350,7 @@ def step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
     # -- wheels, then the terms' state over the deflection increment of the step --------------------
     ok = True
     for i in range(4):
-        zwd_i = s[_ZWD + i] + (w[_W_WF + i] - w[_W_FS + i]) / p[_M_U + i] * dt
+        zwd_i = s[_ZWD + i] + (w[_W_WF + i] - w[_W_FS + i]) * dv[_D_INV_MU + i] * dt
         zw_i = s[_ZW + i] + zwd_i * dt
         s[_ZWD + i] = zwd_i
         s[_ZW + i] = zw_i
@@ -355,14 +386,14 @@ def step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
 
 
 @njit(cache=True, _nrt=False, fastmath={"contract", "arcp", "nsz"})
-def _run_steps(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y, c, w, y):
+def _run_steps(p, dv, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y, c, w, y):
     # compiled without the reference-counting runtime: with it, every array argument of the inlined
     # helpers costs an atomic incref/decref pair per step, which made up half of the step time
     n_sel = sel.shape[0]
     row = 0
     count = 0
     for k in range(U.shape[0]):
-        ok = step(p, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y)
+        ok = step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y)
         count += 1
         if count == decim:
             count = 0
@@ -382,8 +413,11 @@ def run_one(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y):
     became non-finite: the run stops there and the state is left as it was after the bad step)."""
     c = np.zeros((4, N_CTX))
     w = np.zeros(N_SCRATCH)
+    w[_W_VLAST] = -1.0
     y = np.zeros(N_Y)
-    return _run_steps(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y, c, w, y)
+    dv = np.zeros(N_DERIVED)
+    derive(p, dv)
+    return _run_steps(p, dv, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y, c, w, y)
 
 
 @njit(cache=True, parallel=True)
@@ -402,13 +436,15 @@ def rig_run(p, s, i, d, dd, fx, fy, fz, mask, with_spring, out):
     body held, quasi-static wheel forces ``fx``, ``fy``, ``fz`` [N]; ``out`` gets the suspension force
     [N] (spring if ``with_spring``, hydraulic damper, and the terms selected by ``mask``)."""
     c = np.zeros((4, N_CTX))
+    dv = np.zeros(N_DERIVED)
+    derive(p, dv)
     cell = -1
     for k in range(d.shape[0]):
-        fill_context(p, i, c, d[k], dd[k], fx, fy, fz, 0.0, 0.0)
+        fill_context(p, dv, i, c, d[k], dd[k], fx, fy, fz, 0.0, 0.0)
         cell = _grid_cell(p, dd[k], cell)
-        f = hydraulic_force(p, i, dd[k], cell) + terms_force(p, s, i, c, mask)
+        f = hydraulic_force(p, dv, i, dd[k], cell) + terms_force(p, s, i, c, mask)
         if with_spring:
-            f += spring_force(p, i, d[k])
+            f += spring_force(p, dv, i, d[k])
         out[k] = f
         if k + 1 < d.shape[0]:
             terms_update(p, s, i, c, d[k + 1] - d[k], mask)
