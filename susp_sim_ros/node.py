@@ -8,8 +8,9 @@ Timing:
 - wall time (default): a dedicated thread wakes at each publish tick (absolute deadlines, no drift),
   steps the core to "now" and publishes; publish-period jitter, lateness and deadline misses (a tick
   published more than one period late) are measured and reported on ``/diagnostics``;
-- sim time (``use_sim_time:=true``, a replay with ``/clock``): a ROS timer on the sim clock; the core
-  steps exactly as far as ``/clock`` moved, so replays at any rate give the same outputs.
+- sim time (``use_sim_time:=true``, a replay with ``/clock``): every ``/clock`` message steps the core
+  exactly as far as the clock moved and publishes the ticks passed, so replays at any rate give the same
+  outputs (as long as the clock and the inputs arrive in order).
 
 Every input first steps the core to the current time, then replaces the held value, so inputs take
 effect at the instant they arrive. The callbacks only take inputs, step the shared core and publish.
@@ -38,6 +39,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.serialization import serialize_message
 
 from diagnostic_msgs.msg import DiagnosticArray
+from rosgraph_msgs.msg import Clock
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64, Float64MultiArray
@@ -53,6 +55,7 @@ NODE_NAME = "susp_sim_node"
 INPUT_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+CLOCK_QOS = QoSProfile(depth=1000, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 OUTPUT_QOS = QoSProfile(depth=50, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 
 DEFAULTS = {
@@ -142,6 +145,12 @@ class SuspSimNode(Node):
         self.core = SimCore(model, step_s=float(p["step_s"]), publish_rate_hz=float(p["publish_rate_hz"]),
                             oil=oil, input_timeout_s=float(p["input_timeout_s"]))
         self.lock = threading.RLock()
+        self._sim_now = 0
+        self.inputs_received = 0  # applied
+        self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
+        self.late_inputs = 0      # sim time: inputs that arrived after a later /clock was processed
+        self._pending_inputs: list = []
+        self._clock_src_ts = 0
         self._rt_priority = int(p["realtime_priority"])
         warm_up(model)
         self.timing = TimingStats(self.core.period_ns)
@@ -154,6 +163,11 @@ class SuspSimNode(Node):
         self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
         self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
         self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
+        if self.sim_time:
+            # Our own /clock subscription, reliable and deep (rclpy's time source keeps only the latest
+            # /clock, so a busy node would see the clock skip ahead of queued inputs): every clock value
+            # is seen, in order, and each one steps the core exactly that far.
+            self.create_subscription(Clock, "/clock", self._on_clock, CLOCK_QOS)
         self.create_subscription(Float64, "/vehicle/speed", self._on_speed, INPUT_QOS)
         self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self._on_steering, INPUT_QOS)
         self.create_subscription(Float64MultiArray, "/road/profile", self._on_profile, LATCHED_QOS)
@@ -163,12 +177,9 @@ class SuspSimNode(Node):
         self._wall0 = time.monotonic()
         self._sim0_ns: int | None = None
         self.published = 0
-        self.inputs_received = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        if self.sim_time:
-            self.create_timer(self.core.period_ns * 1e-9, self._on_sim_timer)
-        elif start_thread:
+        if start_thread and not self.sim_time:
             self._thread = threading.Thread(target=self._realtime_loop, name="susp_sim_tick", daemon=True)
             self._thread.start()
         self.create_timer(1.0 / float(p["diagnostics_rate_hz"]), self.publish_diagnostics)
@@ -180,6 +191,9 @@ class SuspSimNode(Node):
 
     # -- time -----------------------------------------------------------------------------------------
     def now_ns(self) -> int:
+        """ROS time [ns]: the last /clock value seen in sim time, else the wall clock."""
+        if self.sim_time:
+            return self._sim_now
         return self.get_clock().now().nanoseconds
 
     def _record(self, topic: str, msgtype: str, t_ns: int, msg, latched: bool = False) -> None:
@@ -187,7 +201,23 @@ class SuspSimNode(Node):
             self.recorder.write(topic, msgtype, t_ns, serialize_message(msg), latched=latched)
 
     # -- inputs ---------------------------------------------------------------------------------------
-    def _input(self, topic: str, msgtype: str, msg, apply, latched: bool = False) -> None:
+    def _input(self, topic: str, msgtype: str, msg, apply, info=None, latched: bool = False) -> None:
+        """An input message: in wall time applied at once; in sim time ordered against ``/clock`` by
+        the publishers' source timestamps (an input published after ``/clock`` t and before the next
+        ``/clock`` belongs to t), because ROS 2 gives no order across topics and a busy executor would
+        otherwise take inputs ahead of queued clock messages."""
+        self.inputs_taken += 1
+        if self.sim_time:
+            src = int(info["source_timestamp"]) if info else 0
+            with self.lock:
+                if src and src > self._clock_src_ts:
+                    self._pending_inputs.append((src, topic, msgtype, msg, apply, latched))
+                    return
+                if src:
+                    self.late_inputs += 1
+        self._apply_input(topic, msgtype, msg, apply, latched)
+
+    def _apply_input(self, topic: str, msgtype: str, msg, apply, latched: bool) -> None:
         t = self.now_ns()
         with self.lock:
             if t > 0:
@@ -203,21 +233,21 @@ class SuspSimNode(Node):
         if reason:
             self.get_logger().warning(reason, throttle_duration_sec=1.0)
 
-    def _on_speed(self, msg: Float64) -> None:
-        self._input("/vehicle/speed", M.FLOAT64, msg, lambda t: self.core.set_speed(t, msg.data))
+    def _on_speed(self, msg: Float64, info) -> None:
+        self._input("/vehicle/speed", M.FLOAT64, msg, lambda t: self.core.set_speed(t, msg.data), info)
 
-    def _on_steering(self, msg: Float64) -> None:
+    def _on_steering(self, msg: Float64, info) -> None:
         self._input("/vehicle/steering_wheel_angle", M.FLOAT64, msg,
-                    lambda t: self.core.set_steering(t, msg.data))
+                    lambda t: self.core.set_steering(t, msg.data), info)
 
-    def _on_profile(self, msg: Float64MultiArray) -> None:
+    def _on_profile(self, msg: Float64MultiArray, info) -> None:
         dims = [(d.label, d.size) for d in msg.layout.dim]
         self._input("/road/profile", M.FLOAT64_ARRAY, msg,
-                    lambda t: self.core.set_road_profile(t, msg.data, dims), latched=True)
+                    lambda t: self.core.set_road_profile(t, msg.data, dims), info, latched=True)
 
-    def _on_heights(self, msg: Float64MultiArray) -> None:
+    def _on_heights(self, msg: Float64MultiArray, info) -> None:
         self._input("/road/wheel_heights", M.FLOAT64_ARRAY, msg,
-                    lambda t: self.core.set_wheel_heights(t, msg.data))
+                    lambda t: self.core.set_wheel_heights(t, msg.data), info)
 
     # -- stepping and publishing ----------------------------------------------------------------------
     def _publish_samples(self, samples, stamps: list | None = None) -> None:
@@ -251,7 +281,16 @@ class SuspSimNode(Node):
             self._publish_samples(samples)
         return len(samples)
 
-    def _on_sim_timer(self) -> None:
+    def _on_clock(self, msg: Clock, info) -> None:
+        src = int(info["source_timestamp"]) if info else 0
+        with self.lock:
+            # inputs published before this clock message belong to the previous clock value
+            due = [p for p in self._pending_inputs if not src or p[0] < src]
+            self._pending_inputs = [p for p in self._pending_inputs if src and p[0] >= src]
+            self._clock_src_ts = max(self._clock_src_ts, src)
+            for _, topic, msgtype, m, apply, latched in sorted(due, key=lambda p: p[0]):
+                self._apply_input(topic, msgtype, m, apply, latched)
+            self._sim_now = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
         if self.core.started:  # sim time starts with the first input (lockstep does the same)
             self.tick()
 
@@ -339,6 +378,7 @@ class SuspSimNode(Node):
         inputs = {"level": 1 if stale else 0, "name": f"{NODE_NAME}: inputs",
                   "message": ("stale: " + ", ".join(stale)) if stale else ("waiting for inputs" if not core.started else "fresh"),
                   "values": {"stale": ",".join(stale), "rejected_total": sum(rej.values()),
+                             "late_inputs": self.late_inputs,
                              **{f"rejected_{k}": v for k, v in rej.items()}, "last_rejection": last_rej}}
         timing = {"level": 1 if tm["deadline_misses"] else 0, "name": f"{NODE_NAME}: timing",
                   "message": f"real-time factor {rtf:.3f}, {tm['deadline_misses']} deadline misses",

@@ -1,8 +1,9 @@
 """Launch-free ROS 2 test helpers: isolated environment, private context, a sim-time driver.
 
 The driver publishes ``/clock`` and the input topics from a second node in the same private context and
-spins a ``SingleThreadedExecutor`` until the node under test has seen each message, so the order
-"clock first, then the inputs of that instant" is exact, as in lockstep.
+spins a ``SingleThreadedExecutor`` until the node under test has taken each message. In sim time the node
+applies an input at the ``/clock`` value published before it, when the next ``/clock`` arrives, which is
+the lockstep order.
 """
 from __future__ import annotations
 
@@ -82,7 +83,7 @@ class SimDriver:
         msg = self.Clock()
         msg.clock.sec, msg.clock.nanosec = divmod(int(t_ns), 1_000_000_000)
         self.pub_clock.publish(msg)
-        self.spin_until(lambda: self.node.get_clock().now().nanoseconds == int(t_ns))
+        self.spin_until(lambda: self.node.now_ns() == int(t_ns))
         self.spin_idle()
 
     def spin_idle(self, n: int = 3) -> None:
@@ -90,9 +91,9 @@ class SimDriver:
             self.ex.spin_once(timeout_sec=0.0)
 
     def send(self, topic: str, msg) -> None:
-        before = self.node.inputs_received
+        before = self.node.inputs_taken
         self.pub[topic].publish(msg)
-        self.spin_until(lambda: self.node.inputs_received > before)
+        self.spin_until(lambda: self.node.inputs_taken > before)
 
     def send_value(self, topic: str, value: float) -> None:
         self.send(topic, self.Float64(data=float(value)))

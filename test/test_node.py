@@ -138,6 +138,7 @@ def test_bad_inputs_are_rejected_not_integrated(driver):
         driver.send_value("/vehicle/speed", v)
     driver.send_value("/vehicle/steering_wheel_angle", 20.0)
     driver.send_profile([0.0, 2.0, 1.0], [0.0] * 3, [0.0] * 3)  # non-increasing s
+    driver.clock(T0 + 1_000_000)  # inputs take effect at the clock they followed
     core = driver.node.core
     assert core.speed == 10.0 and core.steering == 0.1 and core.road is None
     assert core.rejections == {"non_finite": 2, "speed_negative": 1, "steering_range": 1, "road_profile": 1}

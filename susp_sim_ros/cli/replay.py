@@ -91,9 +91,13 @@ def run(args) -> dict:
         pubs[topic] = node.create_publisher(_msg_class(topics[topic]), topic, qos)
     clock_pub = None if args.no_clock else node.create_publisher(Clock, "/clock", 100)
     t0, t1 = msgs[0].log_time_ns, msgs[-1].log_time_ns
+    # wait until every topic (and /clock) has a subscriber, so nothing early is lost to discovery
+    everything = list(pubs.values()) + ([clock_pub] if clock_pub is not None else [])
     deadline = time.monotonic() + args.wait_subscribers
-    while time.monotonic() < deadline and not any(p.get_subscription_count() for p in pubs.values()):
+    while time.monotonic() < deadline and not all(p.get_subscription_count() for p in everything):
         time.sleep(0.02)
+    if any(p.get_subscription_count() for p in everything):
+        time.sleep(0.2)  # matched: give the subscribers' side of discovery a moment
     progress = None
     if not args.no_progress:
         from tqdm import tqdm
