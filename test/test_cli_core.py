@@ -49,3 +49,20 @@ def test_paper_study_qualitative_findings():
     assert ring["rear_empty"]["full"] > 2 * ring["intact"]["full"]
     assert ring["rear_empty"]["dahl_only"] > 1.25 * ring["rear_empty"]["full"]
     assert max(ring["intact"].values()) - min(ring["intact"].values()) < 0.1
+
+
+def test_paper_job_writes_report_and_plots(tmp_path):
+    rc, out, err = susp("paper", "--out", str(tmp_path), "--json")
+    assert rc == 0, err
+    d = json.loads(out)
+    assert set(d["rmse_vs_full_deg_s"]) == {"bump_crossing", "sine_steer"}
+    assert d["rmse_vs_full_deg_s"]["bump_crossing"]["rear_empty"]["full"] == 0.0
+    for p in d["plots"] + d["rig_plots"]:
+        assert (tmp_path / p.split("/")[-1]).stat().st_size > 10_000  # a real figure, not an empty file
+    assert "| rear_empty |" in (tmp_path / "paper_study.md").read_text()
+
+
+def test_rig_plot_png(tmp_path):
+    rc, _, err = susp("rig", "axle", "--axle", "front", "--plot", str(tmp_path / "loop.png"))
+    assert rc == 0, err
+    assert (tmp_path / "loop.png").read_bytes()[:4] == b"\x89PNG"

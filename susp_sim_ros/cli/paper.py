@@ -13,12 +13,34 @@ def add_arguments(p) -> None:
     p.add_argument("--step", type=float, default=0.001, help="integration step [s]")
 
 
+def _rig_plots(vehicle: str, out: Path) -> list[str]:
+    """The paper's rig procedures on the model: axle loops (with and without 1 kN lateral force) and
+    damper loops (intact and oil-empty), one PNG each."""
+    from ..model import Model
+    from ..model.rigs import axle_rig, damper_rig, plot_loops
+    model = Model(vehicle, "full")
+    paths = []
+    for axle in ("front", "rear"):
+        p = out / f"rig_axle_{axle}.png"
+        plot_loops({"no horizontal force": axle_rig(model, axle),
+                    "1 kN lateral": axle_rig(model, axle, fy=1000.0),
+                    "1 kN longitudinal": axle_rig(model, axle, fx=1000.0)}, p,
+                   f"{axle} axle friction rig, 1 mm/s, +-5 mm (paper: {60 if axle == 'front' else 43} N)")
+        paths.append(str(p))
+        p = out / f"rig_damper_{axle}.png"
+        plot_loops({"intact": damper_rig(model, axle, 1.0), "oil-empty": damper_rig(model, axle, 0.0)}, p,
+                   f"{axle} damper on the hydropulser, 1 mm/s ramp")
+        paths.append(str(p))
+    return paths
+
+
 def run(args) -> dict:
     from tqdm import tqdm
     bar = tqdm(total=2 * len(STATES) * len(VARIANTS), desc="paper study", unit="run", file=sys.stderr)
     study = run_paper_study(args.config, args.step, progress=lambda _: bar.update())
     bar.close()
     result = write_report(study, Path(args.out))
+    result["rig_plots"] = _rig_plots(args.config, Path(args.out))
     rows = []
     for m, by_state in study.rmse_vs_full.items():
         for s in STATES:
