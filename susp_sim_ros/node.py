@@ -9,8 +9,9 @@ Timing:
   steps the core to "now" and publishes; publish-period jitter, lateness and deadline misses (a tick
   published more than one period late) are measured and reported on ``/diagnostics``;
 - sim time (``use_sim_time:=true``, a replay with ``/clock``): every ``/clock`` message steps the core
-  exactly as far as the clock moved and publishes the ticks passed, so replays at any rate give the same
-  outputs (as long as the clock and the inputs arrive in order).
+  exactly as far as the clock moved and publishes the ticks passed; ``/clock`` and the inputs are put
+  back into publish order (source timestamps, ``sim_reorder_window_s``), so replays at any rate give
+  the same outputs.
 
 Every input first steps the core to the current time, then replaces the held value, so inputs take
 effect at the instant they arrive. The callbacks only take inputs, step the shared core and publish.
@@ -23,6 +24,7 @@ Parameters (all with defaults; ``--ros-args --params-file config/susp_sim_node.y
 """
 from __future__ import annotations
 
+import heapq
 import math
 import os
 import sys
@@ -33,6 +35,7 @@ from collections import deque
 import numpy as np
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.clock import Clock as RosClock, ClockType
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -68,6 +71,8 @@ DEFAULTS = {
     "record_overwrite": (False, "overwrite an existing record_path"),
     "input_timeout_s": (0.5, "an input not refreshed for this long is reported stale [s]"),
     "diagnostics_rate_hz": (1.0, "publish rate of /diagnostics [Hz]"),
+    "sim_reorder_window_s": (0.005, "sim time: /clock and inputs are put in publish order and processed "
+                                    "this long after they were published (wall time) [s]"),
     "realtime_priority": (10, "SCHED_FIFO priority of the wall-time tick thread (0: normal scheduling; "
                               "falls back to normal scheduling when not permitted)"),
 }
@@ -148,9 +153,10 @@ class SuspSimNode(Node):
         self._sim_now = 0
         self.inputs_received = 0  # applied
         self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
-        self.late_inputs = 0      # sim time: inputs that arrived after a later /clock was processed
-        self._pending_inputs: list = []
-        self._clock_src_ts = 0
+        self._events: list = []   # sim time: (source timestamp, seq, kind, payload) heap
+        self._seq = 0
+        self._max_clock_src = 0
+        self._reorder_ns = int(round(float(p["sim_reorder_window_s"]) * 1e9))
         self._rt_priority = int(p["realtime_priority"])
         warm_up(model)
         self.timing = TimingStats(self.core.period_ns)
@@ -168,6 +174,7 @@ class SuspSimNode(Node):
             # /clock, so a busy node would see the clock skip ahead of queued inputs): every clock value
             # is seen, in order, and each one steps the core exactly that far.
             self.create_subscription(Clock, "/clock", self._on_clock, CLOCK_QOS)
+            self.create_timer(0.002, self._drain, clock=RosClock(clock_type=ClockType.STEADY_TIME))
         self.create_subscription(Float64, "/vehicle/speed", self._on_speed, INPUT_QOS)
         self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self._on_steering, INPUT_QOS)
         self.create_subscription(Float64MultiArray, "/road/profile", self._on_profile, LATCHED_QOS)
@@ -202,20 +209,49 @@ class SuspSimNode(Node):
 
     # -- inputs ---------------------------------------------------------------------------------------
     def _input(self, topic: str, msgtype: str, msg, apply, info=None, latched: bool = False) -> None:
-        """An input message: in wall time applied at once; in sim time ordered against ``/clock`` by
-        the publishers' source timestamps (an input published after ``/clock`` t and before the next
-        ``/clock`` belongs to t), because ROS 2 gives no order across topics and a busy executor would
-        otherwise take inputs ahead of queued clock messages."""
+        """An input message: in wall time applied at once; in sim time queued with ``/clock`` (see
+        :meth:`_drain`)."""
         self.inputs_taken += 1
         if self.sim_time:
-            src = int(info["source_timestamp"]) if info else 0
-            with self.lock:
-                if src and src > self._clock_src_ts:
-                    self._pending_inputs.append((src, topic, msgtype, msg, apply, latched))
-                    return
-                if src:
-                    self.late_inputs += 1
-        self._apply_input(topic, msgtype, msg, apply, latched)
+            self._push(info, 1, (topic, msgtype, msg, apply, latched))
+        else:
+            self._apply_input(topic, msgtype, msg, apply, latched)
+
+    # Sim time: ROS 2 gives no order across topics, and a busy executor may take an input before the
+    # /clock message published just before it (or after the next one). So /clock and inputs go through
+    # one queue ordered by the publishers' source timestamps. An input is processed once a /clock
+    # published after it has arrived (per topic DDS keeps order, so every earlier /clock is in the queue
+    # by then); a /clock once it is ``sim_reorder_window_s`` old (wall time), so that inputs published
+    # before it can still be sorted in. An input published after /clock t and before the next /clock
+    # thus takes effect exactly at t, as in lockstep, at any replay rate.
+    INPUT_WAIT_MAX_NS = 500_000_000  # an input with no later /clock is processed after this anyway
+
+    def _push(self, info, kind: int, payload) -> None:
+        src = int(info["source_timestamp"]) if info else 0
+        with self.lock:
+            self._seq += 1
+            heapq.heappush(self._events, (src, self._seq, kind, payload))
+            if kind == 0:
+                self._max_clock_src = max(self._max_clock_src, src)
+        self._drain()
+
+    def _drain(self) -> None:
+        now = time.time_ns()
+        with self.lock:
+            while self._events:
+                src, _, kind, payload = self._events[0]
+                if kind == 0:
+                    if src > now - self._reorder_ns:
+                        break
+                elif not (src < self._max_clock_src or src <= now - self.INPUT_WAIT_MAX_NS):
+                    break
+                heapq.heappop(self._events)
+                if kind == 0:
+                    self._sim_now = payload
+                    if self.core.started:  # sim time starts with the first input (as lockstep)
+                        self.tick()
+                else:
+                    self._apply_input(*payload)
 
     def _apply_input(self, topic: str, msgtype: str, msg, apply, latched: bool) -> None:
         t = self.now_ns()
@@ -282,17 +318,7 @@ class SuspSimNode(Node):
         return len(samples)
 
     def _on_clock(self, msg: Clock, info) -> None:
-        src = int(info["source_timestamp"]) if info else 0
-        with self.lock:
-            # inputs published before this clock message belong to the previous clock value
-            due = [p for p in self._pending_inputs if not src or p[0] < src]
-            self._pending_inputs = [p for p in self._pending_inputs if src and p[0] >= src]
-            self._clock_src_ts = max(self._clock_src_ts, src)
-            for _, topic, msgtype, m, apply, latched in sorted(due, key=lambda p: p[0]):
-                self._apply_input(topic, msgtype, m, apply, latched)
-            self._sim_now = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
-        if self.core.started:  # sim time starts with the first input (lockstep does the same)
-            self.tick()
+        self._push(info, 0, msg.clock.sec * 1_000_000_000 + msg.clock.nanosec)
 
     def _realtime_loop(self) -> None:
         """Wall-time stepping: wake at each tick (absolute deadline), step, publish, measure."""
@@ -378,7 +404,7 @@ class SuspSimNode(Node):
         inputs = {"level": 1 if stale else 0, "name": f"{NODE_NAME}: inputs",
                   "message": ("stale: " + ", ".join(stale)) if stale else ("waiting for inputs" if not core.started else "fresh"),
                   "values": {"stale": ",".join(stale), "rejected_total": sum(rej.values()),
-                             "late_inputs": self.late_inputs,
+                             "queued_sim_events": len(self._events),
                              **{f"rejected_{k}": v for k, v in rej.items()}, "last_rejection": last_rej}}
         timing = {"level": 1 if tm["deadline_misses"] else 0, "name": f"{NODE_NAME}: timing",
                   "message": f"real-time factor {rtf:.3f}, {tm['deadline_misses']} deadline misses",

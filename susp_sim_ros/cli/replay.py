@@ -111,11 +111,13 @@ def run(args) -> dict:
         while True:
             start = time.monotonic()
             last_shown = t0
+            t_sent = None
             for t, m in _timeline(msgs, t0, t1, clock_ns):
                 wait = start + (t - t0) * 1e-9 / args.rate - time.monotonic()
                 if wait > 0:
                     time.sleep(wait)
-                if clock_pub is not None:
+                if clock_pub is not None and t != t_sent:  # one /clock per instant
+                    t_sent = t
                     c = Clock()
                     c.clock.sec, c.clock.nanosec = divmod(t, 1_000_000_000)
                     clock_pub.publish(c)
