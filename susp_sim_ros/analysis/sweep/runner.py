@@ -1,0 +1,266 @@
+"""Run a study on an executor: in this process, on a local Dask cluster, or on an existing scheduler.
+
+The client owns the store: workers return each chunk's metrics and the client writes the chunk file as
+soon as the chunk finishes, so workers need no shared disk for sweeps (drive studies read the recordings
+on the workers: the folder must be visible to them, as it is on a local cluster). At most a few chunks
+per worker thread are in flight, so a study of a million runs does not put a million tasks on the
+scheduler.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import os
+import sys
+import time
+from typing import Callable, Iterator, Sequence
+
+from ...errors import SuspInputError
+from . import engine
+from .spec import StudySpec, reference_run, run_key
+from .store import ResultStore, _parse
+
+
+# ---- executors -------------------------------------------------------------------------------------------
+class InProcessExecutor:
+    """Plain single-process execution, in submission order (the reference for the Dask results)."""
+
+    name = "inprocess"
+    workers = 1
+
+    def __init__(self, threads: int | None = None):
+        self.threads = threads
+
+    def map(self, fn: Callable, tasks: Sequence[tuple]) -> Iterator[tuple]:
+        for key, args in tasks:
+            t0 = time.perf_counter()
+            yield key, fn(*args, **self._kw(fn)), time.perf_counter() - t0
+
+    def _kw(self, fn) -> dict:
+        return {"threads": self.threads} if fn is not engine.drive_task else {}
+
+    def close(self) -> None:
+        pass
+
+
+def _timed(fn, *args, **kw):
+    t0 = time.perf_counter()
+    return fn(*args, **kw), time.perf_counter() - t0
+
+
+class DaskExecutor:
+    """Tasks on a Dask cluster, yielded as they complete (at most ``in_flight`` per worker thread queued)."""
+
+    def __init__(self, client, cluster=None, threads: int | None = None, in_flight: int = 2,
+                 name: str = "dask"):
+        self.client, self.cluster, self.threads, self.name = client, cluster, threads, name
+        info = client.scheduler_info()
+        self.workers = len(info.get("workers", {})) or 1
+        self.slots = max(1, sum(w.get("nthreads", 1) for w in info.get("workers", {}).values())) * in_flight
+
+    def map(self, fn: Callable, tasks: Sequence[tuple]) -> Iterator[tuple]:
+        from distributed import as_completed
+        kw = {"threads": self.threads} if fn is not engine.drive_task else {}
+        todo = list(tasks)[::-1]
+        pending = {}
+
+        def submit():
+            key, args = todo.pop()
+            f = self.client.submit(_timed, fn, *args, pure=False, **kw)
+            pending[f] = key
+            return f
+
+        ac = as_completed([submit() for _ in range(min(self.slots, len(todo)))])
+        try:
+            for f in ac:
+                key = pending.pop(f)
+                result, elapsed = f.result()
+                if todo:
+                    ac.add(submit())
+                yield key, result, elapsed
+        finally:
+            for f in list(pending):
+                f.cancel()
+
+    def close(self) -> None:
+        try:
+            self.client.close()
+        finally:
+            if self.cluster is not None:
+                self.cluster.close()
+
+
+def make_executor(scheduler: str | None = None, workers: int | None = None,
+                  processes: bool = True) -> InProcessExecutor | DaskExecutor:
+    """``scheduler``: ``None``/``"local"`` a local cluster of ``workers`` (default 1) single-threaded
+    workers; ``"inprocess"`` no Dask; else the address of an existing scheduler (``tcp://host:8786``).
+
+    On a local cluster each worker's compiled batch kernel gets cores / workers threads."""
+    cores = os.cpu_count() or 1
+    if scheduler == "inprocess":
+        return InProcessExecutor(threads=None)
+    from distributed import Client, LocalCluster
+    if scheduler in (None, "", "local"):
+        n = workers or 1
+        if n < 1:
+            raise SuspInputError(f"--workers: expected at least 1, got {n}")
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+        return DaskExecutor(Client(cluster), cluster, threads=max(1, cores // n), name=f"local:{n}")
+    try:
+        client = Client(scheduler, timeout="10s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SuspInputError(f"--scheduler {scheduler}: cannot connect to a Dask scheduler: {exc}") from None
+    return DaskExecutor(client, None, threads=None, name=scheduler)
+
+
+# ---- running -------------------------------------------------------------------------------------------
+def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: bool = False,
+              plot: bool = True, on_chunk: Callable[[int], None] | None = None) -> dict:
+    """Run (or resume) ``spec`` into ``out``; returns the JSON-ready result.
+
+    ``on_chunk(cid)`` is called after each chunk is stored (tests interrupt a study from it)."""
+    t_start = time.perf_counter()
+    store = ResultStore(spec, out, fresh=fresh)
+    resumed = sorted(store.done)
+    todo = [c for c in spec.chunks if c.id not in store.done]
+    from tqdm import tqdm
+    done_runs = sum(len(spec.chunks[c].runs) for c in resumed)
+    unit = "run" if spec.kind == "sweep" else "drive"
+    bar = tqdm(total=spec.n_runs, initial=done_runs, desc=spec.name, unit=unit, file=sys.stderr,
+               disable=not progress, dynamic_ncols=True, smoothing=0.1)
+    computed: list[int] = []
+    t_compute = time.perf_counter()
+    try:
+        if spec.kind == "sweep":
+            refs = _references(spec, store, executor, todo)
+            tasks = [(c.id, (spec.data, [spec.runs[r] for r in c.runs],
+                             [refs.get(run_key(reference_run(spec.data, spec.runs[r]))) if refs else None
+                              for r in c.runs])) for c in todo]
+            fn = engine.chunk_task
+        else:
+            tasks = [(c.id, (spec.runs[c.id]["file"], spec.data["variants"])) for c in todo]
+            fn = engine.drive_task
+        for cid, result, elapsed in executor.map(fn, tasks):
+            store.write_chunk(cid, result, elapsed)
+            computed.append(cid)
+            bar.update(len(spec.chunks[cid].runs))
+            if on_chunk is not None:
+                on_chunk(cid)
+    finally:
+        bar.close()
+        store.finish_session(chunks_computed=len(computed),
+                             elapsed_s=round(time.perf_counter() - t_start, 3))
+    compute_s = time.perf_counter() - t_compute
+    missing = set(range(len(spec.chunks))) - store.done
+    if missing:
+        raise RuntimeError(f"{len(missing)} chunk(s) missing after the run: {sorted(missing)[:10]}")
+    new_runs = sum(len(spec.chunks[c].runs) for c in computed)
+    result = {"study": spec.name, "kind": spec.kind, "source": spec.path, "out": str(store.out),
+              "hash": spec.hash, "scheduler": executor.name, "workers": executor.workers,
+              "n_runs": spec.n_runs, "n_chunks": len(spec.chunks), "chunks_resumed": len(resumed),
+              "chunks_computed": len(computed), "runs_computed": new_runs,
+              "compute_s": compute_s, "runs_per_s": new_runs / compute_s if compute_s > 0 else math.nan}
+    if spec.kind == "sweep":
+        result.update(_finish_sweep(spec, store, plot))
+    else:
+        result.update(_finish_drives(spec, store, plot))
+    result["elapsed_s"] = time.perf_counter() - t_start
+    import json
+    (store.out / "summary.json").write_text(json.dumps(result, indent=1, default=str))
+    result["summary"] = summary_text(result)
+    return result
+
+
+def _references(spec: StudySpec, store: ResultStore, executor, todo) -> dict | None:
+    """Traces of the distinct reference runs (computed once, kept in the store for resumes)."""
+    if spec.data.get("reference") is None:
+        return None
+    refs = {}
+    for r in spec.runs:
+        ref = reference_run(spec.data, r)
+        refs.setdefault(run_key(ref), ref)
+    keys = list(refs)
+    stored = store.load_references(keys)
+    if stored is not None:
+        return stored
+    size = spec.data["chunk_size"]
+    tasks = [(j, (spec.data, [refs[k] for k in keys[j:j + size]])) for j in range(0, len(keys), size)]
+    traces = {}
+    for j, res, _ in executor.map(engine.reference_task, tasks):
+        traces.update(zip(keys[j:j + size], res))
+    traces = {k: traces[k] for k in keys}
+    store.save_references(traces)
+    return traces
+
+
+def _finish_sweep(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
+    header = store.columns()
+    rows = store.rows()
+    fmt = spec.data["results"]
+    table = store.write_table(header, rows if fmt == "csv" else rows, "results", fmt)
+    cols = {h: [_parse(r[i]) for r in rows] for i, h in enumerate(header)}
+    plots = []
+    if plot and spec.data.get("plot"):
+        from .plot import plot_sweep
+        plots.append(str(plot_sweep(spec, cols, store.out / f"{spec.name}.png")))
+    ok = sum(int(x) for x in cols["ok"])
+    ranges = {}
+    for c in spec.metric_columns():
+        vals = [v for v, good in zip(cols[c], cols["ok"]) if good and isinstance(v, float) and math.isfinite(v)]
+        if vals:
+            ranges[c] = [min(vals), max(vals)]
+    return {"table": str(table), "columns": header, "plots": plots, "runs_ok": ok,
+            "runs_failed": len(rows) - ok, "metric_ranges": ranges}
+
+
+def _finish_drives(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
+    rows = store.drive_rows()
+    variants = spec.data["variants"]
+    header = ["file", "maneuver", "state", "vehicle", "source", "signal", "window",
+              *[f"rmse_{v}_deg_s" for v in variants], "best_variant", "error"]
+    table = store.write_table(header, [[r.get(h, "") for h in header] for r in rows], "drives")
+    tables: dict = {}
+    for r in rows:
+        if r.get("error") or not r.get("maneuver"):
+            continue
+        cell = tables.setdefault(r["maneuver"], {}).setdefault(r["state"], {})
+        for v in variants:
+            cell.setdefault(v, []).append(r[f"rmse_{v}_deg_s"])
+    tables = {m: {s: {v: sum(x) / len(x) for v, x in c.items()} for s, c in by_s.items()}
+              for m, by_s in tables.items()}
+    plots = []
+    if plot and any(not r.get("error") for r in rows):
+        from .plot import plot_drives
+        plots.append(str(plot_drives(rows, variants, store.out / f"{spec.name}_rmse.png")))
+    failed = [{"file": r["file"], "error": r["error"]} for r in rows if r.get("error")]
+    return {"table": str(table), "columns": header, "plots": plots, "tables": tables, "unit": "deg/s",
+            "drives_ok": len(rows) - len(failed), "drives_failed": failed, "diagnosis": _diagnosis_note()}
+
+
+def _diagnosis_note() -> str:
+    try:
+        import importlib
+        importlib.import_module("susp_sim_ros.analysis.discrepancy")
+    except ImportError:
+        return "not available: the discrepancy finder is not in this tree (batch validation only)"
+    return "not wired: run susp diagnose per drive (batch diagnosis on the study engine is a follow-up)"
+
+
+def summary_text(r: dict) -> str:
+    lines = [f"study {r['study']} ({r['kind']}): {r['n_runs']} {'runs' if r['kind'] == 'sweep' else 'drives'} "
+             f"in {r['n_chunks']} chunks on {r['scheduler']} ({r['workers']} worker(s)); "
+             f"{r['chunks_computed']} chunks computed, {r['chunks_resumed']} resumed"]
+    if r["runs_computed"]:
+        lines.append(f"  {r['runs_per_s']:.0f} runs/s over {r['compute_s']:.1f} s")
+    for c, (lo, hi) in r.get("metric_ranges", {}).items():
+        lines.append(f"  {c}: {lo:.4g} .. {hi:.4g}")
+    if r["kind"] == "drives":
+        for m, by_s in r["tables"].items():
+            for s, row in by_s.items():
+                lines.append(f"  {m} {s}: " + ", ".join(f"{v} {x:.3f}" for v, x in row.items()) + " deg/s RMSE")
+        for f in r["drives_failed"]:
+            lines.append(f"  FAILED {f['file']}: {f['error']}")
+        lines.append(f"  diagnosis: {r['diagnosis']}")
+    lines.append(f"  table: {r['table']}" + (f"; plots: {', '.join(r['plots'])}" if r["plots"] else ""))
+    return "\n".join(lines)

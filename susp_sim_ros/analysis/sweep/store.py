@@ -1,0 +1,199 @@
+"""The resumable result store of a study: one file per finished chunk, written as the chunk finishes.
+
+Layout of ``OUT``::
+
+    manifest.json          the study (normalised), its hash, and one entry per session (start, resumed chunks)
+    chunks/c000017.csv     the rows of finished chunk 17 (sweep); chunks/d000003.json: drive 3 (drives)
+    chunks/references.npz  traces of the reference runs (sweeps with ``reference:``)
+    chunks/log.jsonl       one line per chunk computed: chunk id, session, runs, wall time
+    results.csv            (or .parquet) all rows by run id, once every chunk is in; drives: drives.csv
+
+A chunk file is written to a temporary name and renamed into place (atomic on POSIX), so a killed study
+leaves only whole chunk files; the next run with the same ``--out`` skips them and computes the rest.
+Floats are written with ``repr`` (shortest round-trip form), so the table holds exactly the computed
+values. A store of a different study (other hash) is refused unless ``fresh=True``.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import shutil
+import time
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from ...errors import SuspInputError
+from .spec import StudySpec
+
+
+def _fmt(v) -> str:
+    if isinstance(v, (bool, np.bool_)):
+        return "1" if v else "0"
+    if isinstance(v, (float, np.floating)):
+        return repr(float(v))
+    return str(v)
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+class ResultStore:
+    def __init__(self, spec: StudySpec, out: str | Path, *, fresh: bool = False):
+        self.spec, self.out = spec, Path(out)
+        self.chunk_dir = self.out / "chunks"
+        self.manifest_path = self.out / "manifest.json"
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise SuspInputError(f"--out {self.out}: cannot create the directory: {exc.strerror or exc}") from None
+        manifest = None
+        if self.manifest_path.exists():
+            try:
+                manifest = json.loads(self.manifest_path.read_text())
+            except (OSError, ValueError):
+                manifest = None
+            if manifest is not None and manifest.get("hash") != spec.hash and not fresh:
+                raise SuspInputError(
+                    f"--out {self.out}: holds results of another study ({manifest.get('name')!r}, hash "
+                    f"{manifest.get('hash')}) or of this study edited since (hash now {spec.hash}); use "
+                    f"another --out, or --fresh to discard them")
+            if fresh or manifest is None or manifest.get("hash") != spec.hash:
+                manifest = None
+        if manifest is None and self.chunk_dir.exists():
+            shutil.rmtree(self.chunk_dir)
+        self.chunk_dir.mkdir(exist_ok=True)
+        for tmp in self.chunk_dir.glob(".*.tmp"):       # leftovers of a killed writer
+            tmp.unlink()
+        self.manifest = manifest or {"name": spec.name, "kind": spec.kind, "hash": spec.hash,
+                                     "source": spec.path, "spec": spec.data, "n_runs": spec.n_runs,
+                                     "n_chunks": len(spec.chunks), "sessions": []}
+        self.session = len(self.manifest["sessions"])
+        self.done = self._finished()
+        self.manifest["sessions"].append({"started": time.strftime("%Y-%m-%dT%H:%M:%S"),
+                                          "chunks_already_done": len(self.done)})
+        _atomic_write(self.manifest_path, json.dumps(self.manifest, indent=1, default=str).encode())
+
+    # -- chunks ----------------------------------------------------------------------------------------
+    def _chunk_path(self, cid: int) -> Path:
+        return self.chunk_dir / (f"c{cid:06d}.csv" if self.spec.kind == "sweep" else f"d{cid:06d}.json")
+
+    def _finished(self) -> set[int]:
+        ids = set()
+        pattern = "c*.csv" if self.spec.kind == "sweep" else "d*.json"
+        for p in self.chunk_dir.glob(pattern):
+            try:
+                cid = int(p.stem[1:])
+            except ValueError:
+                continue
+            if 0 <= cid < len(self.spec.chunks):
+                ids.add(cid)
+        return ids
+
+    def columns(self) -> list[str]:
+        return ["run_id", *self.spec.swept, "ok", *self.spec.metric_columns()]
+
+    def write_chunk(self, cid: int, result, elapsed_s: float) -> None:
+        """Store a finished chunk (sweep: ``{"ok", "metrics"}`` from the chunk task; drives: a row)."""
+        chunk = self.spec.chunks[cid]
+        if self.spec.kind == "sweep":
+            buf = io.StringIO()
+            w = csv.writer(buf, lineterminator="\n")
+            w.writerow(self.columns())
+            for rid, ok, metrics in zip(chunk.runs, result["ok"], result["metrics"]):
+                run = self.spec.runs[rid]
+                w.writerow([rid, *(_fmt(run[k]) for k in self.spec.swept), _fmt(ok), *map(_fmt, metrics)])
+            data = buf.getvalue().encode()
+        else:
+            data = json.dumps(result, default=_fmt).encode()
+        _atomic_write(self._chunk_path(cid), data)
+        self.done.add(cid)
+        with open(self.chunk_dir / "log.jsonl", "a") as f:
+            f.write(json.dumps({"chunk": cid, "session": self.session, "runs": len(chunk.runs),
+                                "elapsed_s": round(elapsed_s, 6)}) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+
+    def log(self) -> list[dict]:
+        path = self.chunk_dir / "log.jsonl"
+        if not path.exists():
+            return []
+        out = []
+        for line in path.read_text().splitlines():
+            try:
+                out.append(json.loads(line))
+            except ValueError:          # a line cut by a kill
+                pass
+        return out
+
+    # -- references ------------------------------------------------------------------------------------
+    def load_references(self, keys: Sequence[str]) -> dict | None:
+        path = self.chunk_dir / "references.npz"
+        if not path.exists():
+            return None
+        with np.load(path, allow_pickle=False) as z:
+            stored = list(z["keys"])
+            if stored != list(keys):
+                return None
+            return {k: z[f"r{i}"] for i, k in enumerate(stored)}
+
+    def save_references(self, refs: dict) -> None:
+        buf = io.BytesIO()
+        keys = list(refs)
+        np.savez(buf, keys=np.array(keys), **{f"r{i}": refs[k] for i, k in enumerate(keys)})
+        _atomic_write(self.chunk_dir / "references.npz", buf.getvalue())
+
+    # -- the final table ---------------------------------------------------------------------------------
+    def rows(self) -> list[list[str]]:
+        """All sweep rows (strings, as stored) ordered by run id."""
+        rows = []
+        for cid in sorted(self.done):
+            with open(self._chunk_path(cid), newline="") as f:
+                r = csv.reader(f)
+                next(r)
+                rows.extend(r)
+        rows.sort(key=lambda row: int(row[0]))
+        return rows
+
+    def drive_rows(self) -> list[dict]:
+        return [json.loads(self._chunk_path(cid).read_text()) for cid in sorted(self.done)]
+
+    def write_table(self, header: Sequence[str], rows: Iterable[Sequence], name: str, fmt: str = "csv") -> Path:
+        rows = list(rows)
+        if fmt == "parquet":
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+            cols = {h: [_parse(r[i]) for r in rows] for i, h in enumerate(header)}
+            path = self.out / f"{name}.parquet"
+            pq.write_table(pa.table(cols), path)
+            return path
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(header)
+        w.writerows([[_fmt(x) for x in r] for r in rows])
+        path = self.out / f"{name}.csv"
+        _atomic_write(path, buf.getvalue().encode())
+        return path
+
+    def finish_session(self, **info) -> None:
+        self.manifest["sessions"][-1].update(info)
+        _atomic_write(self.manifest_path, json.dumps(self.manifest, indent=1, default=str).encode())
+
+
+def _parse(s: str):
+    try:
+        return int(s)
+    except ValueError:
+        try:
+            return float(s)
+        except ValueError:
+            return s

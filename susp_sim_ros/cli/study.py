@@ -1,0 +1,53 @@
+"""``susp study``: a parameter study from ``config/studies/*.yaml``, or batch validation of a folder of
+recorded drives, on Dask.
+
+    susp study config/studies/bump_oil_inspection.yaml --out results/inspection [--json]
+    susp study config/studies/X.yaml --out DIR --scheduler tcp://host:8786     # an existing cluster
+    susp study --drives bags --out results/drives                              # one task per drive
+
+A local cluster (``--workers N`` single-threaded worker processes) by default; ``--scheduler inprocess``
+runs without Dask. Finished chunks stream to ``DIR/chunks/``; running the same command again after a kill
+resumes without redoing them (``--fresh`` starts over). Progress bar on stderr (runs/s, ETA).
+"""
+from __future__ import annotations
+
+from ..errors import SuspInputError
+
+
+def add_arguments(p) -> None:
+    p.add_argument("study", nargs="?", help="study YAML (config/studies/*.yaml)")
+    p.add_argument("--drives", metavar="DIR", help="batch validation over every *.mcap in DIR instead")
+    p.add_argument("--variants", default="full,no_horizontal,no_velocity,dahl_only",
+                   help="friction variants of --drives (comma-separated)")
+    p.add_argument("--out", required=True, metavar="DIR", help="result directory (table, plots, chunks)")
+    p.add_argument("--scheduler", default="local",
+                   help="'local' (default: a local Dask cluster), 'inprocess' (no Dask), or the address "
+                        "of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    p.add_argument("--workers", type=int, default=None,
+                   help="workers of the local cluster (default 1; each gets cores/workers kernel threads)")
+    p.add_argument("--threads", action="store_true",
+                   help="local cluster of threads in this process instead of worker processes")
+    p.add_argument("--fresh", action="store_true", help="discard results in --out instead of resuming")
+    p.add_argument("--no-plot", action="store_true", help="no PNG figure")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
+def run(args) -> dict:
+    from ..analysis.sweep import drives_study, load_study, make_executor, run_study
+    if bool(args.study) == bool(args.drives):
+        raise SuspInputError("give a study YAML or --drives DIR (one of them)")
+    if args.drives:
+        variants = [v.strip() for v in args.variants.split(",") if v.strip()]
+        if not variants:
+            raise SuspInputError("--variants: give at least one friction variant")
+        spec = drives_study(args.drives, variants)
+    else:
+        spec = load_study(args.study)
+    if args.workers is not None and args.workers < 1:
+        raise SuspInputError(f"--workers: expected at least 1, got {args.workers}")
+    executor = make_executor(args.scheduler, args.workers, processes=not args.threads)
+    try:
+        return run_study(spec, args.out, executor, progress=not args.no_progress, fresh=args.fresh,
+                         plot=not args.no_plot)
+    finally:
+        executor.close()
