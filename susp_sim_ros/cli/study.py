@@ -23,6 +23,8 @@ def add_arguments(p) -> None:
     p.add_argument("--scheduler", default="local",
                    help="'local' (default: a local Dask cluster), 'inprocess' (no Dask), or the address "
                         "of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    p.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
+                   help="seconds to wait for --scheduler ADDRESS (default 10)")
     p.add_argument("--workers", type=int, default=None,
                    help="workers of the local cluster (default 1; each gets cores/workers kernel threads)")
     p.add_argument("--threads", action="store_true",
@@ -45,7 +47,8 @@ def run(args) -> dict:
         spec = load_study(args.study)
     if args.workers is not None and args.workers < 1:
         raise SuspInputError(f"--workers: expected at least 1, got {args.workers}")
-    executor = make_executor(args.scheduler, args.workers, processes=not args.threads)
+    executor = make_executor(args.scheduler, args.workers, processes=not args.threads,
+                             connect_timeout_s=args.connect_timeout)
     try:
         return run_study(spec, args.out, executor, progress=not args.no_progress, fresh=args.fresh,
                          plot=not args.no_plot)

@@ -234,6 +234,8 @@ def batch_metrics(data: Mapping, Y: np.ndarray, t_after: np.ndarray, dt_out: flo
             x = np.where(valid, q[rows[:, None], np.minimum(idx, n - 1)], 0.0)
             cnt = valid.sum(axis=1)
             cols.append(np.where(cnt > 0, np.sqrt((x * x).sum(axis=1) / np.maximum(cnt, 1)), math.nan))
+        elif m == "rmse_ref" and ref is None:
+            cols.append(np.full(B, math.nan))
         elif m == "rmse_ref":
             k = min(n, ref.shape[1])
             d = q[:, :k] - ref[:, :k]
@@ -266,7 +268,8 @@ def chunk_task(data: Mapping, runs: Sequence[Mapping], refs: Sequence[np.ndarray
     for idx in by_len.values():
         Y = np.stack([res[i][0] for i in idx])
         ta = np.array([res[i][2] for i in idx])
-        ref = np.stack([refs[i] for i in idx]) if data.get("reference") is not None else None
+        have = data.get("reference") is not None and all(refs[i] is not None for i in idx)
+        ref = np.stack([refs[i] for i in idx]) if have else None
         metrics[idx] = batch_metrics(data, Y, ta, res[idx[0]][3], ref)
     return {"ok": ok, "metrics": metrics.tolist()}
 

@@ -91,7 +91,7 @@ class DaskExecutor:
 
 
 def make_executor(scheduler: str | None = None, workers: int | None = None,
-                  processes: bool = True) -> InProcessExecutor | DaskExecutor:
+                  processes: bool = True, connect_timeout_s: float = 10.0) -> InProcessExecutor | DaskExecutor:
     """``scheduler``: ``None``/``"local"`` a local cluster of ``workers`` (default 1) single-threaded
     workers; ``"inprocess"`` no Dask; else the address of an existing scheduler (``tcp://host:8786``).
 
@@ -108,7 +108,7 @@ def make_executor(scheduler: str | None = None, workers: int | None = None,
                                dashboard_address=None, silence_logs=logging.ERROR)
         return DaskExecutor(Client(cluster), cluster, threads=max(1, cores // n), name=f"local:{n}")
     try:
-        client = Client(scheduler, timeout="10s")
+        client = Client(scheduler, timeout=f"{connect_timeout_s}s")
     except (OSError, TimeoutError, ValueError) as exc:
         raise SuspInputError(f"--scheduler {scheduler}: cannot connect to a Dask scheduler: {exc}") from None
     return DaskExecutor(client, None, threads=None, name=scheduler)

@@ -1,0 +1,333 @@
+"""Parameter studies on Dask (``susp study``, issue 6): study YAML validation, metrics, the same results on a
+local Dask cluster as in a plain single-process run, resume after an interrupt or a kill, batch
+validation of a folder of drives, and the CLI."""
+import csv
+import importlib.util
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from susp_sim_ros.analysis.sweep import (InProcessExecutor, DaskExecutor, drives_study, load_study,
+                                         run_study, study_from_dict)
+from susp_sim_ros.analysis.sweep import engine
+from susp_sim_ros.cli.main import main
+from susp_sim_ros.errors import ConfigError
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "config" / "studies" / "bump_oil_inspection.yaml"
+BAGS = ROOT / "bags"
+
+# a small study: 3 x 2 x 2 = 12 runs of the 8 km/h bump, chunks of 5 -> 3 chunks (the last one short)
+TINY = {
+    "name": "tiny", "maneuver": "bump_crossing", "chunk_size": 5,
+    "parameters": {"oil_front": [1.0, 0.5, 0.0], "oil_rear": {"from": 0.0, "to": 1.0, "num": 2},
+                   "bump_height": [0.04, 0.06]},
+    "reference": {"oil_front": 1.0, "oil_rear": 1.0},
+    "outputs": ["peak_rate", "decay_ratio", "damping_ratio", "ring_out", "rms_after", "rmse_ref",
+                {"peak": "F_FRICTION_RL"}],
+    "plot": {"y": ["decay_ratio"], "lines": "bump_height",
+             "panels": [{"x": "oil_rear", "fixed": {"oil_front": 1.0}}]},
+}
+
+
+def write_study(tmp_path, data, name="study.yaml") -> Path:
+    p = tmp_path / name
+    p.write_text(yaml.safe_dump(data, sort_keys=False))
+    return p
+
+
+def read_table(path) -> list[dict]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.fixture(scope="module")
+def dask_executor():
+    """A local cluster of two single-threaded worker processes (results cross a process boundary)."""
+    import logging
+    from distributed import Client, LocalCluster
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                           silence_logs=logging.ERROR)
+    ex = DaskExecutor(Client(cluster), cluster, threads=1, name="test-local:2")
+    try:
+        yield ex
+    finally:
+        ex.close()
+
+
+@pytest.fixture(scope="module")
+def tiny_reference(tmp_path_factory):
+    """The tiny study run plainly in this process: the reference every other run must equal."""
+    d = tmp_path_factory.mktemp("tiny_ref")
+    spec = study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml")
+    res = run_study(spec, d / "out", InProcessExecutor(), progress=False)
+    return res, (d / "out" / "results.csv").read_text()
+
+
+# ---- the study description ------------------------------------------------------------------------
+def test_example_study_expands_into_chunks_of_batched_runs():
+    spec = load_study(EXAMPLE)
+    assert spec.n_runs == 11 * 11 * 3
+    assert [r["oil_front"] for r in spec.runs[:1]] == [0.0] and spec.runs[-1]["oil_rear"] == 1.0
+    assert spec.runs[1] == {"variant": "full", "oil_front": 0.0, "oil_rear": 0.0, "bump_height": 0.06}
+    assert {r["oil_rear"] for r in spec.runs} == {round(0.1 * k, 12) for k in range(11)}   # 0.3, not 0.30000000000000004
+    assert sorted(i for c in spec.chunks for i in c.runs) == list(range(spec.n_runs))
+    assert all(len(c.runs) <= spec.data["chunk_size"] for c in spec.chunks)
+    assert load_study(EXAMPLE).hash == spec.hash                  # deterministic: resumable
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"colour": 1}, ["colour", "unknown key"]),
+    ({"parameters": {"oil_rear": [0.5, 1.2]}}, ["parameters.oil_rear", "[0, 1]"]),
+    ({"parameters": {"oil_rear": {"from": 0, "to": 1}}}, ["parameters.oil_rear", "from, to, num"]),
+    ({"parameters": {"steer_amplitude": [0.1]}}, ["parameters.steer_amplitude", "sine_steer"]),
+    ({"parameters": {"oil_rear": [0.5], "oil_RL": [1.0]}}, ["oil_rear", "oil_RL"]),
+    ({"parameters": {"variant": ["full", "no_such_variant"]}}, ["parameters.variant", "no_such_variant"]),
+    ({"outputs": ["peak_rate", "wobble"]}, ["outputs[1]", "wobble"]),
+    ({"reference": None, "outputs": ["rmse_ref"]}, ["outputs[0]", "reference"]),
+    ({"reference": {"speed": 3.0}}, ["reference.speed"]),
+    ({"plot": {"y": "decay_ratio", "panels": [{"x": "speed"}]}}, ["plot.panels[0].x", "speed"]),
+    ({"chunk_size": 0}, ["chunk_size"]),
+    ({"output_rate_hz": 300}, ["output_rate_hz"]),
+    ({"vehicle_classes": {"heavy": {"sprung_mass": 1800, "wheel_rate": 30000}}}, ["vehicle_classes.heavy.wheel_rate"]),
+    ({"results": "xlsx"}, ["results", "csv or parquet"]),
+])
+def test_bad_study_yaml_names_file_and_key(tmp_path, change, words):
+    data = {**json.loads(json.dumps(TINY)), **change}
+    path = write_study(tmp_path, data, "bad_study.yaml")
+    with pytest.raises(ConfigError) as exc:
+        load_study(path)
+    msg = str(exc.value)
+    assert "bad_study.yaml" in msg
+    for w in words:
+        assert w in msg
+
+
+@pytest.mark.skipif(importlib.util.find_spec("pyarrow") is not None, reason="pyarrow installed: parquet works")
+def test_parquet_without_pyarrow_is_a_config_error(tmp_path):
+    with pytest.raises(ConfigError, match="results: parquet needs pyarrow"):
+        load_study(write_study(tmp_path, {**TINY, "results": "parquet"}))
+
+
+def test_vehicle_classes_change_the_vehicle():
+    spec = study_from_dict({**json.loads(json.dumps(TINY)), "chunk_size": 50, "plot": None,
+                            "parameters": {"vehicle_class": ["stock", "heavy"], "oil_rear": [1.0]},
+                            "vehicle_classes": {"stock": {}, "heavy": {"sprung_mass": 1900.0,
+                                                                       "wheel_rate": [33000.0, 30000.0]}}},
+                           "classes.yaml")
+    stock, heavy = (engine.vehicle_params(spec.data, r) for r in spec.runs)
+    assert heavy.sprung_mass == 1900.0 and heavy.wheel_rate == (33000.0, 30000.0)
+    assert stock.sprung_mass != 1900.0
+    res = engine.chunk_task(spec.data, spec.runs, [None, None])
+    assert all(res["ok"]) and res["metrics"][0] != res["metrics"][1]
+
+
+# ---- metrics and the engine -------------------------------------------------------------------------
+def test_cached_parameter_vector_equals_model_params(model_full):
+    data = load_study(EXAMPLE).data
+    for oil in ((1.0, 1.0, 1.0, 1.0), (0.0, 0.0, 1.0, 1.0), (0.3, 0.3, 0.7, 0.7)):
+        run = {"variant": "full", "oil_front": oil[0], "oil_rear": oil[2]}
+        np.testing.assert_array_equal(engine.params_of(data, run), model_full.params(oil))  # exact: same numbers
+    assert engine.oil_of({"oil_rear": 0.2, "oil_RL": 0.9}) == (1.0, 1.0, 0.9, 0.2)
+
+
+@pytest.mark.parametrize("zeta", [0.05, 0.2, 0.5])
+def test_decay_ratio_of_a_damped_oscillator(zeta):
+    t = np.arange(0, 6, 0.001)
+    wd = 2 * np.pi * 1.5 * math.sqrt(1 - zeta ** 2)
+    q = np.exp(-zeta * 2 * np.pi * 1.5 * t) * np.sin(wd * t)
+    r = engine.decay_ratio(q, 0)
+    # successive half-wave peaks of a damped sine: ratio exp(-pi zeta / sqrt(1 - zeta^2)) (1 ms sampling)
+    assert r == pytest.approx(math.exp(-math.pi * zeta / math.sqrt(1 - zeta ** 2)), rel=2e-3)
+    assert engine.damping_ratio(r) == pytest.approx(zeta, rel=5e-3)
+    assert engine.decay_ratio(np.exp(-t), 0) == 0.0 and engine.damping_ratio(0.0) == 1.0
+
+
+def test_example_metrics_equal_the_paper_study_path(model_full):
+    """The study's peak pitch rate and ring-out equal those of a single `simulate` run (the path of
+    `susp paper`) bit for bit, for the paper's three vehicle states."""
+    from susp_sim_ros.model import simulate
+    from susp_sim_ros.model.maneuvers import bump_crossing
+    spec = load_study(EXAMPLE)
+    man = bump_crossing(wheelbase=model_full.vehicle.wheelbase)
+    t_leave = (float(man.road.s[-1]) + model_full.vehicle.wheelbase) / man.speed
+    runs = [{"variant": "full", "oil_front": f, "oil_rear": r, "bump_height": 0.06} for f, r in ((1, 1), (0, 1), (1, 0))]
+    res = engine.chunk_task(spec.data, runs, [np.zeros(1000)] * 3)
+    cols = spec.metric_columns()
+    for run, m in zip(runs, res["metrics"]):
+        oil = (run["oil_front"],) * 2 + (run["oil_rear"],) * 2
+        sim = simulate(model_full, man.to_inputs(0.001), dt=0.001, road=man.road, oil=oil, outputs=["PITCH_RATE"], decim=10)
+        q = np.degrees(sim.y[:, 0])
+        above = np.nonzero(np.abs(q) > 0.3)[0]
+        assert m[cols.index("peak_pitch_rate_deg_s")] == float(np.abs(q).max())
+        assert m[cols.index("ring_out_s")] == float(max(sim.t[above[-1]] - t_leave, 0.0))
+    peak = {k: m[cols.index("peak_pitch_rate_deg_s")] for k, m in zip(("intact", "front", "rear"), res["metrics"])}
+    decay = {k: m[cols.index("pitch_rate_decay_ratio")] for k, m in zip(("intact", "front", "rear"), res["metrics"])}
+    assert peak["intact"] == pytest.approx(8.7, abs=0.05) and peak["rear"] == pytest.approx(9.0, abs=0.05)  # model-spec 5
+    assert decay["rear"] > 3 * decay["intact"]          # the inspection signal sees the oil-empty rear dampers
+
+
+# ---- the same results everywhere, and resume ---------------------------------------------------------
+def test_dask_cluster_gives_the_same_table_as_a_plain_run(tmp_path, dask_executor, tiny_reference):
+    ref_res, ref_csv = tiny_reference
+    spec = study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml")
+    res = run_study(spec, tmp_path / "dask", dask_executor, progress=False)
+    assert res["scheduler"] == "test-local:2" and res["workers"] == 2
+    assert (tmp_path / "dask" / "results.csv").read_text() == ref_csv        # byte for byte
+    assert res["n_runs"] == 12 and res["n_chunks"] == 3 and res["runs_failed"] == 0
+    rows = read_table(tmp_path / "dask" / "results.csv")
+    assert [int(r["run_id"]) for r in rows] == list(range(12))
+    assert all(math.isfinite(float(r["pitch_rate_decay_ratio"])) for r in rows)
+    ref_row = next(r for r in rows if r["oil_front"] == "1.0" and r["oil_rear"] == "1.0")
+    assert float(ref_row["rmse_pitch_rate_vs_ref_deg_s"]) == 0.0             # the reference itself
+    assert Path(res["plots"][0]).stat().st_size > 10_000
+
+
+class Interrupt(Exception):
+    pass
+
+
+def _stop_after(n):
+    seen = []
+
+    def hook(cid):
+        seen.append(cid)
+        if len(seen) == n:
+            raise Interrupt()
+    return hook
+
+
+def _check_log_after_resume(out: Path, n_chunks: int, first: set):
+    log = [json.loads(x) for x in (out / "chunks" / "log.jsonl").read_text().splitlines()]
+    ids = [e["chunk"] for e in log]
+    assert sorted(ids) == list(range(n_chunks))              # every chunk computed exactly once
+    second = {e["chunk"] for e in log if e["session"] == 1}
+    assert first.isdisjoint(second) and first | second == set(range(n_chunks))
+
+
+def test_interrupted_dask_study_resumes_without_repeating_or_losing_chunks(tmp_path, dask_executor, tiny_reference):
+    _, ref_csv = tiny_reference
+    data = {**json.loads(json.dumps(TINY)), "chunk_size": 2}            # 6 chunks
+    spec = study_from_dict(data, "tiny.yaml")
+    out = tmp_path / "out"
+    with pytest.raises(Interrupt):
+        run_study(spec, out, dask_executor, progress=False, on_chunk=_stop_after(2))
+    first = {int(p.stem[1:]) for p in (out / "chunks").glob("c*.csv")}
+    assert len(first) == 2 and not (out / "results.csv").exists()
+    res = run_study(spec, out, dask_executor, progress=False)
+    assert res["chunks_resumed"] == 2 and res["chunks_computed"] == 4
+    _check_log_after_resume(out, 6, first)
+    # chunking differs from the reference (2 vs 5 runs per chunk): rows are per run, so the table is the same
+    assert (out / "results.csv").read_text() == ref_csv
+    # nothing left to do: a third run computes nothing
+    again = run_study(spec, out, InProcessExecutor(), progress=False)
+    assert again["chunks_computed"] == 0 and (out / "results.csv").read_text() == ref_csv
+
+
+def test_killed_study_process_resumes(tmp_path, tiny_reference):
+    """SIGKILL a real `susp study` process mid-run; the same command finishes the rest."""
+    data = {**json.loads(json.dumps(TINY)), "chunk_size": 1,
+            "parameters": {"oil_front": {"from": 0.0, "to": 1.0, "num": 20},
+                           "oil_rear": {"from": 0.0, "to": 1.0, "num": 20}, "bump_height": [0.06]}}
+    path = write_study(tmp_path, data, "killme.yaml")
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "susp_sim_ros.cli.main", "study", str(path), "--out", str(out),
+           "--scheduler", "inprocess", "--no-progress", "--no-plot"]
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None:
+            if (out / "chunks").exists() and len(list((out / "chunks").glob("c*.csv"))) >= 5:
+                break
+            time.sleep(0.005)
+        proc.send_signal(signal.SIGKILL)
+    finally:
+        proc.wait(timeout=30)
+    assert proc.returncode == -signal.SIGKILL, "study finished before it could be killed"
+    first = {int(p.stem[1:]) for p in (out / "chunks").glob("c*.csv")}
+    assert 5 <= len(first) < 400
+    r = subprocess.run(cmd + ["--json"], env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout)
+    assert res["chunks_resumed"] == len(first) and res["chunks_computed"] == 400 - len(first)
+    _check_log_after_resume(out, 400, first)
+    rows = read_table(out / "results.csv")
+    assert [int(x["run_id"]) for x in rows] == list(range(400)) and all(x["ok"] == "1" for x in rows)
+    # the killed-and-resumed table equals the plain run of the same runs
+    spec = study_from_dict(json.loads(json.dumps(data)), str(path))
+    plain = engine.chunk_task(spec.data, spec.runs[:3], [None] * 3)
+    ref = run_study(spec, tmp_path / "plain", InProcessExecutor(), progress=False, plot=False)
+    assert (out / "results.csv").read_text() == (tmp_path / "plain" / "results.csv").read_text()
+    assert ref["runs_failed"] == 0 and all(plain["ok"])
+
+
+def test_store_refuses_another_study_unless_fresh(tmp_path, tiny_reference):
+    out = tmp_path / "out"
+    run_study(study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml"), out, InProcessExecutor(), progress=False, plot=False)
+    other = study_from_dict({**json.loads(json.dumps(TINY)), "chunk_size": 4}, "tiny.yaml")
+    from susp_sim_ros.errors import SuspInputError
+    with pytest.raises(SuspInputError, match="another study"):
+        run_study(other, out, InProcessExecutor(), progress=False)
+    res = run_study(other, out, InProcessExecutor(), progress=False, fresh=True, plot=False)
+    assert res["chunks_resumed"] == 0 and res["chunks_computed"] == 3
+    assert (out / "results.csv").read_text() == tiny_reference[1]
+
+
+# ---- batch validation over a folder of drives ----------------------------------------------------------
+def test_batch_validation_over_a_folder(tmp_path, dask_executor):
+    folder = tmp_path / "drives"
+    folder.mkdir()
+    for name in ("bump_crossing_intact.mcap", "bump_crossing_rear_empty.mcap"):
+        shutil.copy(BAGS / name, folder / name)
+    (folder / "junk.mcap").write_bytes(b"not an mcap file")
+    spec = drives_study(folder, ["full", "dahl_only"])
+    res = run_study(spec, tmp_path / "out", dask_executor, progress=False)
+    rows = {Path(r["file"]).name: r for r in read_table(tmp_path / "out" / "drives.csv")}
+    assert set(rows) == {"bump_crossing_intact.mcap", "bump_crossing_rear_empty.mcap", "junk.mcap"}
+    assert rows["junk.mcap"]["error"] and res["drives_failed"][0]["file"].endswith("junk.mcap")
+    rear = rows["bump_crossing_rear_empty.mcap"]
+    assert rear["maneuver"] == "bump_crossing" and rear["state"] == "rear_empty"
+    assert float(rear["rmse_dahl_only_deg_s"]) > float(rear["rmse_full_deg_s"]) > 0      # the paper's finding
+    assert res["tables"]["bump_crossing"]["rear_empty"]["full"] == pytest.approx(float(rear["rmse_full_deg_s"]))
+    # the same numbers as `susp validate --study` computes per drive
+    from susp_sim_ros.analysis.study import simulate_and_validate
+    from susp_sim_ros.io.drive import read_drive
+    one = simulate_and_validate(folder / "bump_crossing_rear_empty.mcap",
+                                read_drive(folder / "bump_crossing_rear_empty.mcap"), ["full"], {})
+    assert float(rear["rmse_full_deg_s"]) == one.rmse("full")
+    assert res["plots"] and Path(res["plots"][0]).exists()
+
+
+# ---- the command line -------------------------------------------------------------------------------------
+def test_cli_study_json_table_and_plot(tmp_path, capsys):
+    path = write_study(tmp_path, TINY)
+    rc = main(["study", str(path), "--out", str(tmp_path / "o"), "--scheduler", "inprocess", "--json", "--no-progress"])
+    assert rc == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["n_runs"] == 12 and res["table"].endswith("results.csv") and res["plots"][0].endswith(".png")
+    assert "peak_abs_F_FRICTION_RL" in res["columns"]
+    assert res["metric_ranges"]["pitch_rate_decay_ratio"][0] > 0
+
+
+def test_cli_bad_input_exits_2(tmp_path, capsys):
+    bad = write_study(tmp_path, {**TINY, "parameters": {"oil_rear": [2.0]}}, "broken.yaml")
+    assert main(["study", str(bad), "--out", str(tmp_path / "o"), "--scheduler", "inprocess"]) == 2
+    err = capsys.readouterr().err
+    assert "broken.yaml" in err and "parameters.oil_rear" in err
+    assert main(["study", str(tmp_path / "missing.yaml"), "--out", str(tmp_path / "o")]) == 2
+    assert main(["study", "--out", str(tmp_path / "o")]) == 2                     # neither study nor --drives
+    assert main(["study", "--drives", str(tmp_path / "nowhere"), "--out", str(tmp_path / "o"),
+                 "--scheduler", "inprocess"]) == 2
+    assert main(["study", str(EXAMPLE), "--out", str(tmp_path / "o"), "--scheduler", "tcp://127.0.0.1:9",
+                 "--connect-timeout", "1"]) == 2
