@@ -1,0 +1,230 @@
+"""The library of candidate physics terms the discrepancy finder tests (names: interface.md, TERM).
+
+Every candidate is a physically named change of the model with parameters, bounds and a one-line
+meaning, applied to the kernel's flat parameter vector ``P`` (one row per drive). How each maps onto the
+model (design choice, see also the package docstring):
+
+- the paper's friction scalings (``damper_friction_velocity``, ``damper_friction_oil``,
+  ``friction_longitudinal_force``, ``friction_lateral_force``) use the kernel's own scaling switches and
+  their continuous parameters (``SV_INF``/``SV_VS``, ``SOIL_EMPTY``, ``SH_X``/``SH_Y``). A model that has
+  a scaling switched off is first rewritten with the switch on at its neutral value (plateau 1, ratio 1,
+  slope 0), which is exactly the same model; the candidate then frees the continuous parameters;
+- ``friction_amplitude``, ``extra_viscous_damping`` and ``damper_gas_preload`` are registered physics
+  terms (:mod:`susp_sim_ros.analysis.synthetic`, :mod:`susp_sim_ros.model.extra_terms`) added to the
+  model at zero effect;
+- ``mass_error``, ``inertia_error``, ``spring_rate_error``, ``tyre_relaxation_error`` scale vehicle
+  parameters;
+- ``sensor_bias`` and ``time_offset`` model the measurement chain, not the car: a constant gyro offset
+  per drive and axis (estimated, like a standstill zeroing, from the drive's quiet lead-in before the
+  first excitation, so it needs no maneuver data) and one time shift of the IMU against the inputs.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ...model.layout import P_INDEX
+
+PHYSICS, PARAMETER, MEASUREMENT = "physics", "parameter", "measurement"
+
+
+@dataclass(frozen=True)
+class CandParam:
+    """One free parameter: neutral value (no effect), bounds, finite-difference/scale step, unit."""
+
+    name: str
+    unit: str
+    neutral: float
+    lower: float
+    upper: float
+    step: float
+    meaning: str = ""
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A named candidate term. ``apply(P, x, model)`` edits the (R, n_p) parameter rows in place for the
+    parameter values ``x`` (one per :attr:`params`); ``axle_of`` maps parameter index -> 'front'/'rear'
+    (or None) for the ``where`` field; ``reveal_with`` names the maneuver that excites it."""
+
+    name: str
+    kind: str
+    meaning: str
+    params: tuple[CandParam, ...]
+    apply: Callable | None = field(default=None, repr=False)
+    axle_of: tuple[str | None, ...] = ()
+    reveal_with: str = ""
+    needs: str = ""  # what the drives must contain to identify it: oil_empty, lateral, bump, any
+
+    @property
+    def n_params(self) -> int:
+        return len(self.params)
+
+    def neutral(self) -> np.ndarray:
+        return np.array([p.neutral for p in self.params], float)
+
+
+def _set_axles(P, key, front, rear):
+    k = P_INDEX[key]
+    P[:, k:k + 2] = front
+    P[:, k + 2:k + 4] = rear
+
+
+def _scale_axles(P, P0, key, front, rear):
+    k = P_INDEX[key]
+    P[:, k:k + 2] = P0[:, k:k + 2] * front
+    P[:, k + 2:k + 4] = P0[:, k + 2:k + 4] * rear
+
+
+def _velocity(P, P0, x, model):
+    P[:, P_INDEX["USE_V"]] = 1.0
+    P[:, P_INDEX["SV_INF"]] = x[0]
+    P[:, P_INDEX["SV_VS"]] = x[1]
+
+
+def _oil(P, P0, x, model):
+    P[:, P_INDEX["USE_OIL"]] = 1.0
+    _set_axles(P, "SOIL_EMPTY", x[0], x[1])
+
+
+def _longitudinal(P, P0, x, model):
+    P[:, P_INDEX["USE_H"]] = 1.0
+    _set_axles(P, "SH_X", x[0] * 1e-3, x[1] * 1e-3)
+
+
+def _lateral(P, P0, x, model):
+    P[:, P_INDEX["USE_H"]] = 1.0
+    _set_axles(P, "SH_Y", x[0] * 1e-3, x[1] * 1e-3)
+
+
+def _term_axles(name, param):
+    def apply(P, P0, x, model):
+        sl = model.term_param_slice(name, param)
+        P[:, sl.start:sl.start + 2] = x[0]
+        P[:, sl.start + 2:sl.stop] = x[1]
+    return apply
+
+
+def _gas(P, P0, x, model):
+    P[:, model.term_param_slice("damper_gas_preload", "f0")] = x[0]
+    P[:, model.term_param_slice("damper_gas_preload", "k")] = x[1]
+
+
+def _mass(P, P0, x, model):
+    s = x[0]
+    ms0 = P0[:, P_INDEX["M_S"]]
+    P[:, P_INDEX["M_S"]] = ms0 * s
+    P[:, P_INDEX["M_TOT"]] = P0[:, P_INDEX["M_TOT"]] + ms0 * (s - 1.0)
+    g = P0[:, P_INDEX["G"]][:, None]
+    k, ku = P_INDEX["FZ0"], P_INDEX["M_U"]
+    sprung = P0[:, k:k + 4] - P0[:, ku:ku + 4] * g
+    P[:, k:k + 4] = P0[:, ku:ku + 4] * g + sprung * s
+
+
+def _inertia(P, P0, x, model):
+    P[:, P_INDEX["IXX"]] = P0[:, P_INDEX["IXX"]] * x[0]
+    P[:, P_INDEX["IYY"]] = P0[:, P_INDEX["IYY"]] * x[1]
+
+
+def _spring(P, P0, x, model):
+    _scale_axles(P, P0, "K_S", x[0], x[1])
+
+
+def _relax(P, P0, x, model):
+    P[:, P_INDEX["RELAX_LEN"]] = P0[:, P_INDEX["RELAX_LEN"]] * x[0]
+
+
+def _nothing(P, P0, x, model):
+    pass
+
+
+SINE = "a sine-steer (or slalom) drive: lateral wheel forces of several kN"
+EMPTY = "a drive with oil-empty dampers on that axle (hydraulic damping masks damper friction otherwise)"
+
+LIBRARY: tuple[Candidate, ...] = (
+    Candidate("damper_friction_velocity", PHYSICS,
+              "shock-absorber friction grows with stroke velocity to a plateau (paper: s_v)",
+              (CandParam("plateau", "1", 1.0, 1.0, 5.0, 0.5, "s_v at high stroke velocity"),
+               CandParam("speed", "m/s", 0.02, 0.003, 0.2, 0.005, "stroke velocity scale of the rise")),
+              _velocity, (None, None), "an oil-empty-damper drive with fast strokes (bump crossing)",
+              "oil_empty"),
+    Candidate("damper_friction_oil", PHYSICS,
+              "shock-absorber friction level changes when the damper loses its oil (paper: s_oil)",
+              (CandParam("ratio_front", "1", 1.0, 0.2, 5.0, 0.3, "F_empty/F_intact, front"),
+               CandParam("ratio_rear", "1", 1.0, 0.2, 5.0, 0.3, "F_empty/F_intact, rear")),
+              _oil, ("front", "rear"), "drives with oil-empty dampers on the axle in question", "oil_empty"),
+    Candidate("friction_longitudinal_force", PHYSICS,
+              "suspension friction grows with the longitudinal wheel force (paper: s_h, Fx)",
+              (CandParam("kx_front", "1/kN", 0.0, 0.0, 3.0, 0.3, "relative growth per kN |Fx|, front"),
+               CandParam("kx_rear", "1/kN", 0.0, 0.0, 3.0, 0.3, "relative growth per kN |Fx|, rear")),
+              _longitudinal, ("front", "rear"),
+              "a braking/accelerating drive or a bump crossing with oil-empty dampers", "any"),
+    Candidate("friction_lateral_force", PHYSICS,
+              "suspension friction grows with the lateral wheel force (paper: s_h, Fy)",
+              (CandParam("ky_front", "1/kN", 0.0, 0.0, 3.0, 0.3, "relative growth per kN |Fy|, front"),
+               CandParam("ky_rear", "1/kN", 0.0, 0.0, 3.0, 0.3, "relative growth per kN |Fy|, rear")),
+              _lateral, ("front", "rear"), SINE, "lateral"),
+    Candidate("friction_amplitude", PHYSICS,
+              "suspension friction grows with deflection amplitude (extra Dahl element above 5 mm stroke)",
+              (CandParam("extra_front", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, front"),
+               CandParam("extra_rear", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, rear")),
+              _term_axles("friction_amplitude", "extra_level"), ("front", "rear"),
+              "a bump crossing (strokes of several cm), best with oil-empty dampers", "bump"),
+    Candidate("damper_gas_preload", PHYSICS,
+              "gas-spring force of a pressurised damper: preload change plus gas stiffness",
+              (CandParam("f0", "N", 0.0, -500.0, 500.0, 20.0, "force change at static deflection"),
+               CandParam("k", "N/m", 0.0, -20000.0, 20000.0, 1000.0, "gas stiffness")),
+              _gas, (None, None), "a bump crossing (large deflection)", "bump"),
+    Candidate("extra_viscous_damping", PHYSICS,
+              "additional linear damping c*v in parallel with the damper (bushings, residual oil)",
+              (CandParam("c_front", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, front"),
+               CandParam("c_rear", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, rear")),
+              _term_axles("extra_viscous_damping", "c"), ("front", "rear"), "any drive with body motion",
+              "any"),
+    Candidate("mass_error", PARAMETER, "sprung mass differs from the parameter set (loading, tolerance)",
+              (CandParam("scale", "1", 1.0, 0.8, 1.2, 0.01, "sprung mass factor"),),
+              _mass, (None,), "a bump crossing (heave/pitch frequencies)", "any"),
+    Candidate("inertia_error", PARAMETER, "body roll/pitch inertia differs from the parameter set",
+              (CandParam("roll_scale", "1", 1.0, 0.7, 1.3, 0.02, "roll inertia factor"),
+               CandParam("pitch_scale", "1", 1.0, 0.7, 1.3, 0.02, "pitch inertia factor")),
+              _inertia, (None, None), "sine steer (roll) and bump crossing (pitch)", "any"),
+    Candidate("spring_rate_error", PARAMETER, "wheel rates differ from the parameter set",
+              (CandParam("front_scale", "1", 1.0, 0.8, 1.2, 0.01, "front wheel-rate factor"),
+               CandParam("rear_scale", "1", 1.0, 0.8, 1.2, 0.01, "rear wheel-rate factor")),
+              _spring, ("front", "rear"), "a bump crossing", "any"),
+    Candidate("tyre_relaxation_error", PARAMETER, "tyre relaxation length differs from the parameter set",
+              (CandParam("scale", "1", 1.0, 0.2, 5.0, 0.2, "relaxation-length factor"),),
+              _relax, (None,), SINE, "lateral"),
+    Candidate("time_offset", MEASUREMENT,
+              "the IMU signal lags the inputs (sensor bandwidth, timestamping)",
+              (CandParam("lag", "s", 0.0, -0.05, 0.05, 0.001, "measured minus model time (positive: IMU late)"),),
+              _nothing, (None,), "any drive with fast body motion", "any"),
+    Candidate("sensor_bias", MEASUREMENT,
+              "constant gyro offset per drive and axis (estimated from the quiet lead-in of each drive)",
+              (), _nothing, (), "a drive with a quiet lead-in before the maneuver", "any"),
+)
+
+BY_NAME = {c.name: c for c in LIBRARY}
+# the paper's scalings: which kernel switch each candidate stands for
+SWITCH_OF = {"damper_friction_velocity": "velocity_scaling", "damper_friction_oil": "oil_scaling",
+             "friction_longitudinal_force": "horizontal_scaling",
+             "friction_lateral_force": "horizontal_scaling"}
+
+
+def neutral_base(P0: np.ndarray) -> np.ndarray:
+    """Base rows rewritten so every paper scaling is switched on at its neutral value where it was off
+    (the same model: s_v = 1 with plateau 1, s_oil = 1 with ratio 1, s_h = 1 with zero slopes)."""
+    P = P0.copy()
+    if np.all(P[:, P_INDEX["USE_V"]] < 0.5):
+        P[:, P_INDEX["USE_V"]] = 1.0
+        P[:, P_INDEX["SV_INF"]] = 1.0
+    if np.all(P[:, P_INDEX["USE_OIL"]] < 0.5):
+        P[:, P_INDEX["USE_OIL"]] = 1.0
+        _set_axles(P, "SOIL_EMPTY", 1.0, 1.0)
+    if np.all(P[:, P_INDEX["USE_H"]] < 0.5):
+        P[:, P_INDEX["USE_H"]] = 1.0
+        _set_axles(P, "SH_X", 0.0, 0.0)
+        _set_axles(P, "SH_Y", 0.0, 0.0)
+    return P

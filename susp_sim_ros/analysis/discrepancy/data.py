@@ -1,0 +1,201 @@
+"""Drive preparation for the discrepancy finder: model inputs, comparison grid, measured signals.
+
+Each recorded test drive becomes a :class:`DriveCase`: the per-step model inputs exactly as the lockstep
+runner / node would apply them (inputs held from their message time on, acceleration from successive
+speed messages), its road, oil levels, and the measured gyro rates resampled onto the validator's common
+grid (:mod:`susp_sim_ros.analysis.validation`: integer-ns grid at the lower of the two sample rates, linear
+interpolation, never extrapolating) inside the drive's analysis window (bump window / pitch rate for bump
+crossings, steering window / roll rate for sine steering, as in the paper's tables).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ...errors import RecordingError, SuspInputError
+from ...model.layout import N_U, U_INDEX
+from .. import validation as va
+from ..study import classify_maneuver, classify_state
+
+NS = va.NS
+SIM_RATE_HZ = 1000.0  # the model's 1 ms step
+
+
+@dataclass
+class DriveCase:
+    """One drive prepared for batch simulation and comparison.
+
+    ``U`` (n_steps, N_U) per-step inputs; ``grid_ns`` comparison times [ns]; ``y_meas`` (n_grid, n_sig)
+    measured rates [deg/s] on the grid for the gyro ``axes``; ``quiet`` mask of grid samples before the
+    drive's first excitation (set after the base simulation, see :func:`mark_quiet`).
+    """
+
+    name: str
+    path: str
+    maneuver: str | None
+    state: str
+    oil: np.ndarray
+    U: np.ndarray
+    road: object
+    t0_ns: int
+    dt: float
+    signals: tuple[str, ...]
+    axes: np.ndarray
+    window: va.Window
+    grid_ns: np.ndarray
+    y_meas: np.ndarray
+    drive: object = field(repr=False, default=None)
+    quiet: np.ndarray | None = None
+    metadata: dict = field(default_factory=dict)
+    t_raw_s: np.ndarray | None = None       # measured sample times in the window [s since t0]
+    y_raw: np.ndarray | None = None         # measured rates there [deg/s], before resampling
+    resample_factor: float = 1.0            # noise variance factor of the linear resampling
+
+    @property
+    def n_steps(self) -> int:
+        return self.U.shape[0]
+
+    @property
+    def t_grid_s(self) -> np.ndarray:
+        """Grid times [s] since the drive's first input message."""
+        return (self.grid_ns - self.t0_ns) / NS
+
+    @property
+    def t_sim_s(self) -> np.ndarray:
+        """Times [s] (since the first input) of the simulation outputs: after each step."""
+        return self.dt * np.arange(1, self.n_steps + 1)
+
+
+def _held(t_msg_ns: np.ndarray, values: np.ndarray, t0_ns: int, n_steps: int, step_ns: int) -> np.ndarray:
+    """Per-step value held from each message on (a message at t applies from step floor((t-t0)/dt))."""
+    first_step = (np.asarray(t_msg_ns, np.int64) - t0_ns) // step_ns
+    k = np.arange(n_steps)
+    idx = np.searchsorted(first_step, k, side="right") - 1
+    out = np.zeros((n_steps,) + values.shape[1:])
+    ok = idx >= 0
+    out[ok] = values[idx[ok]]
+    return out
+
+
+def _linear(t_msg_ns: np.ndarray, values: np.ndarray, t0_ns: int, n_steps: int, dt: float) -> np.ndarray:
+    """Per-step value linearly interpolated between messages at the step start times (held outside)."""
+    t = (np.asarray(t_msg_ns, np.int64) - t0_ns) / NS
+    k = dt * np.arange(n_steps)
+    v = np.asarray(values, float)
+    if v.ndim == 1:
+        return np.interp(k, t, v)
+    return np.column_stack([np.interp(k, t, v[:, j]) for j in range(v.shape[1])])
+
+
+def make_inputs_from_drive(drive, dt: float = 0.001, hold: bool = False) -> tuple[np.ndarray, int]:
+    """Per-step inputs (n_steps, N_U) and the time origin [ns] of a recorded drive.
+
+    Recorded inputs are samples of continuous signals; offline, the finder reconstructs them by linear
+    interpolation between samples (``hold=False``). The node and the lockstep runner hold each message
+    until the next one (``hold=True``), which delays the input by half a sample period on average (5 ms
+    at 100 Hz): on a sine steer that shows as a spurious lag of several milliseconds that the
+    ``time_offset`` term would otherwise have to absorb. Acceleration from successive speed messages."""
+    step_ns = int(round(dt * NS))
+    t0 = drive.t0_ns
+    n_steps = int((drive.t_end_ns - t0) // step_ns)
+    if n_steps < 10:
+        raise RecordingError(f"drive too short to simulate: {n_steps} steps")
+    U = np.zeros((n_steps, N_U))
+    sp = drive.speed
+    fill = (lambda tm, v: _held(tm, np.asarray(v, float), t0, n_steps, step_ns)) if hold else \
+        (lambda tm, v: _linear(tm, v, t0, n_steps, dt))
+    U[:, U_INDEX["V"]] = fill(sp.t_ns, sp.values)
+    acc = np.zeros(len(sp))
+    if len(sp) > 1:
+        acc[1:] = np.diff(sp.values) / (np.diff(sp.t_ns) * 1e-9)
+    U[:, U_INDEX["AX"]] = _held(sp.t_ns, acc, t0, n_steps, step_ns)
+    st = drive.steering
+    U[:, U_INDEX["SWA"]] = fill(st.t_ns, st.values)
+    if drive.wheel_heights is not None and len(drive.wheel_heights):
+        wh = drive.wheel_heights
+        U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4] = fill(wh.t_ns, wh.values)
+    return U, t0
+
+
+def prepare_case(path: str | Path, drive, *, wheelbase: float, dt: float = 0.001,
+                 signals: Sequence[str] | None = None) -> DriveCase:
+    """A :class:`DriveCase` of a read drive (``drive`` from :func:`~susp_sim_ros.io.drive.read_drive`)."""
+    path = Path(path)
+    if drive.imu is None or len(drive.imu) < 10:
+        raise RecordingError(f"{path}: no measured IMU samples on /imu/data: nothing to diagnose against")
+    meta = drive.metadata
+    maneuver = classify_maneuver(meta.get("maneuver", ""))
+    oil = np.array(drive.oil_levels(), float) if "damper_oil_level" in meta else np.ones(4)
+    U, t0 = make_inputs_from_drive(drive, dt)
+    windows = va.analysis_windows(drive, wheelbase)
+    wname = va.MANEUVER_WINDOW.get(maneuver, "whole")
+    window = windows.get(wname, windows["whole"])
+    if signals is None:
+        signals = (va.MANEUVER_SIGNAL[maneuver],) if maneuver else ("roll_rate", "pitch_rate")
+    axes = np.array([va.SIGNAL_AXIS[s] for s in signals])
+    t_meas, g_meas = va.check_series(drive.imu.t_ns, drive.imu.gyro, f"{path} /imu/data")
+    sim_span = (t0 + int(round(dt * NS)), t0 + U.shape[0] * int(round(dt * NS)))
+    span = va.overlap((int(t_meas[0]), int(t_meas[-1])), sim_span, window.span,
+                      what=[f"{path} /imu/data", "simulation", f"{window.name} window"])
+    rate = min(va.median_rate(t_meas), SIM_RATE_HZ)
+    grid = va.common_grid(span, rate)
+    if grid.size < 20:
+        raise RecordingError(f"{path}: only {grid.size} comparison samples in the {window.name} window")
+    y_meas = np.degrees(va.resample(t_meas, g_meas[:, axes], grid))
+    if y_meas.ndim == 1:
+        y_meas = y_meas[:, None]
+    # white noise through linear interpolation: variance x (w^2 + (1 - w)^2), w the grid point's position
+    # between its two measured samples
+    j = np.clip(np.searchsorted(t_meas, grid, side="right") - 1, 0, len(t_meas) - 2)
+    w = (grid - t_meas[j]) / (t_meas[j + 1] - t_meas[j])
+    factor = float(np.mean(w * w + (1 - w) ** 2))
+    inwin = (t_meas >= span[0]) & (t_meas <= span[1])
+    return DriveCase(name=path.stem, path=str(path), maneuver=maneuver, state=classify_state(oil),
+                     oil=oil, U=U, road=drive.road, t0_ns=int(t0), dt=dt, signals=tuple(signals), axes=axes,
+                     window=window, grid_ns=grid, y_meas=y_meas, drive=drive, metadata=dict(meta),
+                    t_raw_s=(t_meas[inwin] - t0) / NS, y_raw=np.degrees(g_meas[inwin][:, axes]),
+                    resample_factor=factor)
+
+
+def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.001) -> list[DriveCase]:
+    """Read and prepare drives; :class:`SuspInputError` naming the file on unreadable input."""
+    from ...io.drive import read_drive
+    if not paths:
+        raise SuspInputError("give at least one recorded test drive (MCAP)")
+    cases = []
+    names = set()
+    for p in paths:
+        p = Path(p)
+        if not p.is_file():
+            raise SuspInputError(f"{p}: no such file")
+        case = prepare_case(p, read_drive(p), wheelbase=wheelbase, dt=dt)
+        if case.name in names:
+            case.name = f"{case.name}_{len(names)}"
+        names.add(case.name)
+        cases.append(case)
+    return cases
+
+
+def mark_quiet(case: DriveCase, sim_rates_deg_s: np.ndarray, *, threshold_deg_s: float = 0.005,
+               margin_s: float = 0.05) -> None:
+    """Mark the grid samples before the drive's first excitation: where the base simulation's body
+    rates (all three gyro axes, [deg/s], at the simulation's step times) are still below
+    ``threshold_deg_s``, minus a margin. Used for the standstill-style sensor-bias estimate."""
+    active = np.nonzero(np.any(np.abs(sim_rates_deg_s) > threshold_deg_s, axis=1))[0]
+    t_on = case.t_sim_s[active[0]] - margin_s if active.size else case.t_sim_s[-1]
+    case.quiet = case.t_grid_s < t_on
+
+
+def excitation_onset_s(case: DriveCase) -> float:
+    q = case.quiet
+    if q is None or not q.any():
+        return 0.0
+    return float(case.t_grid_s[np.nonzero(q)[0][-1]])
+
+
+def _finite(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None

@@ -1,0 +1,164 @@
+"""Batch evaluation of candidate models over many drives at once (:func:`simulate_batch`).
+
+A *model structure* is a list of candidates; its parameter vector ``x`` concatenates their parameters.
+:class:`Evaluator` turns ``x`` into kernel parameter rows (one per drive), runs many parameter sets x
+drives in one parallel batch, and turns the simulated gyro rates into residuals (simulated - measured,
+deg/s) on each drive's comparison grid, with the measurement-chain terms (time offset, per-drive bias)
+applied on the way.
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from ...model import Model, simulate_batch
+from .candidates import BY_NAME, Candidate, neutral_base
+from .data import DriveCase
+
+RATES = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")
+
+
+class Structure:
+    """A list of candidates with the layout of their joint parameter vector."""
+
+    def __init__(self, names: Sequence[str]):
+        self.names = tuple(names)
+        self.cands: tuple[Candidate, ...] = tuple(BY_NAME[n] for n in self.names)
+        self.offsets = np.cumsum([0] + [c.n_params for c in self.cands])
+
+    @property
+    def n_params(self) -> int:
+        return int(self.offsets[-1])
+
+    def part(self, x: np.ndarray, name: str) -> np.ndarray:
+        k = self.names.index(name)
+        return x[self.offsets[k]:self.offsets[k + 1]]
+
+    def neutral(self) -> np.ndarray:
+        return np.concatenate([c.neutral() for c in self.cands]) if self.cands else np.zeros(0)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lo = [p.lower for c in self.cands for p in c.params]
+        hi = [p.upper for c in self.cands for p in c.params]
+        return np.array(lo, float), np.array(hi, float)
+
+    def steps(self) -> np.ndarray:
+        return np.array([p.step for c in self.cands for p in c.params], float)
+
+    def labels(self) -> list[tuple[str, str]]:
+        return [(c.name, p.name) for c in self.cands for p in c.params]
+
+    def lag(self, x: np.ndarray) -> float:
+        return float(self.part(x, "time_offset")[0]) if "time_offset" in self.names else 0.0
+
+    @property
+    def bias(self) -> bool:
+        return "sensor_bias" in self.names
+
+    def with_(self, *names: str) -> "Structure":
+        return Structure(self.names + tuple(n for n in names if n not in self.names))
+
+    def without(self, name: str) -> "Structure":
+        return Structure(tuple(n for n in self.names if n != name))
+
+    def embed(self, other: "Structure", x_other: np.ndarray) -> np.ndarray:
+        """This structure's vector with values taken from ``x_other`` where ``other`` has the term."""
+        x = self.neutral()
+        for k, n in enumerate(self.names):
+            if n in other.names:
+                x[self.offsets[k]:self.offsets[k + 1]] = other.part(x_other, n)
+        return x
+
+
+class Evaluator:
+    """Simulate parameter sets over the drives and compute residuals.
+
+    ``model`` must contain every registered term a candidate uses (at zero effect); ``cases`` the
+    prepared drives. Counts simulated vehicle-seconds in :attr:`vehicle_seconds`.
+    """
+
+    def __init__(self, model: Model, cases: Sequence[DriveCase], progress=None):
+        self.model, self.cases = model, list(cases)
+        self.P0 = np.stack([model.params(c.oil) for c in self.cases])
+        self.Pn = neutral_base(self.P0)
+        self.n_max = max(c.n_steps for c in self.cases)
+        U = np.zeros((len(self.cases), self.n_max, self.cases[0].U.shape[1]))
+        for r, c in enumerate(self.cases):
+            U[r, :c.n_steps] = c.U
+            U[r, c.n_steps:] = c.U[-1]
+        self.U = U
+        self.roads = [c.road for c in self.cases]
+        self.dt = self.cases[0].dt
+        self.vehicle_seconds = 0.0
+        self.progress = progress
+        self.n_res = [c.y_meas.size for c in self.cases]
+
+    # -- parameters ---------------------------------------------------------------------------------
+    def rows(self, st: Structure, x: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:
+        """Kernel parameter rows (len(idx), n_p) for structure ``st`` at ``x``."""
+        idx = range(len(self.cases)) if idx is None else idx
+        P = self.Pn[list(idx)].copy()
+        P0 = P.copy()
+        for k, c in enumerate(st.cands):
+            c.apply(P, P0, x[st.offsets[k]:st.offsets[k + 1]], self.model)
+        return P
+
+    # -- simulation ---------------------------------------------------------------------------------
+    def simulate(self, st: Structure, X: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:
+        """Gyro rates [deg/s] (M, len(idx), n_max, 3) for parameter vectors ``X`` (M, n)."""
+        idx = list(range(len(self.cases))) if idx is None else list(idx)
+        X = np.atleast_2d(X)
+        M, R = X.shape[0], len(idx)
+        P = np.concatenate([self.rows(st, x, idx) for x in X])
+        u_row = np.tile(np.array(idx), M)
+        _, Y, done = simulate_batch(self.model, P, self.U, dt=self.dt, roads=self.roads, u_row=u_row,
+                                    road_row=u_row, outputs=RATES)
+        bad = done < self.U.shape[1]
+        Y[bad] = 1e3  # a diverged run: a huge residual, never a crash
+        self.vehicle_seconds += M * R * self.n_max * self.dt
+        if self.progress is not None:
+            self.progress.update(M * R)
+        return np.degrees(Y).reshape(M, R, Y.shape[1], 3)
+
+    # -- residuals ----------------------------------------------------------------------------------
+    def case_residual(self, r: int, rates: np.ndarray, lag: float, bias: bool) -> np.ndarray:
+        """Residual (n_grid, n_sig) simulated - measured [deg/s] of drive ``r`` from its simulated rates
+        (n_max, 3); ``lag`` [s]: the measured signal is the model output delayed by ``lag``."""
+        c = self.cases[r]
+        t = c.dt * np.arange(1, self.n_max + 1)
+        tq = c.t_grid_s - lag
+        sim = np.column_stack([np.interp(tq, t, rates[:, a]) for a in c.axes])
+        e = sim - c.y_meas
+        if bias and c.quiet is not None and c.quiet.sum() >= 5:
+            e = e - e[c.quiet].mean(axis=0)
+        return e
+
+    def bias_values(self, r: int, rates: np.ndarray, lag: float) -> np.ndarray:
+        """Estimated gyro bias [deg/s] of drive ``r`` per compared signal (measured - simulated over the
+        quiet lead-in), and its standard error."""
+        c = self.cases[r]
+        e = -self.case_residual(r, rates, lag, False)
+        if c.quiet is None or c.quiet.sum() < 5:
+            return np.zeros(len(c.axes)), np.full(len(c.axes), np.nan)
+        q = e[c.quiet]
+        return q.mean(axis=0), q.std(axis=0, ddof=1) / np.sqrt(len(q))
+
+    def residuals(self, st: Structure, X: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:
+        """Stacked residual vectors (M, n_res(idx)) for parameter vectors ``X``."""
+        idx = list(range(len(self.cases))) if idx is None else list(idx)
+        X = np.atleast_2d(X)
+        rates = self.simulate(st, X, idx)
+        out = []
+        for m, x in enumerate(X):
+            lag = st.lag(x)
+            out.append(np.concatenate([self.case_residual(r, rates[m, j], lag, st.bias).ravel()
+                                       for j, r in enumerate(idx)]))
+        return np.array(out)
+
+    def per_case_rmse(self, st: Structure, x: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:
+        idx = list(range(len(self.cases))) if idx is None else list(idx)
+        rates = self.simulate(st, x[None], idx)[0]
+        lag = st.lag(x)
+        return np.array([float(np.sqrt(np.mean(self.case_residual(r, rates[j], lag, st.bias) ** 2)))
+                         for j, r in enumerate(idx)])

@@ -1,0 +1,356 @@
+"""Reporting: the interface JSON, plain-words findings, the written variant, overlay plots, Markdown."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from .candidates import BY_NAME, MEASUREMENT, PHYSICS
+
+VERDICTS = ("missing_physics", "no_significant_discrepancy", "unexplained_residual")
+
+
+def _num(x):
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _where(name: str, x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> str:
+    cand = BY_NAME[name]
+    axles = set()
+    for j, p in enumerate(cand.params):
+        ax = cand.axle_of[j] if j < len(cand.axle_of) else None
+        if ax is None:
+            return "all"
+        if not (lo[j] <= p.neutral <= hi[j]):
+            axles.add(ax)
+    if not axles:  # nothing significant on its own: the axle with the larger relative effect
+        eff = [abs(x[j] - p.neutral) / p.step for j, p in enumerate(cand.params)]
+        axles.add(cand.axle_of[int(np.argmax(eff))])
+    return axles.pop() if len(axles) == 1 else "all"
+
+
+def term_entries(f) -> list[dict]:
+    """One entry per accepted term of the finder ``f``: name, where, params, ci95, evidence."""
+    res = f.result_
+    st = res.structure
+    lo, hi = res.ci95()
+    out = []
+    acc = {a["name"]: a for a in f.accepted_}
+    for k, name in enumerate(st.names):
+        cand = BY_NAME[name]
+        a, b = st.offsets[k], st.offsets[k + 1]
+        x = res.x[a:b]
+        params = {p.name: _num(v) for p, v in zip(cand.params, x)}
+        ci = {p.name: [_num(l), _num(h)] for p, l, h in zip(cand.params, lo[a:b], hi[a:b])}
+        ev = dict(acc.get(name, {}))
+        ev.pop("name", None)
+        ev.update({"kind": cand.kind, "meaning": cand.meaning, "n_params": cand.n_params,
+                   "units": {p.name: p.unit for p in cand.params}})
+        if name == "sensor_bias":
+            bias = {}
+            rates = f.evaluator_.simulate(st, res.x[None])[0]
+            for r, c in enumerate(f.cases_):
+                m, se = f.evaluator_.bias_values(r, rates[r], st.lag(res.x))
+                for j, sig in enumerate(c.signals):
+                    bias[f"{c.name}:{sig}"] = _num(m[j])
+                    ci[f"{c.name}:{sig}"] = [_num(m[j] - 1.96 * se[j]), _num(m[j] + 1.96 * se[j])]
+            params = {"bias_deg_s": bias}
+            ev["units"] = {"bias_deg_s": "deg/s"}
+        ev["statement"] = statement(name, params, ev, f)
+        out.append({"name": name, "where": _where(name, x, lo[a:b], hi[a:b]) if cand.n_params else "all",
+                    "params": params, "ci95": ci, "evidence": ev})
+    return out
+
+
+def statement(name: str, params: dict, ev: dict, f) -> str:
+    """Plain words: what was left out, where, how sure."""
+    cand = BY_NAME[name]
+    per_b = ev.get("per_drive_rmse_before_deg_s", {})
+    per_a = ev.get("per_drive_rmse_after_deg_s", {})
+    gain = {d: per_b[d] - per_a.get(d, per_b[d]) for d in per_b}
+    best = max(gain, key=gain.get) if gain else None
+    s = f"{cand.meaning}"
+    if "explained_fraction_of_excess" in ev:
+        s += (f"; explains {100 * ev['explained_fraction_of_excess']:.0f} % of the residual variance above "
+              f"the noise floor left at its step")
+    if best:
+        s += f"; largest gain in {best}: RMSE {per_b[best]:.3f} -> {per_a[best]:.3f} deg/s"
+    s += f"; {cand.n_params} parameter(s)"
+    if "delta_bic" in ev:
+        s += f"; BIC lower by {ev['delta_bic']:.0f}"
+    return s
+
+
+def verdict(f) -> tuple[str, str]:
+    sigma = f.noise_floor_
+    ho = f.heldout_ or {}
+    before = ho.get("before_deg_s", math.sqrt(f.base_fit_.rss / f.base_fit_.n))
+    after = ho.get("after_deg_s", math.sqrt(f.result_.rss / f.result_.n))
+    phys = [n for n in f.result_.structure.names if BY_NAME[n].kind != MEASUREMENT]
+    significant = bool(f.windows_)
+    excess_before = max(before ** 2 - sigma ** 2, 0.0)
+    excess_after = max(after ** 2 - sigma ** 2, 0.0)
+    explained = 1.0 - excess_after / excess_before if excess_before > 0 else 1.0
+    if not significant and not phys:
+        return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
+    if after > UNEXPLAINED_RATIO * sigma and explained < 0.5:
+        return "unexplained_residual", (f"a residual of {after:.3f} deg/s held-out remains against a noise floor "
+                                        f"of {sigma:.3f} deg/s; the candidate library explains "
+                                        f"{100 * max(explained, 0):.0f} % of it")
+    if not phys:
+        if after <= UNEXPLAINED_RATIO * sigma:
+            return "no_significant_discrepancy", ("the residual is explained by the measurement chain "
+                                                  "(sensor bias, time offset) alone")
+        return "unexplained_residual", "no physics candidate explains the residual"
+    return "missing_physics", f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out residual above noise"
+
+
+UNEXPLAINED_RATIO = 1.5
+
+
+def interface_json(f) -> dict:
+    v, _ = verdict(f)
+    terms = term_entries(f) if v != "unexplained_residual" else [
+        t for t in term_entries(f) if BY_NAME[t["name"]].kind == MEASUREMENT]
+    ni = [{"name": s["name"], "reveal_with": s["reveal_with"]} for s in f.skipped_]
+    # tested terms whose parameters the drives do not determine
+    lo, hi = f.result_.ci95()
+    ho = f.heldout_ or {}
+    return {
+        "verdict": v,
+        "terms": terms,
+        "windows": [_clean(w) for w in f.windows_],
+        "not_identifiable": ni,
+        "heldout_rmse_before_deg_s": _num(ho.get("before_deg_s", math.sqrt(f.base_fit_.rss / f.base_fit_.n))),
+        "heldout_rmse_after_deg_s": _num(ho.get("after_deg_s", math.sqrt(f.result_.rss / f.result_.n))),
+        "noise_floor_deg_s": _num(f.noise_floor_),
+    }
+
+
+def _clean(x):
+    if isinstance(x, dict):
+        return {k: _clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_clean(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return _num(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
+# ---- the extended model as config files the node can run -------------------------------------------------
+def _axle_map(front, rear):
+    return {"front": float(front), "rear": float(rear)}
+
+
+def model_files(f, name: str) -> tuple[dict, dict | None]:
+    """(variant YAML dict, vehicle YAML dict or None) of the fitted model.
+
+    Registered terms go into the variant's ``terms:`` (with ``module:`` so the node imports them); the
+    paper's scalings switch the variant's flags on; parameter values that live in the vehicle file (the
+    scalings' continuous parameters, mass, inertia, wheel rates, relaxation length) go into a vehicle file
+    next to it. Measurement-chain terms (sensor_bias, time_offset) describe the IMU, not the car: they
+    are reported, not written into the model.
+    """
+    from ...model.params import load_vehicle
+    res = f.result_
+    st, x = res.structure, res.x
+    base = f.base_variant_
+    var = {"name": name,
+           "velocity_scaling": bool(base.velocity_scaling or "damper_friction_velocity" in st.names),
+           "oil_scaling": bool(base.oil_scaling or "damper_friction_oil" in st.names),
+           "horizontal_scaling": bool(base.horizontal_scaling or "friction_lateral_force" in st.names
+                                      or "friction_longitudinal_force" in st.names),
+           "terms": []}
+    for s in base.terms:
+        var["terms"].append({"name": s.term.name, "params": {k: {"FL": v[0], "FR": v[1], "RL": v[2], "RR": v[3]}
+                                                              for k, v in s.values.items()}})
+    from .finder import TERM_MODULES
+    if "friction_amplitude" in st.names:
+        p = st.part(x, "friction_amplitude")
+        var["terms"].append({"name": "friction_amplitude", "module": TERM_MODULES["friction_amplitude"],
+                             "params": {"extra_level": _axle_map(p[0], p[1])}})
+    if "extra_viscous_damping" in st.names:
+        p = st.part(x, "extra_viscous_damping")
+        var["terms"].append({"name": "extra_viscous_damping", "module": TERM_MODULES["extra_viscous_damping"],
+                             "params": {"c": _axle_map(p[0], p[1])}})
+    if "damper_gas_preload" in st.names:
+        p = st.part(x, "damper_gas_preload")
+        var["terms"].append({"name": "damper_gas_preload", "module": TERM_MODULES["damper_gas_preload"],
+                             "params": {"f0": float(p[0]), "k": float(p[1])}})
+    vp = f.model_.vehicle
+    src = Path(vp.source_file) if vp.source_file else None
+    veh_changes = {}
+    if "damper_friction_velocity" in st.names:
+        p = st.part(x, "damper_friction_velocity")
+        veh_changes[("friction", "velocity_scaling_plateau")] = float(p[0])
+        veh_changes[("friction", "velocity_scaling_speed")] = float(p[1])
+    if "damper_friction_oil" in st.names:
+        p = st.part(x, "damper_friction_oil")
+        fi, ri = vp.damper_friction_intact
+        veh_changes[("friction", "damper_level_empty")] = _axle_map(p[0] * fi, p[1] * ri)
+    if "friction_longitudinal_force" in st.names or (var["horizontal_scaling"] and not base.horizontal_scaling):
+        p = st.part(x, "friction_longitudinal_force") if "friction_longitudinal_force" in st.names else (0, 0)
+        veh_changes[("friction", "horizontal_scaling_longitudinal")] = _axle_map(p[0] * 1e-3, p[1] * 1e-3)
+    if "friction_lateral_force" in st.names or (var["horizontal_scaling"] and not base.horizontal_scaling):
+        p = st.part(x, "friction_lateral_force") if "friction_lateral_force" in st.names else (0, 0)
+        veh_changes[("friction", "horizontal_scaling_lateral")] = _axle_map(p[0] * 1e-3, p[1] * 1e-3)
+    if "mass_error" in st.names:
+        veh_changes[("body", "sprung_mass")] = float(vp.sprung_mass * st.part(x, "mass_error")[0])
+    if "inertia_error" in st.names:
+        p = st.part(x, "inertia_error")
+        veh_changes[("body", "roll_inertia")] = float(vp.roll_inertia * p[0])
+        veh_changes[("body", "pitch_inertia")] = float(vp.pitch_inertia * p[1])
+    if "spring_rate_error" in st.names:
+        p = st.part(x, "spring_rate_error")
+        veh_changes[("suspension", "wheel_rate")] = _axle_map(vp.wheel_rate[0] * p[0], vp.wheel_rate[1] * p[1])
+    if "tyre_relaxation_error" in st.names:
+        veh_changes[("tyre", "relaxation_length")] = float(vp.relaxation_length * st.part(x, "tyre_relaxation_error")[0])
+    if not veh_changes or src is None:
+        return var, None
+    data = yaml.safe_load(src.read_text())
+    data["name"] = f"{data.get('name', vp.name)}+{name}"
+    for (sec, key), val in veh_changes.items():
+        data[sec][key]["value"] = val
+        data[sec][key]["source"] = f"fitted by susp diagnose ({name}) from {len(f.cases_)} drives"
+    return var, data
+
+
+def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
+    """Write ``<name>.yaml`` (variant), ``<name>_vehicle.yaml`` (if vehicle values changed),
+    ``<name>.json`` (full result), overlay PNGs and ``<name>.md`` into ``out_dir``; returns the paths."""
+    import json
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    var, veh = model_files(f, name)
+    paths = {}
+    head = (f"# Written by susp diagnose (the discrepancy finder) from {len(f.cases_)} drives, base "
+            f"variant {getattr(f.base_variant_, 'name', f.variant)}.\n")
+    p = out / f"{name}.yaml"
+    p.write_text(head + yaml.safe_dump(var, sort_keys=False))
+    paths["variant"] = str(p)
+    if veh is not None:
+        p = out / f"{name}_vehicle.yaml"
+        p.write_text(head + yaml.safe_dump(veh, sort_keys=False))
+        paths["vehicle"] = str(p)
+    if plots:
+        paths["plots"] = plot_overlays(f, out, name)
+    rep = f.report()
+    detail = {"result": rep, "path": f.path_, "noise": f.noise_, "heldout": f.heldout_,
+              "ranking": ranking_table(f), "tested": f.testable_, "in_base_model": f.in_base_,
+              "elapsed_s": getattr(f, "elapsed_s_", None),
+              "vehicle_seconds_simulated": f.evaluator_.vehicle_seconds}
+    p = out / f"{name}.json"
+    p.write_text(json.dumps(_clean(detail), indent=1, default=str))
+    paths["json"] = str(p)
+    p = out / f"{name}.md"
+    p.write_text(markdown(f, rep, paths, name))
+    paths["report"] = str(p)
+    return paths
+
+
+def ranking_table(f) -> list[dict]:
+    n = f.base_fit_.n
+    return [{"name": o.add[0], "rmse_linearised_deg_s": math.sqrt(o.rss_lin / n), "bic_linearised": o.bic_lin,
+             "heldout_rmse_linearised_deg_s": o.heldout_lin,
+             "accepted": any(a["name"] == o.add[0] for a in f.accepted_)} for o in f.ranking_]
+
+
+def plot_overlays(f, out: Path, name: str) -> list[str]:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    ev = f.evaluator_
+    st, x = f.result_.structure, f.result_.x
+    rates = ev.simulate(st, x[None])[0]
+    paths = []
+    for r, c in enumerate(f.cases_):
+        e_after = ev.case_residual(r, rates[r], st.lag(x), st.bias)
+        e_before = f.base_residuals_[r]
+        t = c.t_grid_s
+        fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+        for j, sig in enumerate(c.signals):
+            ax[0].plot(t, c.y_meas[:, j], "k", lw=0.8, label=f"measured {sig}")
+            ax[0].plot(t, c.y_meas[:, j] + e_before[:, j], "tab:red", lw=1, label="base model")
+            ax[0].plot(t, c.y_meas[:, j] + e_after[:, j], "tab:blue", lw=1, label="extended model")
+            ax[1].plot(t, e_before[:, j], "tab:red", lw=0.8, label="residual, base")
+            ax[1].plot(t, e_after[:, j], "tab:blue", lw=0.8, label="residual, extended")
+        s = f.noise_floor_
+        ax[1].axhspan(-s, s, color="0.85", label="noise floor (+-1 sigma)")
+        for w in f.windows_:
+            if w["drive"] == c.name:
+                ax[1].axvspan(w["start_s"], w["end_s"], color="tab:orange", alpha=0.15)
+        ax[0].set_ylabel("rate [deg/s]")
+        ax[1].set_ylabel("sim - meas [deg/s]")
+        ax[1].set_xlabel("time since first input [s]")
+        ax[0].set_title(f"{c.name}: {', '.join(c.signals)} ({c.window.name} window)")
+        ax[0].legend(fontsize=7)
+        ax[1].legend(fontsize=7)
+        fig.tight_layout()
+        p = out / f"{name}_{c.name}.png"
+        fig.savefig(p, dpi=90)
+        plt.close(fig)
+        paths.append(str(p))
+    return paths
+
+
+def markdown(f, rep: dict, paths: dict, name: str) -> str:
+    v, why = verdict(f)
+    L = [f"# Discrepancy diagnosis `{name}`", "",
+         f"Base model: vehicle `{f.model_.vehicle.name}`, variant `{getattr(f.base_variant_, 'name', f.variant)}`; "
+         f"{len(f.cases_)} drives. Rates in deg/s.", "",
+         f"**Verdict: {v}** - {why}.", "",
+         f"Noise floor (white gyro noise as seen on the comparison grid): {f.noise_floor_:.4f} deg/s "
+         f"(raw-sample noise {np.mean(list(f.noise_['raw_sample_noise_deg_s'].values())):.4f} deg/s; "
+         f"quiet lead-in cross-check {f.noise_['quiet_lead_in_pooled_deg_s'] or float('nan'):.4f} deg/s).", "",
+         "## Findings", ""]
+    for t in rep["terms"]:
+        L.append(f"- **{t['name']}** ({t['where']}): {t['evidence'].get('statement', '')}.")
+        L.append(f"  - parameters: " + ", ".join(
+            f"{k} = {_fmt(val)} [{_fmt(rep_ci(t, k)[0])}, {_fmt(rep_ci(t, k)[1])}]"
+            for k, val in t["params"].items() if not isinstance(val, dict)))
+    if not rep["terms"]:
+        L.append("- none")
+    L += ["", "## Not identifiable from these drives", ""]
+    L += [f"- {s['name']}: {s['why']}; reveal with {s['reveal_with']}" for s in f.skipped_] or ["- none"]
+    if f.in_base_:
+        L += ["", f"Already in the base model (not tested): {', '.join(f.in_base_)}."]
+    L += ["", "## Held-out (leave-one-drive-out) RMSE", "", "| drive | before | after |", "|---|---|---|"]
+    for fo in (f.heldout_ or {}).get("folds", []):
+        L.append(f"| {fo['drive']} | {fo['rmse_before_deg_s']:.4f} | {fo['rmse_after_deg_s']:.4f} |")
+    L.append(f"| **pooled** | **{rep['heldout_rmse_before_deg_s']:.4f}** | **{rep['heldout_rmse_after_deg_s']:.4f}** |")
+    L += ["", "## Forward selection", "", "| step | added | RMSE in-sample | delta BIC | explained of excess | accepted |",
+          "|---|---|---|---|---|---|"]
+    for p in f.path_[1:]:
+        L.append(f"| {p['step']} | {', '.join(p['added'])} | {p['rmse_deg_s']:.4f} | {p['delta_bic']:.1f} | "
+                 f"{100 * p['explained_fraction_of_excess']:.0f} % | {'yes' if p['accepted'] else 'no'} |")
+    L += ["", "## Ranking of single candidates at the base model (linearised)", "",
+          "| candidate | RMSE | BIC | held-out RMSE (LODO) |", "|---|---|---|---|"]
+    for r in ranking_table(f):
+        L.append(f"| {r['name']} | {r['rmse_linearised_deg_s']:.4f} | {r['bic_linearised']:.1f} | "
+                 f"{_fmt(r['heldout_rmse_linearised_deg_s'])} |")
+    L += ["", "## Windows where the base model's residual exceeds the noise", "",
+          "| drive | signal | from [s] | to [s] | RMS | x noise | dominant f [Hz] | most active axle |",
+          "|---|---|---|---|---|---|---|---|"]
+    for w in f.windows_:
+        L.append(f"| {w['drive']} | {w['signal']} | {w['start_s']:.2f} | {w['end_s']:.2f} | {w['rms_deg_s']:.3f} | "
+                 f"{w['ratio_to_noise']:.1f} | {w['dominant_frequency_hz']:.1f} | {w.get('axle', '')} |")
+    L += ["", "## Files", ""] + [f"- {k}: `{v}`" for k, v in paths.items() if isinstance(v, str)]
+    for p in paths.get("plots", []):
+        L.append(f"![{Path(p).stem}]({Path(p).name})")
+    return "\n".join(L) + "\n"
+
+
+def rep_ci(t, k):
+    c = t["ci95"].get(k, [None, None])
+    return c if isinstance(c, list) else [None, None]
+
+
+def _fmt(x):
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "n/a"
+    return f"{x:.4g}"
