@@ -153,6 +153,17 @@ def test_decay_ratio_of_a_damped_oscillator(zeta):
     assert engine.decay_ratio(np.exp(-t), 0) == 0.0 and engine.damping_ratio(0.0) == 1.0
 
 
+def test_vectorised_decay_ratio_equals_the_scalar_definition():
+    rng = np.random.default_rng(7)
+    t = np.arange(600) * 0.01
+    Q = np.array([np.exp(-z * 9 * t) * np.sin(9 * t + ph) for z, ph in zip(rng.uniform(0, 0.6, 60), rng.uniform(0, 6, 60))])
+    Q[3] = 0.0                      # no motion: NaN
+    Q[4] = np.exp(-t)               # no overshoot: 0
+    k0 = rng.integers(0, 599, 60)
+    expected = np.array([engine.decay_ratio(Q[i], int(k0[i])) for i in range(60)])
+    np.testing.assert_array_equal(engine.decay_ratios(Q, k0), expected)   # same values, not just close
+
+
 def test_example_metrics_equal_the_paper_study_path(model_full):
     """The study's peak pitch rate and ring-out equal those of a single `simulate` run (the path of
     `susp paper`) bit for bit, for the paper's three vehicle states."""
@@ -270,6 +281,17 @@ def test_killed_study_process_resumes(tmp_path, tiny_reference):
     ref = run_study(spec, tmp_path / "plain", InProcessExecutor(), progress=False, plot=False)
     assert (out / "results.csv").read_text() == (tmp_path / "plain" / "results.csv").read_text()
     assert ref["runs_failed"] == 0 and all(plain["ok"])
+
+
+def test_damaged_chunk_file_is_recomputed(tmp_path, tiny_reference):
+    spec = study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml")
+    out = tmp_path / "out"
+    run_study(spec, out, InProcessExecutor(), progress=False, plot=False)
+    c1 = out / "chunks" / "c000001.csv"
+    c1.write_text("\n".join(c1.read_text().splitlines()[:3]))     # cut short, as after a power loss
+    res = run_study(spec, out, InProcessExecutor(), progress=False, plot=False)
+    assert res["chunks_resumed"] == 2 and res["chunks_computed"] == 1
+    assert (out / "results.csv").read_text() == tiny_reference[1]
 
 
 def test_store_refuses_another_study_unless_fresh(tmp_path, tiny_reference):

@@ -189,6 +189,28 @@ def decay_ratio(q: np.ndarray, k0: int) -> float:
     return float(a[j0:j1].max() / a[k])
 
 
+def decay_ratios(q: np.ndarray, k0: np.ndarray) -> np.ndarray:
+    """:func:`decay_ratio` of every row of ``q[B, n]`` (from ``k0[B]`` on), vectorised; equal values."""
+    B, n = q.shape
+    idx = np.arange(n)[None, :]
+    x = np.where(idx >= k0[:, None], q, 0.0)
+    a = np.abs(x)
+    rows = np.arange(B)
+    k = np.argmax(a, axis=1)
+    peak = a[rows, k]
+    s = np.sign(x)
+    opp = (s * s[rows, k][:, None] < 0) & (idx > k[:, None])
+    has = opp.any(axis=1)
+    j0 = np.argmax(opp, axis=1)
+    opp2 = (s * s[rows, j0][:, None] < 0) & (idx > j0[:, None])
+    j1 = np.where(opp2.any(axis=1), np.argmax(opp2, axis=1), n)
+    second = np.where((idx >= j0[:, None]) & (idx < j1[:, None]), a, 0.0).max(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = np.where(has, second / np.where(peak > 0, peak, 1.0), 0.0)
+    r[(peak == 0) | (k0 >= n)] = math.nan
+    return r
+
+
 def damping_ratio(r: float) -> float:
     """Equivalent damping ratio of a half-cycle amplitude ratio ``r`` (logarithmic decrement)."""
     if not math.isfinite(r):
@@ -213,6 +235,7 @@ def batch_metrics(data: Mapping, Y: np.ndarray, t_after: np.ndarray, dt_out: flo
     k0 = np.clip(np.ceil(t_after / dt_out - 1e-9).astype(np.int64) - 1, 0, n)
     rows = np.arange(B)
     cols = []
+    decay = None
     for m in data["outputs"]:
         if isinstance(m, dict):
             kind, lab = next(iter(m.items()))
@@ -221,8 +244,9 @@ def batch_metrics(data: Mapping, Y: np.ndarray, t_after: np.ndarray, dt_out: flo
         elif m == "peak_rate":
             cols.append(a.max(axis=1))
         elif m in ("decay_ratio", "damping_ratio"):
-            r = np.array([decay_ratio(q[b], int(k0[b])) for b in rows])
-            cols.append(r if m == "decay_ratio" else np.array([damping_ratio(x) for x in r]))
+            if decay is None:
+                decay = decay_ratios(q, k0)
+            cols.append(decay if m == "decay_ratio" else np.array([damping_ratio(x) for x in decay]))
         elif m == "ring_out":
             above = a > data["ring_out_threshold_deg_s"]
             last = n - 1 - np.argmax(above[:, ::-1], axis=1)

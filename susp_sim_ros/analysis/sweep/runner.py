@@ -97,6 +97,7 @@ def make_executor(scheduler: str | None = None, workers: int | None = None,
 
     On a local cluster each worker's compiled batch kernel gets cores / workers threads."""
     cores = os.cpu_count() or 1
+    logging.getLogger("distributed").setLevel(logging.ERROR)   # its INFO lines would drown the progress bar
     if scheduler == "inprocess":
         return InProcessExecutor(threads=None)
     from distributed import Client, LocalCluster
@@ -104,9 +105,12 @@ def make_executor(scheduler: str | None = None, workers: int | None = None,
         n = workers or 1
         if n < 1:
             raise SuspInputError(f"--workers: expected at least 1, got {n}")
+        threads = max(1, cores // n)
+        # Dask sets OMP_NUM_THREADS=1 in worker processes; the kernel's OpenMP layer gets its share back
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
-                               dashboard_address=None, silence_logs=logging.ERROR)
-        return DaskExecutor(Client(cluster), cluster, threads=max(1, cores // n), name=f"local:{n}")
+                               dashboard_address=None, silence_logs=logging.ERROR,
+                               **({"env": {"OMP_NUM_THREADS": str(threads)}} if processes else {}))
+        return DaskExecutor(Client(cluster), cluster, threads=threads, name=f"local:{n}")
     try:
         client = Client(scheduler, timeout=f"{connect_timeout_s}s")
     except (OSError, TimeoutError, ValueError) as exc:

@@ -31,6 +31,8 @@ from .spec import StudySpec
 
 
 def _fmt(v) -> str:
+    if type(v) is float:
+        return repr(v)
     if isinstance(v, (bool, np.bool_)):
         return "1" if v else "0"
     if isinstance(v, (float, np.floating)):
@@ -38,12 +40,17 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def _atomic_write(path: Path, data: bytes) -> None:
+def _atomic_write(path: Path, data: bytes, sync: bool = True) -> None:
+    """Write to a temporary name, then rename: readers see the old file or the whole new one.
+
+    Chunk files skip the fsync (it cost ~10 % of a study's time): a killed process loses nothing that
+    was renamed; after a power loss a damaged chunk file fails the check on resume and is recomputed."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     with open(tmp, "wb") as f:
         f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
+        if sync:
+            f.flush()
+            os.fsync(f.fileno())
     os.replace(tmp, path)
 
 
@@ -95,9 +102,24 @@ class ResultStore:
                 cid = int(p.stem[1:])
             except ValueError:
                 continue
-            if 0 <= cid < len(self.spec.chunks):
+            if 0 <= cid < len(self.spec.chunks) and self._intact(p, cid):
                 ids.add(cid)
         return ids
+
+    def _intact(self, p: Path, cid: int) -> bool:
+        """A whole chunk file: the header and one complete row per run (sweep), valid JSON (drives)."""
+        try:
+            text = p.read_text()
+            if self.spec.kind != "sweep":
+                json.loads(text)
+                return True
+            rows = list(csv.reader(io.StringIO(text)))
+        except (OSError, ValueError, UnicodeDecodeError, csv.Error):
+            return False
+        n = len(self.columns())
+        ids = [int(r[0]) for r in rows[1:] if len(r) == n and r[0].isdigit()]
+        return (text.endswith("\n") and bool(rows) and rows[0] == self.columns()
+                and ids == list(self.spec.chunks[cid].runs))
 
     def columns(self) -> list[str]:
         return ["run_id", *self.spec.swept, "ok", *self.spec.metric_columns()]
@@ -115,13 +137,11 @@ class ResultStore:
             data = buf.getvalue().encode()
         else:
             data = json.dumps(result, default=_fmt).encode()
-        _atomic_write(self._chunk_path(cid), data)
+        _atomic_write(self._chunk_path(cid), data, sync=False)
         self.done.add(cid)
         with open(self.chunk_dir / "log.jsonl", "a") as f:
             f.write(json.dumps({"chunk": cid, "session": self.session, "runs": len(chunk.runs),
                                 "elapsed_s": round(elapsed_s, 6)}) + "\n")
-            f.flush()
-            os.fsync(f.fileno())
 
     def log(self) -> list[dict]:
         path = self.chunk_dir / "log.jsonl"

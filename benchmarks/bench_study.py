@@ -1,0 +1,132 @@
+"""Benchmark of ``susp study``: runs per second of the example study (config/studies/) with 1 and 2 local
+Dask workers, and the per-run overhead the study engine adds over the bare batch simulation.
+
+    python benchmarks/bench_study.py [--study config/studies/bump_oil_inspection.yaml] [--repeat 3] [--json]
+
+- ``bare``: only the ``simulate_batch`` calls of the study's chunks (parameter vectors, inputs and roads
+  prepared outside the timer), all cores to the compiled kernel;
+- ``engine_inprocess``: the whole study through the engine without Dask (parameters, batched simulation,
+  metrics, the reference runs, chunk files, the final table), all cores;
+- ``dask_1`` / ``dask_2``: the same on a local cluster of 1 / 2 single-threaded worker processes (the
+  kernel gets cores/workers threads each); cluster start-up and the workers' first chunk (loading the
+  compiled kernel) are warmed up outside the timer and reported apart.
+
+Overhead = (engine time - bare time) / bare time over the same runs, target under 10 %. Each figure is
+the best of ``--repeat`` runs (the machine is shared). Plots are off (they are not per-run cost).
+JSON: ``{"runs": int, "runs_per_s": {"bare": f, "inprocess": f, "1": f, "2": f},
+"overhead_pct": {"inprocess": f, "dask_1_worker": f}, "overhead_us_per_run": {...}, ...}``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from susp_sim_ros.analysis.sweep import InProcessExecutor, load_study, make_executor, run_study  # noqa: E402
+from susp_sim_ros.analysis.sweep import engine  # noqa: E402
+from susp_sim_ros.model import simulate_batch  # noqa: E402
+
+
+def bare_batches(spec):
+    """Per chunk: everything simulate_batch needs, prepared in advance."""
+    data, dt = spec.data, spec.data["step_s"]
+    out = []
+    for c in spec.chunks:
+        runs = [spec.runs[r] for r in c.runs]
+        model, _ = engine.model_of(data, runs[0])
+        mans = [engine.maneuver_of(data, r, engine.model_of(data, r)[0].vehicle.wheelbase) for r in runs]
+        roads, road_row, ids = [], [], []
+        for m in mans:                              # maneuvers are cached: equal bumps are one object
+            if id(m.road) not in ids:
+                ids.append(id(m.road))
+                roads.append(m.road)
+            road_row.append(ids.index(id(m.road)))
+        U = np.stack([mans[0].to_inputs(dt)])       # the example varies no speed: one input row
+        P = np.stack([engine.params_of(data, r) for r in runs])
+        out.append((model, P, U, roads, np.array(road_row)))
+    return out
+
+
+def time_bare(spec, batches) -> float:
+    t0 = time.perf_counter()
+    for model, P, U, roads, road_row in batches:
+        simulate_batch(model, P, U, dt=spec.data["step_s"], roads=roads, road_row=road_row,
+                       decim=spec.data["decim"], outputs=engine.selection(spec.data))
+    return time.perf_counter() - t0
+
+
+def time_engine(spec, executor, tmp: Path, tag: str) -> float:
+    res = run_study(spec, tmp / tag, executor, progress=False, fresh=True, plot=False)
+    return res["compute_s"]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--study", default=str(ROOT / "config" / "studies" / "bump_oil_inspection.yaml"))
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args(argv)
+
+    spec = load_study(args.study)
+    spec.data["plot"] = None
+    n, cores = spec.n_runs, os.cpu_count() or 1
+    tmp = Path(tempfile.mkdtemp(prefix="bench-study-"))
+    batches = bare_batches(spec)
+    time_bare(spec, batches[:1])                            # compile/load the kernel
+    inproc = InProcessExecutor()
+    time_engine(spec, inproc, tmp, "warm")
+    execs, start_s = {}, {}
+    try:
+        for w in (1, 2):
+            t0 = time.perf_counter()
+            execs[str(w)] = make_executor("local", w)         # what `susp study --workers W` uses
+            time_engine(spec, execs[str(w)], tmp, f"warm{w}")   # workers import and load the kernel
+            start_s[str(w)] = time.perf_counter() - t0
+        # interleaved rounds, best of each: the machine is shared, load comes and goes
+        best = {"bare": np.inf, "inprocess": np.inf, "1": np.inf, "2": np.inf}
+        for k in range(args.repeat):
+            best["bare"] = min(best["bare"], time_bare(spec, batches))
+            best["inprocess"] = min(best["inprocess"], time_engine(spec, inproc, tmp, f"inproc{k}"))
+            for w, ex in execs.items():
+                best[w] = min(best[w], time_engine(spec, ex, tmp, f"dask{w}_{k}"))
+    finally:
+        for ex in execs.values():
+            ex.close()
+    t_bare, t_inproc, dask_t = best["bare"], best["inprocess"], {"1": best["1"], "2": best["2"]}
+    over = {"inprocess": 100 * (t_inproc - t_bare) / t_bare, "dask_1_worker": 100 * (dask_t["1"] - t_bare) / t_bare}
+    out = {
+        "study": spec.name, "runs": n, "chunks": len(spec.chunks), "chunk_size": spec.data["chunk_size"],
+        "cores": cores, "repeat": args.repeat,
+        "runs_per_s": {"bare": n / t_bare, "inprocess": n / t_inproc, "1": n / dask_t["1"], "2": n / dask_t["2"]},
+        "seconds": {"bare": t_bare, "inprocess": t_inproc, "1": dask_t["1"], "2": dask_t["2"]},
+        "overhead_pct": over,
+        "overhead_us_per_run": {"inprocess": 1e6 * (t_inproc - t_bare) / n,
+                                "dask_1_worker": 1e6 * (dask_t["1"] - t_bare) / n},
+        "overhead_target_pct": 10.0, "overhead_ok": over["dask_1_worker"] < 10.0,
+        "cluster_startup_and_warmup_s": start_s,
+    }
+    if args.json:
+        print(json.dumps(out))
+    else:
+        r = out["runs_per_s"]
+        print(f"{spec.name}: {n} runs in {len(spec.chunks)} chunks, {cores} cores")
+        print(f"  bare batch simulation     {r['bare']:8.0f} runs/s")
+        print(f"  engine, no Dask           {r['inprocess']:8.0f} runs/s  (overhead {over['inprocess']:+.1f} %)")
+        print(f"  engine, Dask 1 worker     {r['1']:8.0f} runs/s  (overhead {over['dask_1_worker']:+.1f} %, "
+              f"target < 10 %)")
+        print(f"  engine, Dask 2 workers    {r['2']:8.0f} runs/s")
+        print(f"  cluster start + warm-up   1 worker {start_s['1']:.1f} s, 2 workers {start_s['2']:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
