@@ -154,6 +154,7 @@ class Option:
     bic_lin: float
     delta: np.ndarray = field(repr=False)
     heldout_lin: float = math.nan
+    excitation_rms: float = math.inf
 
 
 def screen(ev: Evaluator, current: FitResult, remaining: Sequence[str], *, pairs: bool = True,
@@ -188,6 +189,10 @@ def screen(ev: Evaluator, current: FitResult, remaining: Sequence[str], *, pairs
         rss = float(e @ e)
         k = n_params_bic(ev, sub, idx)
         opt = Option(add, rss, bic(rss, n, k), d)
+        new = [j for j, (t, _) in enumerate(labels) if t in add]
+        if new:  # RMS change of the rates for one typical step of each new parameter (root-sum-square)
+            steps = st.steps()[new]
+            opt.excitation_rms = float(math.sqrt(sum(np.mean((J[:, j] * h) ** 2) for j, h in zip(new, steps))))
         if heldout and Js.shape[1] and len(idx) > 1:
             sq = 0.0
             for h in range(len(idx)):
