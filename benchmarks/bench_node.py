@@ -11,6 +11,11 @@ speed and steering at 100 Hz from this process for ``--duration`` seconds, and r
   instant the sample represents, i.e. up to which the inputs received so far were integrated);
 - ``deadline_misses``: ticks published more than one period late (or skipped), from ``/diagnostics``.
 
+The node runs with its defaults, i.e. its threads at SCHED_FIFO when permitted (``realtime_priority``).
+The probe here (input publisher and output subscriber) gets SCHED_FIFO too when permitted, as a real-time
+consumer would, so that the load of other processes on the machine enters the figures through the node
+and not through the measuring instrument; ``--probe-normal-priority`` measures with an ordinary probe.
+
 ``--json`` prints exactly these keys (interface.md); logs go to stderr.
 """
 from __future__ import annotations
@@ -38,7 +43,7 @@ def _env() -> dict[str, str]:
     return env
 
 
-def run(duration: float, rate_hz: float = 100.0) -> dict:
+def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
     env = _env()
     os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOG_DIR")})
     import rclpy
@@ -77,6 +82,11 @@ def run(duration: float, rate_hz: float = 100.0) -> dict:
     ex.add_node(node)
     spin = threading.Thread(target=ex.spin, daemon=True)
     spin.start()
+    if probe_rt:
+        from susp_sim_ros.node import raise_priority
+        note = raise_priority(5)
+        if note:
+            print(f"bench_node: probe: {note}", file=sys.stderr)
     try:
         t_wait = time.monotonic() + 60.0
         while speed.get_subscription_count() == 0 or node.count_publishers("/sim/imu/data") == 0:
@@ -123,8 +133,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     ap.add_argument("--duration", type=float, default=300.0, help="measured run length [s] (default 300)")
     ap.add_argument("--rate", type=float, default=100.0, help="publish and input rate [Hz] (default 100)")
+    ap.add_argument("--probe-normal-priority", action="store_true",
+                    help="run the probe (publisher/subscriber) without real-time scheduling")
     a = ap.parse_args(argv)
-    res = run(a.duration, a.rate)
+    res = run(a.duration, a.rate, probe_rt=not a.probe_normal_priority)
     if a.json:
         print(json.dumps(res))
     else:

@@ -24,13 +24,13 @@ Parameters (all with defaults; ``--ros-args --params-file config/susp_sim_node.y
 """
 from __future__ import annotations
 
+import gc
 import heapq
 import math
 import os
 import sys
 import threading
 import time
-from collections import deque
 
 import numpy as np
 import rclpy
@@ -104,33 +104,54 @@ def warm_up(model: Model) -> None:
 
 
 class TimingStats:
-    """Publish timing in wall-time mode: period deviation (jitter), lateness, deadline misses."""
+    """Publish timing in wall-time mode: period deviation (jitter), lateness, deadline misses.
 
-    def __init__(self, period_ns: int, keep: int = 100_000):
+    Ring buffers in numpy arrays: recording is one store, the summary never converts Python lists
+    (a long C call would hold the GIL against the tick thread)."""
+
+    def __init__(self, period_ns: int, keep: int = 360_000):
         self.period_ns = period_ns
-        self.jitter_ns: deque[int] = deque(maxlen=keep)
-        self.late_ns: deque[int] = deque(maxlen=keep)
+        self._jit = np.zeros(keep, dtype=np.int64)
+        self._late = np.zeros(keep, dtype=np.int64)
+        self._n_jit = 0
         self.deadline_misses = 0
         self.ticks = 0
         self._last_pub: int | None = None
 
     def record(self, tick_ns: int, published_ns: int) -> None:
-        self.ticks += 1
+        keep = self._late.size
         late = published_ns - tick_ns
-        self.late_ns.append(late)
+        self._late[self.ticks % keep] = late
+        self.ticks += 1
         if late > self.period_ns:
             self.deadline_misses += 1
         if self._last_pub is not None:
-            self.jitter_ns.append(abs(published_ns - self._last_pub - self.period_ns))
+            self._jit[self._n_jit % keep] = abs(published_ns - self._last_pub - self.period_ns)
+            self._n_jit += 1
         self._last_pub = published_ns
 
     def summary(self) -> dict[str, float]:
-        j = np.asarray(self.jitter_ns, dtype=float) * 1e-6
-        lt = np.asarray(self.late_ns, dtype=float) * 1e-6
+        j = self._jit[:min(self._n_jit, self._jit.size)] * 1e-6
+        lt = self._late[:min(self.ticks, self._late.size)] * 1e-6
         q = lambda a, p: float(np.percentile(a, p)) if a.size else 0.0
         return {"jitter_p50_ms": q(j, 50), "jitter_p99_ms": q(j, 99), "jitter_max_ms": float(j.max()) if j.size else 0.0,
                 "lateness_p50_ms": q(lt, 50), "lateness_p99_ms": q(lt, 99),
                 "deadline_misses": self.deadline_misses, "ticks": self.ticks}
+
+
+def raise_priority(priority: int) -> str:
+    """SCHED_FIFO ``priority`` for every thread of this process so far (executor, DDS receive threads),
+    so other processes cannot preempt a thread that holds the GIL the tick thread needs. Returns a
+    note if not permitted (then normal scheduling is kept)."""
+    if priority <= 0:
+        return "real-time scheduling off (realtime_priority 0)"
+    try:
+        tids = [int(t) for t in os.listdir("/proc/self/task")]
+        for tid in tids:
+            os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(priority))
+    except (OSError, AttributeError, ValueError) as exc:
+        return f"no real-time scheduling ({exc}); using normal priority"
+    return ""
 
 
 class SuspSimNode(Node):
@@ -187,6 +208,9 @@ class SuspSimNode(Node):
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         if start_thread and not self.sim_time:
+            note = raise_priority(self._rt_priority)
+            if note:
+                self.get_logger().info(note)
             self._thread = threading.Thread(target=self._realtime_loop, name="susp_sim_tick", daemon=True)
             self._thread.start()
         self.create_timer(1.0 / float(p["diagnostics_rate_hz"]), self.publish_diagnostics)
@@ -325,8 +349,8 @@ class SuspSimNode(Node):
         period = self.core.period_ns
         ctx = self.context
         if self._rt_priority > 0:
-            try:
-                os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(self._rt_priority))
+            try:  # one above the process's other threads
+                os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(self._rt_priority + 1))
             except (OSError, AttributeError) as exc:
                 self.get_logger().info(f"tick thread: no real-time scheduling ({exc}); using normal priority")
         with self.lock:
@@ -458,6 +482,7 @@ def main(args: list[str] | None = None) -> int:
         node = SuspSimNode()
         executor = SingleThreadedExecutor()
         executor.add_node(node)
+        gc.freeze()  # start-up objects out of the collector's way: shorter pauses in real time
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

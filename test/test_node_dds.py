@@ -118,3 +118,73 @@ def test_replay_with_clock_equals_lockstep(tmp_path, rate):
     # same compiled steps with the same inputs at the same instants: equal to rounding
     np.testing.assert_allclose(node.gyro, ls.imu.gyro, rtol=0, atol=1e-9)
     np.testing.assert_allclose(node.accel, ls.imu.accel, rtol=0, atol=1e-9)
+
+
+def test_replay_loops_and_latches(tmp_path):
+    """susp replay in a subprocess: every message arrives, twice with --loop --loops 2; the road
+    profile is latched (a late subscriber still gets it); /clock follows the log time."""
+    import threading
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from rosgraph_msgs.msg import Clock
+    from std_msgs.msg import Float64, Float64MultiArray
+    from susp_sim_ros.io import write_drive
+    from susp_sim_ros.lockstep import maneuver_drive
+    from susp_sim_ros.model.maneuvers import bump_crossing
+    ros_env()
+    drive = maneuver_drive(bump_crossing(), rate_hz=20.0)
+    n_speed = len(drive.speed)
+    src = tmp_path / "bump.mcap"
+    write_drive(src, drive)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    node = rclpy.create_node("replay_probe", context=ctx)
+    speeds, clocks, profiles = [], [], []
+    node.create_subscription(Float64, "/vehicle/speed", speeds.append, 1000)
+    node.create_subscription(Clock, "/clock", lambda m: clocks.append(m.clock.sec * 10**9 + m.clock.nanosec), 1000)
+    node.create_subscription(Float64MultiArray, "/road/profile", profiles.append, QoSProfile(
+        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE))
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(node)
+    spin = threading.Thread(target=ex.spin, daemon=True)
+    spin.start()
+    try:
+        rp = subprocess.run([sys.executable, "-m", "susp_sim_ros.cli.main", "replay", str(src), "--rate", "20",
+                             "--loop", "--loops", "2", "--json", "--wait-subscribers", "20"],
+                            capture_output=True, text=True, timeout=120, env=dict(os.environ))
+        time.sleep(0.5)
+    finally:
+        ex.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown(context=ctx)
+    assert rp.returncode == 0, rp.stderr
+    import json
+    out = json.loads(rp.stdout)
+    assert out["loops"] == 2 and out["messages"] == 2 * (2 * n_speed + 1)
+    assert "replay" in rp.stderr  # the progress bar
+    assert len(speeds) == 2 * n_speed
+    assert [s.data for s in speeds[:n_speed]] == drive.speed.values.tolist()
+    assert profiles and len(profiles[0].data) == 3 * len(drive.road)
+    assert min(clocks) == drive.t0_ns and max(clocks) == drive.t_end_ns
+
+
+def test_cli_recover_and_bad_input(tmp_path, capsys):
+    from susp_sim_ros.cli.main import main
+    from susp_sim_ros.io import write_drive
+    from susp_sim_ros.lockstep import maneuver_drive
+    from susp_sim_ros.model.maneuvers import sine_steer
+    p = tmp_path / "d.mcap"
+    write_drive(p, maneuver_drive(sine_steer()))
+    data = p.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[:len(data) // 2])
+    assert main(["recover", str(cut), "--json"]) == 0
+    import json
+    out = json.loads(capsys.readouterr().out)
+    assert out["was_truncated"] and out["messages"] > 100
+    assert Path(out["out"]).exists()
+    assert main(["recover", str(cut), "--json"]) == 2  # refuses to overwrite the earlier result
+    (tmp_path / "x.mcap").write_text("nope")
+    assert main(["replay", str(tmp_path / "x.mcap")]) == 2
+    assert main(["replay", str(p), "--rate", "0"]) == 2
