@@ -353,3 +353,25 @@ def test_cli_bad_input_exits_2(tmp_path, capsys):
                  "--scheduler", "inprocess"]) == 2
     assert main(["study", str(EXAMPLE), "--out", str(tmp_path / "o"), "--scheduler", "tcp://127.0.0.1:9",
                  "--connect-timeout", "1"]) == 2
+
+
+@pytest.mark.slow
+def test_cli_batch_diagnosis_over_a_folder(tmp_path, capsys):
+    """`susp study --drives DIR --diagnose`: the discrepancy finder per drive, one summary table."""
+    folder = tmp_path / "drives"
+    folder.mkdir()
+    shutil.copy(BAGS / "bump_crossing_rear_empty.mcap", folder)
+    rc = main(["study", "--drives", str(folder), "--diagnose", "--variants", "full", "--out", str(tmp_path / "o"),
+               "--scheduler", "inprocess", "--json", "--no-progress"])
+    assert rc == 0
+    res = json.loads(capsys.readouterr().out)
+    (row,) = read_table(tmp_path / "o" / "drives.csv")
+    assert row["error"] == "" and row["diag_verdict"] in ("missing_physics", "no_significant_discrepancy",
+                                                          "unexplained_residual")
+    assert float(row["diag_rmse_after_deg_s"]) <= float(row["diag_rmse_before_deg_s"])
+    assert res["diagnosis"]["verdicts"] == {row["diag_verdict"]: 1}
+    # the same verdict and numbers as the finder on that drive
+    from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder
+    rep = DiscrepancyFinder(variant="full", heldout=False).fit([str(folder / "bump_crossing_rear_empty.mcap")]).report()
+    assert row["diag_verdict"] == rep["verdict"]
+    assert float(row["diag_rmse_after_deg_s"]) == rep["heldout_rmse_after_deg_s"]

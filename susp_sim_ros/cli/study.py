@@ -3,7 +3,7 @@ recorded drives, on Dask.
 
     susp study config/studies/bump_oil_inspection.yaml --out results/inspection [--json]
     susp study config/studies/X.yaml --out DIR --scheduler tcp://host:8786     # an existing cluster
-    susp study --drives bags --out results/drives                              # one task per drive
+    susp study --drives bags --out results/drives [--diagnose]                 # one task per drive
 
 A local cluster (``--workers N`` single-threaded worker processes) by default; ``--scheduler inprocess``
 runs without Dask. Finished chunks stream to ``DIR/chunks/``; running the same command again after a kill
@@ -17,6 +17,8 @@ from ..errors import SuspInputError
 def add_arguments(p) -> None:
     p.add_argument("study", nargs="?", help="study YAML (config/studies/*.yaml)")
     p.add_argument("--drives", metavar="DIR", help="batch validation over every *.mcap in DIR instead")
+    p.add_argument("--diagnose", action="store_true",
+                   help="with --drives: also run the discrepancy finder on each drive (against the first variant)")
     p.add_argument("--variants", default="full,no_horizontal,no_velocity,dahl_only",
                    help="friction variants of --drives (comma-separated)")
     p.add_argument("--out", required=True, metavar="DIR", help="result directory (table, plots, chunks)")
@@ -42,8 +44,10 @@ def run(args) -> dict:
         variants = [v.strip() for v in args.variants.split(",") if v.strip()]
         if not variants:
             raise SuspInputError("--variants: give at least one friction variant")
-        spec = drives_study(args.drives, variants)
+        spec = drives_study(args.drives, variants, diagnose=args.diagnose)
     else:
+        if args.diagnose:
+            raise SuspInputError("--diagnose goes with --drives DIR (or 'diagnose: true' in a drives study)")
         spec = load_study(args.study)
     if args.workers is not None and args.workers < 1:
         raise SuspInputError(f"--workers: expected at least 1, got {args.workers}")

@@ -298,9 +298,10 @@ def chunk_task(data: Mapping, runs: Sequence[Mapping], refs: Sequence[np.ndarray
     return {"ok": ok, "metrics": metrics.tolist()}
 
 
-def drive_task(path: str, variants: Sequence[str]) -> dict:
+def drive_task(path: str, variants: Sequence[str], diagnose: bool = False) -> dict:
     """Batch validation of one recorded drive: lockstep simulation with each variant, RMSE per variant
-    in the paper's window and signal. A drive that fails gives a row with ``error`` instead of raising."""
+    in the paper's window and signal; with ``diagnose``, the discrepancy finder on this drive alone
+    against the first variant. A drive that fails gives a row with ``error`` instead of raising."""
     from ...errors import SuspInputError
     from ...io.drive import read_drive
     from ..study import simulate_and_validate
@@ -315,6 +316,21 @@ def drive_task(path: str, variants: Sequence[str]) -> dict:
                     **{f"rmse_{v}_deg_s": res.rmse(v) for v in variants}, "error": ""})
         best = min(variants, key=lambda v: res.rmse(v))
         row["best_variant"] = best
+        if diagnose:
+            row.update(diagnose_drive(path, variants[0]))
     except (SuspInputError, RuntimeError, ValueError, OSError) as exc:
         row["error"] = f"{type(exc).__name__}: {exc}"
     return row
+
+
+def diagnose_drive(path: str, variant: str) -> dict:
+    """The discrepancy finder (``susp diagnose``) on one drive: verdict, terms, RMSE before/after the
+    fit on this drive (no held-out drive in a one-drive fit), noise floor."""
+    from ..discrepancy import DiscrepancyFinder
+    f = DiscrepancyFinder(variant=variant, heldout=False, progress=False).fit([path])
+    rep = f.report()
+    return {"diag_verdict": rep["verdict"],
+            "diag_terms": ";".join(f"{t['name']}:{t['where']}" for t in rep["terms"]),
+            "diag_rmse_before_deg_s": rep["heldout_rmse_before_deg_s"],
+            "diag_rmse_after_deg_s": rep["heldout_rmse_after_deg_s"],
+            "diag_noise_floor_deg_s": rep["noise_floor_deg_s"]}

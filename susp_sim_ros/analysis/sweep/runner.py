@@ -143,7 +143,8 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
                               for r in c.runs])) for c in todo]
             fn = engine.chunk_task
         else:
-            tasks = [(c.id, (spec.runs[c.id]["file"], spec.data["variants"])) for c in todo]
+            tasks = [(c.id, (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
+                     for c in todo]
             fn = engine.drive_task
         for cid, result, elapsed in executor.map(fn, tasks):
             store.write_chunk(cid, result, elapsed)
@@ -222,7 +223,8 @@ def _finish_drives(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
     rows = store.drive_rows()
     variants = spec.data["variants"]
     header = ["file", "maneuver", "state", "vehicle", "source", "signal", "window",
-              *[f"rmse_{v}_deg_s" for v in variants], "best_variant", "error"]
+              *[f"rmse_{v}_deg_s" for v in variants], "best_variant",
+              *(DIAG_COLUMNS if spec.data["diagnose"] else ()), "error"]
     table = store.write_table(header, [[r.get(h, "") for h in header] for r in rows], "drives")
     tables: dict = {}
     for r in rows:
@@ -239,16 +241,24 @@ def _finish_drives(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
         plots.append(str(plot_drives(rows, variants, store.out / f"{spec.name}_rmse.png")))
     failed = [{"file": r["file"], "error": r["error"]} for r in rows if r.get("error")]
     return {"table": str(table), "columns": header, "plots": plots, "tables": tables, "unit": "deg/s",
-            "drives_ok": len(rows) - len(failed), "drives_failed": failed, "diagnosis": _diagnosis_note()}
+            "drives_ok": len(rows) - len(failed), "drives_failed": failed,
+            "diagnosis": _diagnosis_summary(rows) if spec.data["diagnose"] else "off (--diagnose)"}
 
 
-def _diagnosis_note() -> str:
-    try:
-        import importlib
-        importlib.import_module("susp_sim_ros.analysis.discrepancy")
-    except ImportError:
-        return "not available: the discrepancy finder is not in this tree (batch validation only)"
-    return "not wired: run susp diagnose per drive (batch diagnosis on the study engine is a follow-up)"
+DIAG_COLUMNS = ("diag_verdict", "diag_terms", "diag_rmse_before_deg_s", "diag_rmse_after_deg_s",
+                "diag_noise_floor_deg_s")
+
+
+def _diagnosis_summary(rows) -> dict:
+    """Verdict counts and how often each term was found, over the diagnosed drives."""
+    verdicts, terms = {}, {}
+    for r in rows:
+        if r.get("error"):
+            continue
+        verdicts[r["diag_verdict"]] = verdicts.get(r["diag_verdict"], 0) + 1
+        for t in filter(None, r["diag_terms"].split(";")):
+            terms[t] = terms.get(t, 0) + 1
+    return {"verdicts": verdicts, "terms_found": dict(sorted(terms.items(), key=lambda kv: -kv[1]))}
 
 
 def summary_text(r: dict) -> str:

@@ -50,7 +50,7 @@ GENERIC_METRICS = ("peak", "rms")      # {peak: OUTPUT_LABEL}: max |x|, {rms: OU
 RESULT_FORMATS = ("csv", "parquet")
 TOP_KEYS = {"name", "description", "kind", "maneuver", "step_s", "output_rate_hz", "chunk_size",
             "parameters", "vehicle_classes", "outputs", "reference", "after_window_s",
-            "ring_out_threshold_deg_s", "results", "plot", "folder", "variants"}
+            "ring_out_threshold_deg_s", "results", "plot", "folder", "variants", "diagnose"}
 
 
 @dataclass(frozen=True)
@@ -122,10 +122,10 @@ def load_study(path: str | Path) -> StudySpec:
 
 
 def drives_study(folder: str | Path, variants=("full", "no_horizontal", "no_velocity", "dahl_only"),
-                 name: str = "drives", source: str = "--drives") -> StudySpec:
-    """A batch-validation study over every ``*.mcap`` in ``folder``."""
+                 name: str = "drives", source: str = "--drives", diagnose: bool = False) -> StudySpec:
+    """A batch-validation (and, with ``diagnose``, diagnosis) study over every ``*.mcap`` in ``folder``."""
     return study_from_dict({"name": name, "kind": "drives", "folder": str(folder),
-                            "variants": list(variants)}, source)
+                            "variants": list(variants), "diagnose": diagnose}, source)
 
 
 def study_from_dict(data: Any, source: str = "<study>") -> StudySpec:
@@ -377,6 +377,9 @@ def _drives(data: dict, source: str, name: str) -> StudySpec:
         raise ConfigError(f"{source}: variants: expected a non-empty list of friction variants")
     for i, v in enumerate(variants):
         _load(source, f"variants[{i}]", load_variant, v)
+    diagnose = data.get("diagnose", False)
+    if not isinstance(diagnose, bool):
+        raise ConfigError(f"{source}: diagnose: expected true or false, got {diagnose!r}")
     p = Path(folder)
     if not p.is_dir():
         raise SuspInputError(f"{source}: folder {folder}: not a directory")
@@ -386,7 +389,7 @@ def _drives(data: dict, source: str, name: str) -> StudySpec:
     # identity of each drive (name, size, mtime) enters the hash: a changed folder is a new study
     ident = [[f.name, f.stat().st_size, f.stat().st_mtime_ns] for f in files]
     norm = {"name": name, "kind": "drives", "folder": str(p.resolve()), "variants": list(variants),
-            "files": ident, "results": "csv"}
+            "diagnose": diagnose, "files": ident, "results": "csv"}
     spec = StudySpec(source, norm)
     spec.runs = [{"file": str(p.resolve() / f[0])} for f in ident]
     spec.chunks = [Chunk(i, (i,)) for i in range(len(files))]
