@@ -266,7 +266,8 @@ def summary_text(r: dict) -> str:
              f"in {r['n_chunks']} chunks on {r['scheduler']} ({r['workers']} worker(s)); "
              f"{r['chunks_computed']} chunks computed, {r['chunks_resumed']} resumed"]
     if r["runs_computed"]:
-        lines.append(f"  {r['runs_per_s']:.0f} runs/s over {r['compute_s']:.1f} s")
+        unit = "runs" if r["kind"] == "sweep" else "drives"
+        lines.append(f"  {r['runs_per_s']:.3g} {unit}/s over {r['compute_s']:.1f} s")
     for c, (lo, hi) in r.get("metric_ranges", {}).items():
         lines.append(f"  {c}: {lo:.4g} .. {hi:.4g}")
     if r["kind"] == "drives":
