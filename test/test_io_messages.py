@@ -91,3 +91,13 @@ def test_rclpy_serialization_is_compatible():
     assert ros.angular_velocity.z == d["angular_velocity"]["z"] and ros.header.frame_id == "base_link"
     back = M.decode(M.IMU, serialize_message(ros))
     assert M.to_dict(back) == M.to_dict(M.decode(M.IMU, M.encode(M.IMU, d)))
+
+
+def test_io_sim_core_and_lockstep_never_import_rclpy():
+    import subprocess
+    code = ("import sys; import susp_sim_ros.io, susp_sim_ros.io.reader, susp_sim_ros.sim_core, "
+            "susp_sim_ros.lockstep, susp_sim_ros.cli.sim, susp_sim_ros.cli.recover; "
+            "bad = [m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rosidl_runtime_py')]; "
+            "print(bad); sys.exit(1 if bad else 0)")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert p.returncode == 0, p.stdout + p.stderr

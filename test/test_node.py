@@ -208,3 +208,25 @@ def _close(x, y, tol=1e-12) -> bool:
     if isinstance(x, float) or isinstance(y, float):
         return abs(x - y) <= tol
     return x == y
+
+
+def test_params_file_loads(tmp_path):
+    """config/susp_sim_node.yaml has the shape ros2 expects and every key is a declared parameter."""
+    import rclpy
+    from pathlib import Path
+    from susp_sim_ros.node import DEFAULTS, SuspSimNode
+    cfg = Path(__file__).resolve().parents[1] / "config" / "susp_sim_node.yaml"
+    import yaml
+    keys = set(yaml.safe_load(cfg.read_text())["susp_sim_node"]["ros__parameters"])
+    assert keys == set(DEFAULTS)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, args=["--ros-args", "--params-file", str(cfg), "-p", "damper_oil_level:=[1.0, 1.0, 0.5, 0.0]",
+                                  "-p", "use_sim_time:=true"])
+    try:
+        node = SuspSimNode(context=ctx, start_thread=False)
+        assert node.get_parameter("publish_rate_hz").value == 100.0
+        np.testing.assert_array_equal(node.core.oil, [1.0, 1.0, 0.5, 0.0])
+        assert node.core.period_ns == 10_000_000 and node.core.step_ns == 1_000_000
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)

@@ -91,7 +91,7 @@ def test_node_in_another_process_turns_left_and_records(tmp_path):
     assert n > 1000
 
 
-@pytest.mark.parametrize("rate", [10.0])
+@pytest.mark.parametrize("rate", [1.0, 10.0])
 def test_replay_with_clock_equals_lockstep(tmp_path, rate):
     from susp_sim_ros.io import read_imu, write_drive
     from susp_sim_ros.lockstep import maneuver_drive, run_lockstep
