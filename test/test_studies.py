@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 import yaml
 
-from susp_sim_ros.analysis.sweep import (InProcessExecutor, DaskExecutor, drives_study, load_study,
+from susp_sim_ros.analysis.sweep import (InProcessExecutor, drives_study, load_study,
                                          run_study, study_from_dict)
 from susp_sim_ros.analysis.sweep import engine
 from susp_sim_ros.cli.main import main
@@ -54,11 +54,8 @@ def read_table(path) -> list[dict]:
 @pytest.fixture(scope="module")
 def dask_executor():
     """A local cluster of two single-threaded worker processes (results cross a process boundary)."""
-    import logging
-    from distributed import Client, LocalCluster
-    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.ERROR)
-    ex = DaskExecutor(Client(cluster), cluster, threads=1, name="test-local:2")
+    from susp_sim_ros.analysis.sweep import make_executor
+    ex = make_executor("local", 2)          # what `susp study --workers 2` uses
     try:
         yield ex
     finally:
@@ -193,7 +190,7 @@ def test_dask_cluster_gives_the_same_table_as_a_plain_run(tmp_path, dask_executo
     ref_res, ref_csv = tiny_reference
     spec = study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml")
     res = run_study(spec, tmp_path / "dask", dask_executor, progress=False)
-    assert res["scheduler"] == "test-local:2" and res["workers"] == 2
+    assert res["scheduler"] == "local:2" and res["workers"] == 2
     assert (tmp_path / "dask" / "results.csv").read_text() == ref_csv        # byte for byte
     assert res["n_runs"] == 12 and res["n_chunks"] == 3 and res["runs_failed"] == 0
     rows = read_table(tmp_path / "dask" / "results.csv")

@@ -64,9 +64,9 @@ def oil_of(run: Mapping) -> tuple[float, float, float, float]:
     return tuple(float(oil[w]) for w in ("FL", "FR", "RL", "RR"))
 
 
-def params_of(data: Mapping, run: Mapping) -> np.ndarray:
-    _, base = model_of(data, run)
-    p = base.copy()
+def params_of(data: Mapping, run: Mapping, base: np.ndarray | None = None) -> np.ndarray:
+    """The run's parameter vector: the (vehicle, variant) base with the run's oil levels."""
+    p = (model_of(data, run)[1] if base is None else base).copy()
     k = P_INDEX["OIL"]
     p[k:k + 4] = oil_of(run)
     return p
@@ -129,10 +129,10 @@ def simulate_runs(data: Mapping, runs: Sequence[Mapping], threads: int | None = 
     labels = selection(data)
     prepared = []
     for run in runs:
-        model, _ = model_of(data, run)
+        model, base = model_of(data, run)
         wb = model.vehicle.wheelbase
         man = maneuver_of(data, run, wb)
-        prepared.append((model, man, wb, params_of(data, run)))
+        prepared.append((model, man, wb, params_of(data, run, base)))
     groups: dict = {}
     for i, (model, man, _, _) in enumerate(prepared):
         groups.setdefault((id(model.kernel), model.layout.n_p, man.n_steps(dt)), []).append(i)

@@ -107,8 +107,10 @@ def make_executor(scheduler: str | None = None, workers: int | None = None,
             raise SuspInputError(f"--workers: expected at least 1, got {n}")
         threads = max(1, cores // n)
         # Dask sets OMP_NUM_THREADS=1 in worker processes; the kernel's OpenMP layer gets its share back
+        # no dashboard; the scheduler's small HTTP server (health, metrics) on a free port, not 8787
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
                                dashboard_address=None, silence_logs=logging.ERROR,
+                               scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
                                **({"env": {"OMP_NUM_THREADS": str(threads)}} if processes else {}))
         return DaskExecutor(Client(cluster), cluster, threads=threads, name=f"local:{n}")
     try:
@@ -134,13 +136,12 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     bar = tqdm(total=spec.n_runs, initial=done_runs, desc=spec.name, unit=unit, file=sys.stderr,
                disable=not progress, dynamic_ncols=True, smoothing=0.1)
     computed: list[int] = []
-    t_compute = time.perf_counter()
+    t_compute, cpu_compute = time.perf_counter(), time.process_time()
     try:
         if spec.kind == "sweep":
-            refs = _references(spec, store, executor, todo)
+            refs = _references(spec, store, executor, todo)    # run id -> reference trace, or None
             tasks = [(c.id, (spec.data, [spec.runs[r] for r in c.runs],
-                             [refs.get(run_key(reference_run(spec.data, spec.runs[r]))) if refs else None
-                              for r in c.runs])) for c in todo]
+                             [refs[r] if refs else None for r in c.runs])) for c in todo]
             fn = engine.chunk_task
         else:
             tasks = [(c.id, (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
@@ -156,7 +157,7 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
         bar.close()
         store.finish_session(chunks_computed=len(computed),
                              elapsed_s=round(time.perf_counter() - t_start, 3))
-    compute_s = time.perf_counter() - t_compute
+    compute_s, cpu_s = time.perf_counter() - t_compute, time.process_time() - cpu_compute
     missing = set(range(len(spec.chunks))) - store.done
     if missing:
         raise RuntimeError(f"{len(missing)} chunk(s) missing after the run: {sorted(missing)[:10]}")
@@ -165,7 +166,7 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
               "hash": spec.hash, "scheduler": executor.name, "workers": executor.workers,
               "n_runs": spec.n_runs, "n_chunks": len(spec.chunks), "chunks_resumed": len(resumed),
               "chunks_computed": len(computed), "runs_computed": new_runs,
-              "compute_s": compute_s, "runs_per_s": new_runs / compute_s if compute_s > 0 else math.nan}
+              "compute_s": compute_s, "cpu_s": cpu_s, "runs_per_s": new_runs / compute_s if compute_s > 0 else math.nan}
     if spec.kind == "sweep":
         result.update(_finish_sweep(spec, store, plot))
     else:
@@ -177,26 +178,29 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     return result
 
 
-def _references(spec: StudySpec, store: ResultStore, executor, todo) -> dict | None:
-    """Traces of the distinct reference runs (computed once, kept in the store for resumes)."""
+def _references(spec: StudySpec, store: ResultStore, executor, todo) -> list | None:
+    """Trace of each run's reference run (the distinct ones computed once, kept in the store for resumes)."""
     if spec.data.get("reference") is None:
         return None
-    refs = {}
+    distinct, of_run = {}, []
     for r in spec.runs:
         ref = reference_run(spec.data, r)
-        refs.setdefault(run_key(ref), ref)
-    keys = list(refs)
-    stored = store.load_references(keys)
-    if stored is not None:
-        return stored
-    size = spec.data["chunk_size"]
-    tasks = [(j, (spec.data, [refs[k] for k in keys[j:j + size]])) for j in range(0, len(keys), size)]
-    traces = {}
-    for j, res, _ in executor.map(engine.reference_task, tasks):
-        traces.update(zip(keys[j:j + size], res))
-    traces = {k: traces[k] for k in keys}
-    store.save_references(traces)
-    return traces
+        k = tuple(sorted(ref.items()))
+        distinct.setdefault(k, ref)
+        of_run.append(k)
+    keys = list(distinct)
+    names = [run_key(distinct[k]) for k in keys]
+    stored = store.load_references(names)
+    if stored is None:
+        size = spec.data["chunk_size"]
+        tasks = [(j, (spec.data, [distinct[k] for k in keys[j:j + size]])) for j in range(0, len(keys), size)]
+        stored = {}
+        for j, res, _ in executor.map(engine.reference_task, tasks):
+            stored.update(zip(names[j:j + size], res))
+        stored = {n: stored[n] for n in names}
+        store.save_references(stored)
+    trace = {k: stored[n] for k, n in zip(keys, names)}
+    return [trace[k] for k in of_run]
 
 
 def _finish_sweep(spec: StudySpec, store: ResultStore, plot: bool) -> dict:

@@ -170,7 +170,7 @@ class ResultStore:
         buf = io.BytesIO()
         keys = list(refs)
         np.savez(buf, keys=np.array(keys), **{f"r{i}": refs[k] for i, k in enumerate(keys)})
-        _atomic_write(self.chunk_dir / "references.npz", buf.getvalue())
+        _atomic_write(self.chunk_dir / "references.npz", buf.getvalue(), sync=False)  # recomputable
 
     # -- the final table ---------------------------------------------------------------------------------
     def rows(self) -> list[list[str]]:
@@ -206,7 +206,7 @@ class ResultStore:
 
     def finish_session(self, **info) -> None:
         self.manifest["sessions"][-1].update(info)
-        _atomic_write(self.manifest_path, json.dumps(self.manifest, indent=1, default=str).encode())
+        _atomic_write(self.manifest_path, json.dumps(self.manifest, indent=1, default=str).encode(), sync=False)
 
 
 def _parse(s: str):
