@@ -116,10 +116,24 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--study", default=str(ROOT / "config" / "studies" / "bump_oil_inspection.yaml"))
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--oil-levels", type=int, default=None,
+                    help="override the number of oil levels per axle (a bigger study than the example)")
+    ap.add_argument("--chunk-size", type=int, default=None, help="override the study's chunk_size")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
 
     spec = load_study(args.study)
+    if args.oil_levels or args.chunk_size:
+        import yaml
+        from susp_sim_ros.analysis.sweep import study_from_dict
+        raw = yaml.safe_load(Path(args.study).read_text())
+        if args.oil_levels:
+            for k in ("oil_front", "oil_rear"):
+                raw["parameters"][k] = {"from": 0.0, "to": 1.0, "num": args.oil_levels}
+        if args.chunk_size:
+            raw["chunk_size"] = args.chunk_size
+        raw.pop("plot", None)
+        spec = study_from_dict(raw, args.study)
     spec.data["plot"] = None
     n, cores = spec.n_runs, os.cpu_count() or 1
     tmp = Path(tempfile.mkdtemp(prefix="bench-study-"))
