@@ -278,15 +278,16 @@ class SuspSimNode(Node):
                     self._apply_input(*payload)
 
     def _apply_input(self, topic: str, msgtype: str, msg, apply, latched: bool) -> None:
-        t = self.now_ns()
         with self.lock:
+            t = self.now_ns()
             if t > 0:
                 if not self.core.started:
                     self.core.start(t)
                     self._sim0_ns = t
                     self._wall0 = time.monotonic()
                 else:
-                    self._publish_samples(self.core.advance_to(t))
+                    self._publish_samples(self.core.advance_to(t, allow_restart=self.sim_time))
+                    t = max(t, self.core.t_ns)
             reason = apply(t)
             self.inputs_received += 1
             self._record(topic, msgtype, max(t, 0), msg, latched)
@@ -328,8 +329,8 @@ class SuspSimNode(Node):
 
     def tick(self, t_ns: int | None = None) -> int:
         """Step to ``t_ns`` (default: now) and publish the samples passed; returns how many."""
-        t = self.now_ns() if t_ns is None else int(t_ns)
         with self.lock:
+            t = self.now_ns() if t_ns is None else int(t_ns)
             if not self.core.started:
                 if t <= 0:
                     return 0
@@ -337,7 +338,7 @@ class SuspSimNode(Node):
                 self._sim0_ns = t
                 self._wall0 = time.monotonic()
                 return 0
-            samples = self.core.advance_to(t)
+            samples = self.core.advance_to(t, allow_restart=self.sim_time)
             self._publish_samples(samples)
         return len(samples)
 
@@ -368,7 +369,7 @@ class SuspSimNode(Node):
             now = time.time_ns()
             stamps: list[int] = []
             with self.lock:
-                samples = self.core.advance_to(now)
+                samples = self.core.advance_to(max(time.time_ns(), now), allow_restart=False)
                 self._publish_samples(samples, stamps)
             for s, done in zip(samples, stamps):
                 self.timing.record(s.t_ns, done)
@@ -414,7 +415,8 @@ class SuspSimNode(Node):
             rej = dict(core.rejections)
             last_rej = core.last_rejection
             healthy = core.healthy
-            sim_s = core.sim_time_s
+            sim_s = core.total_sim_time_s
+            restarts = core.restarts
             oil = core.oil.tolist()
         for topic in set(stale) - self._stale:
             self.get_logger().warning(f"input {topic} is stale (no message for more than "
@@ -433,6 +435,7 @@ class SuspSimNode(Node):
         timing = {"level": 1 if tm["deadline_misses"] else 0, "name": f"{NODE_NAME}: timing",
                   "message": f"real-time factor {rtf:.3f}, {tm['deadline_misses']} deadline misses",
                   "values": {"real_time_factor": f"{rtf:.6f}", "sim_time_s": f"{sim_s:.6f}",
+                             "restarts": restarts,
                              "mode": "sim_time" if self.sim_time else "wall_time",
                              **{k: (f"{v:.6f}" if isinstance(v, float) else v) for k, v in tm.items()}}}
         model = {"level": 0 if healthy else 2, "name": f"{NODE_NAME}: model",

@@ -82,6 +82,8 @@ class SimCore:
         self.next_tick_ns = 0
         self.steps_done = 0
         self.samples_out = 0
+        self.total_steps = 0  # over the whole life, across restarts
+        self.restarts = 0
 
     # -- state ----------------------------------------------------------------------------------------
     @property
@@ -98,7 +100,13 @@ class SimCore:
 
     @property
     def sim_time_s(self) -> float:
+        """Simulated time since the last (re)start [s]."""
         return self.steps_done * self.step_ns * 1e-9
+
+    @property
+    def total_sim_time_s(self) -> float:
+        """Simulated time over the core's life, across restarts [s]."""
+        return self.total_steps * self.step_ns * 1e-9
 
     def start(self, t_ns: int) -> None:
         """Fix the time origin (the first tick is one period later)."""
@@ -213,20 +221,25 @@ class SimCore:
         if n > 0:
             self.stepper.advance(int(n), self.speed, self.steering, self.accel, self.wheel_heights)
             self.steps_done = target
+            self.total_steps += int(n)
 
-    def advance_to(self, t_ns: int) -> list[Sample]:
+    def advance_to(self, t_ns: int, *, allow_restart: bool = True) -> list[Sample]:
         """Step to ROS time ``t_ns`` with the held inputs; the samples of the publish ticks passed.
 
-        The first call only fixes the time origin. Time going backwards resets the core (a looped
-        replay) and restarts it at ``t_ns``.
+        The first call only fixes the time origin. Time going backwards restarts the core from rest at
+        ``t_ns`` (a looped replay) when ``allow_restart``, else it is a no-op (wall time: a callback that
+        read the clock just before another one stepped further; a clock adjustment).
         """
         t_ns = int(t_ns)
         if self.t_start_ns is None:
             self.start(t_ns)
             return []
         if t_ns < self.t_ns:
+            if not allow_restart:
+                return []
             self.reset()
             self.start(t_ns)
+            self.restarts += 1
             return []
         out = []
         while self.next_tick_ns <= t_ns:

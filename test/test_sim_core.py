@@ -103,3 +103,15 @@ def test_sample_messages(core):
     msgs = sample_messages(s)
     assert [m[0] for m in msgs] == ["/sim/imu/data", "/sim/odom", "/sim/suspension"]
     assert msgs[1][2]["header"]["frame_id"] == "odom" and msgs[1][2]["child_frame_id"] == "base_link"
+
+
+def test_wall_time_never_restarts_on_a_late_reading(core):
+    core.set_speed(T0, 10.0)
+    core.advance_to(T0)
+    core.advance_to(T0 + 30_000_000)
+    steps = core.steps_done
+    assert core.advance_to(T0 + 29_999_000, allow_restart=False) == []
+    assert core.steps_done == steps and core.restarts == 0
+    assert core.total_sim_time_s == pytest.approx(0.03)
+    core.advance_to(T0, allow_restart=True)
+    assert core.restarts == 1 and core.total_sim_time_s == pytest.approx(0.03)
