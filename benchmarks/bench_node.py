@@ -117,6 +117,7 @@ def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
     if not diag:
         raise RuntimeError("no /diagnostics timing status received from susp_sim_node")
     la = np.asarray(lat, dtype=float) * 1e-6
+    print("bench_node: node timing status: " + ", ".join(f"{k}={v}" for k, v in diag.items()), file=sys.stderr)
     return {
         "rtf": float(diag["real_time_factor"]),
         "jitter_p50_ms": float(diag["jitter_p50_ms"]),

@@ -174,6 +174,7 @@ class SuspSimNode(Node):
         self._sim_now = 0
         self.inputs_received = 0  # applied
         self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
+        self._wall_inputs: list = []  # wall time: (arrival ns, input) for the next tick
         self._events: list = []   # sim time: (source timestamp, seq, kind, payload) heap
         self._seq = 0
         self._max_clock_src = 0
@@ -233,13 +234,16 @@ class SuspSimNode(Node):
 
     # -- inputs ---------------------------------------------------------------------------------------
     def _input(self, topic: str, msgtype: str, msg, apply, info=None, latched: bool = False) -> None:
-        """An input message: in wall time applied at once; in sim time queued with ``/clock`` (see
-        :meth:`_drain`)."""
+        """An input message. Wall time: stamped with its arrival time and handed to the tick, which
+        steps to that instant and applies it (the callback itself does no stepping or publishing, so
+        it never delays a tick). Sim time: queued with ``/clock`` (see :meth:`_drain`)."""
         self.inputs_taken += 1
+        payload = (topic, msgtype, msg, apply, latched)
         if self.sim_time:
-            self._push(info, 1, (topic, msgtype, msg, apply, latched))
+            self._push(info, 1, payload)
         else:
-            self._apply_input(topic, msgtype, msg, apply, latched)
+            with self.lock:
+                self._wall_inputs.append((self.get_clock().now().nanoseconds, payload))
 
     # Sim time: ROS 2 gives no order across topics, and a busy executor may take an input before the
     # /clock message published just before it (or after the next one). So /clock and inputs go through
@@ -277,9 +281,10 @@ class SuspSimNode(Node):
                 else:
                     self._apply_input(*payload)
 
-    def _apply_input(self, topic: str, msgtype: str, msg, apply, latched: bool) -> None:
+    def _apply_input(self, topic: str, msgtype: str, msg, apply, latched: bool, t: int | None = None) -> None:
+        """Step to the input's time ``t`` (default: now), publishing the ticks passed, then apply it."""
         with self.lock:
-            t = self.now_ns()
+            t = self.now_ns() if t is None else t
             if t > 0:
                 if not self.core.started:
                     self.core.start(t)
@@ -311,14 +316,14 @@ class SuspSimNode(Node):
                     lambda t: self.core.set_wheel_heights(t, msg.data), info)
 
     # -- stepping and publishing ----------------------------------------------------------------------
-    def _publish_samples(self, samples, stamps: list | None = None) -> None:
+    def _publish_samples(self, samples) -> None:
         for s in samples:
             imu = fill(self._imu, M.imu_msg(s.t_ns, s.y))
             odom = fill(self._odom, M.odom_msg(s.t_ns, s.y))
             susp = fill(self._susp, M.suspension_msg(s.y))
             self.pub_imu.publish(imu)
-            if stamps is not None:
-                stamps.append(time.time_ns())
+            if not self.sim_time:  # whichever thread published this tick (tick thread or an input)
+                self.timing.record(s.t_ns, time.time_ns())
             self.pub_odom.publish(odom)
             self.pub_susp.publish(susp)
             self.published += 1
@@ -330,6 +335,11 @@ class SuspSimNode(Node):
     def tick(self, t_ns: int | None = None) -> int:
         """Step to ``t_ns`` (default: now) and publish the samples passed; returns how many."""
         with self.lock:
+            n0 = self.published
+            if self._wall_inputs:  # wall time: inputs take effect at their arrival instants
+                pending, self._wall_inputs = self._wall_inputs, []
+                for t_in, payload in pending:
+                    self._apply_input(*payload, t=t_in)
             t = self.now_ns() if t_ns is None else int(t_ns)
             if not self.core.started:
                 if t <= 0:
@@ -338,9 +348,8 @@ class SuspSimNode(Node):
                 self._sim0_ns = t
                 self._wall0 = time.monotonic()
                 return 0
-            samples = self.core.advance_to(t, allow_restart=self.sim_time)
-            self._publish_samples(samples)
-        return len(samples)
+            self._publish_samples(self.core.advance_to(t, allow_restart=self.sim_time))
+            return self.published - n0
 
     def _on_clock(self, msg: Clock, info) -> None:
         self._push(info, 0, msg.clock.sec * 1_000_000_000 + msg.clock.nanosec)
@@ -366,15 +375,7 @@ class SuspSimNode(Node):
             if wait > 0:
                 if self._stop.wait(wait):
                     break
-            now = time.time_ns()
-            stamps: list[int] = []
-            with self.lock:
-                samples = self.core.advance_to(max(time.time_ns(), now), allow_restart=False)
-                self._publish_samples(samples, stamps)
-            for s, done in zip(samples, stamps):
-                self.timing.record(s.t_ns, done)
-            if not samples and now - nxt > period:
-                self.timing.deadline_misses += 1
+            self.tick(time.time_ns())
 
     # -- parameters -----------------------------------------------------------------------------------
     def _on_params(self, params) -> SetParametersResult:
