@@ -79,9 +79,7 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
     model = model or Model(vehicle, variant)
     core = SimCore(model, step_s=step_s, publish_rate_hz=publish_rate_hz, oil=oil,
                    input_timeout_s=input_timeout_s)
-    variant_name = getattr(model.variant, "name", variant) if model is not None else variant
-    meta = simulated_metadata(drive.metadata, vehicle, variant_name if isinstance(variant_name, str) else variant,
-                              oil)
+    meta = simulated_metadata(drive.metadata, model.vehicle.name, model.variant.name, oil)
     rec = McapRecorder(out_path, metadata=meta, overwrite=overwrite) if out_path is not None else None
     ts: list[int] = []
     ys: list[np.ndarray] = []

@@ -184,7 +184,7 @@ class SuspSimNode(Node):
         self.timing = TimingStats(self.core.period_ns)
         self.recorder: McapRecorder | None = None
         if p["record_path"]:
-            meta = simulated_metadata({"maneuver": "live", "node": NODE_NAME}, self._vehicle, self._variant, oil)
+            meta = simulated_metadata({"maneuver": "live", "node": NODE_NAME}, model.vehicle.name, model.variant.name, oil)
             self.recorder = McapRecorder(p["record_path"], metadata=meta, overwrite=bool(p["record_overwrite"]))
         self._imu, self._odom, self._susp = Imu(), Odometry(), Float64MultiArray()
         self.pub_imu = self.create_publisher(Imu, SIM_IMU, OUTPUT_QOS)
