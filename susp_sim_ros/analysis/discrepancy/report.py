@@ -155,6 +155,11 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
     scalings' continuous parameters, mass, inertia, wheel rates, relaxation length) go into a vehicle file
     next to it. Measurement-chain terms (sensor_bias, time_offset) describe the IMU, not the car: they
     are reported, not written into the model.
+
+    The written pair is the fitted model exactly (tested: test/test_discrepancy_written_model.py): when
+    a damper-friction value moves into the vehicle file (oil-empty level, velocity scaling), the damper
+    tables are rewritten so the hydraulic curves the model derives from them stay the ones the fit used
+    (:func:`_keep_hydraulic_curves`).
     """
     from ...model.params import load_vehicle
     res = f.result_
@@ -217,7 +222,98 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
     for (sec, key), val in veh_changes.items():
         data[sec][key]["value"] = val
         data[sec][key]["source"] = f"fitted by susp diagnose ({name}) from {len(f.cases_)} drives"
+    damper_keys = {("friction", k) for k in ("damper_level_empty", "velocity_scaling_plateau",
+                                             "velocity_scaling_speed")}
+    if damper_keys & set(veh_changes):
+        _keep_hydraulic_curves(data, vp, name)
     return var, data
+
+
+def _keep_hydraulic_curves(data: dict, vp, name: str) -> None:
+    """Rewrite ``data``'s damper tables so the hydraulic curves the model derives from them equal the
+    base vehicle's, which the fit used.
+
+    The model derives each hydraulic curve as measured curve minus the full model's damper friction
+    (level x s_v(|v|)) on its velocity grid (:func:`susp_sim_ros.model.vehicle.hydraulic_curves`). The
+    candidates change only the friction (the kernel's SOIL_EMPTY, SV_INF, SV_VS); the hydraulic curves
+    stay those of the base vehicle. Written as a new oil-empty level or a new s_v shape into the vehicle
+    file, the unchanged measured tables would give different hydraulic curves, i.e. not the fitted model.
+    So the tables are written as base hydraulic curve + fitted friction: what a hydropulser would measure
+    on a damper with the fitted friction and the same hydraulic part (at +-1 mm/s: the fitted level, as
+    the paper defines it). They are written on the union of the table's velocities and the model's damper
+    grid, so the derived curve is the base one at every grid point (the model interpolates the table
+    linearly, the friction is not linear in v), up to rounding.
+    """
+    from ...model.layout import DAMPER_GRID
+    from ...model.params import load_vehicle
+    from ...model.vehicle import hydraulic_curves
+
+    new = _with_written_friction(data, vp)
+    vel = np.union1d(np.asarray(vp.damper_velocity, float), DAMPER_GRID)
+    h_old = _hydraulic_at(vp, vel)
+    fric_new = _friction_at(new, vel)
+    tables = {}
+    for key, h, levels in (("measured_intact", h_old[0], new.damper_friction_intact),
+                           ("measured_empty", h_old[1], new.damper_friction_empty)):
+        tables[key] = {ax: [float(v) for v in h[a] + np.sign(vel) * levels[a] * fric_new]
+                       for a, ax in enumerate(("front", "rear"))}
+    d = data["dampers"]
+    d["velocity"]["value"] = [float(v) for v in vel]
+    d["velocity"]["source"] = (f"written by susp diagnose ({name}): the table velocities plus the model's "
+                               f"damper grid, so the derived hydraulic curves are exactly the fitted ones")
+    for key, val in tables.items():
+        d[key]["value"] = val
+        d[key]["source"] = (f"written by susp diagnose ({name}): hydraulic curve of {vp.name} (unchanged, as "
+                            f"fitted) plus the fitted damper friction level x s_v(|v|)")
+    # the written tables must give back the base hydraulic curves on the grid (the fitted model)
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        p = Path(tmp) / "vehicle.yaml"
+        p.write_text(yaml.safe_dump(data, sort_keys=False))
+        check = hydraulic_curves(load_vehicle(p))
+    for a, b in zip(check, hydraulic_curves(vp)):
+        if not np.allclose(a, b, rtol=1e-12, atol=1e-9):
+            raise RuntimeError("discrepancy finder: written damper tables do not reproduce the fitted "
+                               f"hydraulic curves (max diff {np.max(np.abs(a - b)):.3g} N)")
+
+
+def _friction_at(vp, v: np.ndarray) -> np.ndarray:
+    """The full model's damper-friction shape s_v(|v|) (as the model subtracts it), zero inside the
+    1 mm/s reference."""
+    from ...model.vehicle import velocity_scaling
+    return velocity_scaling(vp, np.abs(v))
+
+
+def _hydraulic_at(vp, v: np.ndarray) -> np.ndarray:
+    """Hydraulic curves (intact, empty) x (front, rear) at velocities ``v``, exactly as
+    :func:`susp_sim_ros.model.vehicle.hydraulic_curves` derives them on its grid."""
+    from ...model.vehicle import _extrap_interp
+    sign = np.sign(v)
+    shape = _friction_at(vp, v)
+    out = np.zeros((2, 2, len(v)))
+    for k, (measured, levels) in enumerate(((vp.damper_measured_intact, vp.damper_friction_intact),
+                                            (vp.damper_measured_empty, vp.damper_friction_empty))):
+        for a in range(2):
+            h = _extrap_interp(v, vp.damper_velocity, measured[a]) - sign * levels[a] * shape
+            h = sign * np.maximum(sign * h, 0.0)
+            h[np.abs(v) <= vp.sv_reference] = 0.0
+            out[k, a] = h
+    return out
+
+
+def _with_written_friction(data: dict, vp):
+    """``vp`` with the damper-friction values of the vehicle YAML dict ``data`` (the fitted ones)."""
+    fr = data["friction"]
+
+    def axle(key):
+        v = fr[key]["value"]
+        return (float(v["front"]), float(v["rear"])) if isinstance(v, dict) else (float(v), float(v))
+
+    return vp.replace(damper_friction_intact=axle("damper_level_intact"),
+                      damper_friction_empty=axle("damper_level_empty"),
+                      sv_plateau=float(fr["velocity_scaling_plateau"]["value"]),
+                      sv_speed=float(fr["velocity_scaling_speed"]["value"]),
+                      sv_reference=float(fr["velocity_scaling_reference"]["value"]))
 
 
 def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
@@ -231,12 +327,17 @@ def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
     head = (f"# Written by susp diagnose (the discrepancy finder) from {len(f.cases_)} drives, base "
             f"variant {getattr(f.base_variant_, 'name', f.variant)}.\n")
     p = out / f"{name}.yaml"
-    p.write_text(head + yaml.safe_dump(var, sort_keys=False))
+    pv = out / f"{name}_vehicle.yaml"
+    run = f"# Run it: susp_sim_node --ros-args -p friction_variant:={p.resolve()}"
+    if veh is not None:  # the fitted model is the pair: the variant alone on the base vehicle is not it
+        run += (f" -p vehicle:={pv.resolve()}\n# (the fitted vehicle values are in {pv.name}; with the "
+                f"default vehicle this variant is NOT the fitted model)")
+    p.write_text(head + run + "\n" + yaml.safe_dump(var, sort_keys=False))
     paths["variant"] = str(p)
     if veh is not None:
-        p = out / f"{name}_vehicle.yaml"
-        p.write_text(head + yaml.safe_dump(veh, sort_keys=False))
-        paths["vehicle"] = str(p)
+        pv.write_text(head + f"# Use it together with the variant {p.name} (vehicle:={pv.resolve()}).\n"
+                      + yaml.safe_dump(veh, sort_keys=False))
+        paths["vehicle"] = str(pv)
     if plots:
         paths["plots"] = plot_overlays(f, out, name)
     rep = f.report()
@@ -340,6 +441,12 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
         L.append(f"| {w['drive']} | {w['signal']} | {w['start_s']:.2f} | {w['end_s']:.2f} | {w['rms_deg_s']:.3f} | "
                  f"{w['ratio_to_noise']:.1f} | {w['dominant_frequency_hz']:.1f} | {w.get('axle', '')} |")
     L += ["", "## Files", ""] + [f"- {k}: `{v}`" for k, v in paths.items() if isinstance(v, str)]
+    if "variant" in paths:
+        run = f"susp_sim_node --ros-args -p friction_variant:={Path(paths['variant']).resolve()}"
+        if "vehicle" in paths:
+            run += f" -p vehicle:={Path(paths['vehicle']).resolve()}"
+        L += ["", "Run the fitted model in the node (variant and, when written, vehicle file together):", "",
+              f"```\n{run}\n```"]
     for p in paths.get("plots", []):
         L.append(f"![{Path(p).stem}]({Path(p).name})")
     return "\n".join(L) + "\n"
