@@ -143,3 +143,9 @@ def test_every_vehicle_parameter_has_unit_and_source(model_full):
     assert len(srcs) == 39  # every entry of the vehicle file was read, each with unit and source
     for key, (unit, source) in srcs.items():
         assert unit and source, key
+
+
+def test_bare_variant_name_is_not_shadowed_by_a_folder(tmp_path, monkeypatch):
+    (tmp_path / "dahl_only").mkdir()
+    monkeypatch.chdir(tmp_path)
+    assert load_variant("dahl_only").velocity_scaling is False

@@ -385,7 +385,7 @@ def step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
     return ok and math.isfinite(z + phi + th + vy + r + zd + phid + thd)
 
 
-@njit(cache=True, _nrt=False, fastmath={"contract", "arcp", "nsz"})
+@njit(cache=True, _nrt=False, error_model="numpy", fastmath={"contract", "arcp", "nsz"})
 def _run_steps(p, dv, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y, c, w, y):
     # compiled without the reference-counting runtime: with it, every array argument of the inlined
     # helpers costs an atomic incref/decref pair per step, which made up half of the step time

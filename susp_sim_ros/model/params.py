@@ -55,7 +55,9 @@ def config_dir() -> Path:
 
 def _resolve(kind: str, name_or_path: str | os.PathLike) -> Path:
     p = Path(name_or_path)
-    if p.suffix in (".yaml", ".yml") or p.exists():
+    # a path when it looks like one; a bare name is looked up in config/ even if a folder of that
+    # name happens to exist in the working directory
+    if p.suffix in (".yaml", ".yml") or len(p.parts) > 1 or p.is_file():
         if not p.is_file():
             raise ConfigError(f"{p}: no such {kind} file")
         return p
