@@ -7,12 +7,16 @@ Locates where the measured gyro rates leave the base model's simulation by more 
 drives, proves the fit leave-one-drive-out, and writes the extended model (``NAME.yaml`` variant, plus
 ``NAME_vehicle.yaml`` when vehicle values were fitted), overlay plots, a JSON with every detail and a
 Markdown report into ``--out``. ``--json`` prints the interface object (interface.md, JSON outputs).
+
+Every drive is read and checked first (readable, the input topics present with increasing times and
+values the model accepts, enough measured IMU samples): a bad drive is a named error (exit 2) before any
+fitting starts. ``--dry-run`` stops after that check.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import SuspInputError
+from ..errors import RecordingError, SuspInputError
 
 
 def add_arguments(p) -> None:
@@ -25,14 +29,39 @@ def add_arguments(p) -> None:
     p.add_argument("--no-plots", action="store_true", help="no overlay PNGs")
     p.add_argument("--no-heldout", action="store_true", help="skip leave-one-drive-out (faster)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    p.add_argument("--dry-run", action="store_true", help="read and check the drives only; no fitting")
+
+
+MIN_IMU_SAMPLES = 10  # the finder needs this many measured samples per drive
+
+
+def check_drives(paths) -> list[dict]:
+    """Read and check every drive (RecordingError/SuspInputError naming the file); one summary each."""
+    from ..io.drive import check_drive, read_drive
+    out = []
+    for d in paths:
+        if not Path(d).is_file():
+            raise SuspInputError(f"{d}: no such recorded test drive")
+        drive = check_drive(read_drive(d), d)
+        if drive.imu is None or len(drive.imu) < MIN_IMU_SAMPLES:
+            raise RecordingError(f"{d}: fewer than {MIN_IMU_SAMPLES} measured IMU samples on /imu/data "
+                                 f"(got {0 if drive.imu is None else len(drive.imu)}): nothing to diagnose "
+                                 f"against" + ("; file truncated" if drive.extra.get("truncated") else ""))
+        out.append({"drive": str(d), "maneuver": drive.metadata.get("maneuver", ""),
+                    "duration_s": drive.duration_s, "imu_samples": len(drive.imu),
+                    "truncated": bool(drive.extra.get("truncated", False))})
+    return out
 
 
 def run(args) -> dict:
     from ..analysis.discrepancy import DiscrepancyFinder
     from ..analysis.discrepancy.report import verdict, write_outputs
-    for d in args.drives:
-        if not Path(d).is_file():
-            raise SuspInputError(f"{d}: no such recorded test drive")
+    checked = check_drives(args.drives)
+    if args.dry_run:
+        return {"dry_run": True, "drives": checked,
+                "summary": "\n".join(f"{c['drive']}: {c['maneuver'] or 'drive'}, {c['duration_s']:.2f} s, "
+                                     f"{c['imu_samples']} IMU samples" + (" (truncated)" if c["truncated"] else "")
+                                     for c in checked) + "\nchecked; nothing fitted (--dry-run)"}
     cands = [c.strip() for c in args.candidates.split(",") if c.strip()] if args.candidates else None
     f = DiscrepancyFinder(vehicle=args.config, variant=args.variant, candidates=cands,
                           heldout=not args.no_heldout, progress=not args.no_progress)

@@ -1,8 +1,11 @@
-"""``susp recover``: make a recording from a killed process readable again.
+"""``susp recover``: make a recording from a killed process a finalised, indexed file again.
 
-Reads every complete record of the damaged file (up to its last complete chunk) and writes them into a
-new, properly finalised and indexed MCAP (schemas, channel QoS metadata, ``test_drive`` metadata, log and
-publish times and sequence numbers kept).
+Reads every complete record of the input (up to its last complete chunk; a truncated tail or a corrupt
+chunk ends the readable part) and writes them into a new, properly finalised and indexed MCAP (schemas,
+channel QoS metadata, ``test_drive`` and other metadata, log and publish times and sequence numbers
+kept). A recording left by a killed ``susp_sim_node`` is already readable as it is (the recorder keeps
+the file complete after every chunk); it lacks the summary section (statistics, chunk and message
+indexes) that makes large files fast to seek, which this adds.
 """
 from __future__ import annotations
 
@@ -23,7 +26,7 @@ def recover(src: str | Path, dst: str | Path, *, overwrite: bool = False) -> dic
     src, dst = Path(src), Path(dst)
     if src.resolve() == dst.resolve():
         raise RecordingError(f"{dst}: --out must differ from the input file")
-    rec = read_recording(src)
+    rec = read_recording(src, allow_corrupt=True)
     if not rec.channels and not rec.messages:
         raise RecordingError(f"{src}: nothing readable to recover ({rec.error or 'empty'})")
     meta = rec.metadata.get("test_drive")
@@ -36,11 +39,15 @@ def recover(src: str | Path, dst: str | Path, *, overwrite: bool = False) -> dic
             out.write_raw(m.topic, m.msgtype, rec.schema_text(m.channel_id), m.log_time_ns,
                           m.publish_time_ns, m.sequence, m.data, ch.metadata)
     t = [m.log_time_ns for m in rec.messages]
+    state = (f"input was damaged: {rec.error}" if rec.truncated or rec.corrupt
+             else "input was complete but not finalised (no summary)" if not rec.finalised
+             else "input was intact")
     return {"input": str(src), "out": str(dst), "messages": len(rec.messages),
-            "topics": sorted({m.topic for m in rec.messages}), "was_truncated": rec.truncated,
+            "topics": sorted({m.topic for m in rec.messages}),
+            "was_truncated": rec.truncated or rec.corrupt or not rec.finalised,
+            "was_finalised": rec.finalised, "was_corrupt": rec.corrupt,
             "damage": rec.error, "duration_s": (max(t) - min(t)) * 1e-9 if t else 0.0,
-            "summary": f"{src}: recovered {len(rec.messages)} messages into {dst}"
-                       + (f" (input was damaged: {rec.error})" if rec.truncated else " (input was intact)")}
+            "summary": f"{src}: recovered {len(rec.messages)} messages into {dst} ({state})"}
 
 
 def run(args) -> dict:

@@ -7,11 +7,17 @@ recorded QoS is transient-local (``/road/profile``) are published latched. By de
 ``/sim/...`` and ``/diagnostics`` topics are not replayed (they are outputs of a node, not inputs);
 ``--topics`` selects topics explicitly. ``--loop`` starts over (``/clock`` jumps back; the node
 restarts its simulation). A progress bar goes to stderr.
+
+Before anything is published the recording is read and checked: every message to be played must be a
+known ROS type and deserialise (a damaged file is a named error, exit 2, not garbage on the wire).
+``--dry-run`` stops after that check and prints what would be played (no ROS node is created).
 """
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import math
+import os
 import sys
 import time
 
@@ -33,14 +39,25 @@ def add_arguments(p) -> None:
     p.add_argument("--wait-subscribers", type=float, default=2.0,
                    help="wait up to this long [s] for a subscriber before playing (default 2)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--dry-run", action="store_true",
+                   help="read and check the recording, print what would be played, publish nothing")
 
 
-def _msg_class(msgtype: str):
+def _msg_class(msgtype: str, topic: str = ""):
     try:
-        pkg, _, name = msgtype.split("/")
+        pkg, kind, name = msgtype.split("/")
+        if kind != "msg" or not pkg.isidentifier() or not name.isidentifier():
+            raise ValueError(msgtype)
+        # only a package with a msg/ folder is imported: a schema name never runs arbitrary modules
+        spec = importlib.util.find_spec(pkg)
+        if spec is None or not spec.submodule_search_locations or not any(
+                os.path.isdir(os.path.join(loc, "msg")) for loc in spec.submodule_search_locations):
+            raise ImportError(pkg)
         return getattr(importlib.import_module(f"{pkg}.msg"), name)
     except (ValueError, ImportError, AttributeError):
-        raise RecordingError(f"message type {msgtype} is not available in this ROS installation") from None
+        where = f"topic {topic}: " if topic else ""
+        raise RecordingError(f"{where}message type {msgtype!r} is not available in this ROS "
+                             f"installation (unknown schema)") from None
 
 
 def _timeline(msgs, t0: int, t1: int, clock_ns: int):
@@ -59,9 +76,12 @@ def _timeline(msgs, t0: int, t1: int, clock_ns: int):
         yield t_clock, None
 
 
-def run(args) -> dict:
+def plan(args):
+    """Read and check the recording: ``(recording, topics to play, messages in log-time order)``."""
     if not (math.isfinite(args.rate) and args.rate > 0):
         raise SuspInputError(f"--rate: expected a factor > 0, got {args.rate}")
+    if not (math.isfinite(args.clock_period) and args.clock_period > 0):
+        raise SuspInputError(f"--clock-period: expected a period > 0 s, got {args.clock_period}")
     rec = read_recording(args.recording)
     topics = rec.topics()
     if args.topics:
@@ -74,7 +94,43 @@ def run(args) -> dict:
         play = {t for t in topics if not t.startswith(OUTPUT_PREFIXES)}
     msgs = sorted((m for m in rec.messages if m.topic in play), key=lambda m: m.log_time_ns)
     if not msgs:
-        raise RecordingError(f"{args.recording}: no messages to replay on {', '.join(sorted(play)) or 'any topic'}")
+        why = f" (file damaged: {rec.error})" if rec.truncated else ""
+        raise RecordingError(f"{args.recording}: no messages to replay on "
+                             f"{', '.join(sorted(play)) or 'any topic'}{why}")
+    _check_messages(args.recording, rec, msgs, {t: topics[t] for t in play})
+    return rec, play, msgs
+
+
+def _check_messages(path, rec, msgs, types: dict[str, str]) -> None:
+    """Every message must be of a known ROS type and deserialise (RecordingError naming topic and time)."""
+    from rclpy.serialization import deserialize_message
+    classes = {}
+    for topic, msgtype in types.items():
+        chans = [c for c in rec.channels.values() if c.topic == topic]
+        if any(c.message_encoding != "cdr" for c in chans):
+            raise RecordingError(f"{path}: topic {topic}: message encoding "
+                                 f"{chans[0].message_encoding!r} cannot be replayed (expected cdr)")
+        classes[topic] = _msg_class(msgtype or "(no schema)", topic)
+    for m in msgs:
+        try:
+            deserialize_message(m.data, classes[m.topic])
+        except Exception as exc:  # rclpy raises assorted errors on malformed CDR
+            raise RecordingError(f"{path}: topic {m.topic}: the {m.msgtype} message at log time "
+                                 f"{m.log_time_ns} ns does not deserialise ({type(exc).__name__}: {exc})") from None
+
+
+def run(args) -> dict:
+    rec, play, msgs = plan(args)
+    topics = rec.topics()
+    t0, t1 = msgs[0].log_time_ns, msgs[-1].log_time_ns
+    if args.dry_run:
+        counts = {t: sum(1 for m in msgs if m.topic == t) for t in sorted(play)}
+        return {"recording": str(args.recording), "dry_run": True, "messages": len(msgs),
+                "topics": sorted(play), "counts": counts, "duration_s": (t1 - t0) * 1e-9,
+                "truncated": rec.truncated, "finalised": rec.finalised,
+                "summary": f"would replay {len(msgs)} messages on {len(play)} topics from {args.recording} "
+                           f"({(t1 - t0) * 1e-9:.2f} s of recording"
+                           + (f"; file truncated: {rec.error}" if rec.truncated else "") + ")"}
 
     import rclpy
     from rclpy.executors import ExternalShutdownException
@@ -88,9 +144,8 @@ def run(args) -> dict:
         latched = rec.latched(topic)
         qos = QoSProfile(depth=1 if latched else 100, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
-        pubs[topic] = node.create_publisher(_msg_class(topics[topic]), topic, qos)
+        pubs[topic] = node.create_publisher(_msg_class(topics[topic], topic), topic, qos)
     clock_pub = None if args.no_clock else node.create_publisher(Clock, "/clock", 100)
-    t0, t1 = msgs[0].log_time_ns, msgs[-1].log_time_ns
     # wait until every topic (and /clock) has a subscriber, so nothing early is lost to discovery
     everything = list(pubs.values()) + ([clock_pub] if clock_pub is not None else [])
     deadline = time.monotonic() + args.wait_subscribers

@@ -62,14 +62,14 @@ def _study(args) -> dict:
 
 
 def _simulated_imu(path: str, topic: str):
-    from ..io.drive import IMU, SIM_IMU, read_imu
+    from ..io.drive import IMU, SIM_IMU, imu_from_recording
     from ..io.reader import read_recording
-    if topic != "auto":
-        return topic, read_imu(path, topic)
     rec = read_recording(path)
+    if topic != "auto":
+        return topic, imu_from_recording(rec, topic)
     for t in (SIM_IMU, IMU):
         if rec.by_topic(t):
-            return t, read_imu(path, t)
+            return t, imu_from_recording(rec, t)
     why = f"; file damaged: {rec.error}" if rec.truncated else ""
     raise RecordingError(f"{path}: no IMU messages on {SIM_IMU} or {IMU} (topics: "
                          f"{', '.join(sorted(rec.topics())) or 'none'}{why})")

@@ -28,6 +28,12 @@ WHEEL_HEIGHTS = "/road/wheel_heights"
 IMU = "/imu/data"
 SIM_IMU = "/sim/imu/data"
 
+#: Input values beyond which a message is absurd; the node rejects them (SimCore), the offline tools
+#: refuse drives containing them.
+MAX_SPEED = 100.0               # m/s
+MAX_STEERING = 4.0 * np.pi      # rad, steering-wheel angle
+MAX_WHEEL_HEIGHT = 1.0          # m, road height under a wheel / road profile elevation
+
 
 @dataclass
 class Series:
@@ -117,10 +123,45 @@ class TestDrive:
 
 
 # ---- reading -------------------------------------------------------------------------------------
+#: Message type each topic must have when present (a recording with another type there is rejected).
+TOPIC_TYPES = {SPEED: M.FLOAT64, STEERING: M.FLOAT64, ROAD_PROFILE: M.FLOAT64_ARRAY,
+               WHEEL_HEIGHTS: M.FLOAT64_ARRAY, IMU: M.IMU, SIM_IMU: M.IMU}
+
+
+def check_topic(rec: Recording, topic: str, msgtype: str | None = None) -> None:
+    """RecordingError naming the file and topic unless every channel of ``topic`` carries ``msgtype``
+    (default :data:`TOPIC_TYPES`) as a ``ros2msg`` schema with ``cdr`` messages."""
+    want = msgtype or TOPIC_TYPES[topic]
+    for ch in rec.channels.values():
+        if ch.topic != topic:
+            continue
+        sc = rec.schemas.get(ch.schema_id)
+        name = sc.name if sc is not None else "(no schema)"
+        if name != want:
+            raise RecordingError(f"{rec.path}: topic {topic} has type {name}, expected {want}")
+        if sc.encoding not in ("ros2msg", "ros2idl") or ch.message_encoding != "cdr":
+            raise RecordingError(f"{rec.path}: topic {topic}: unsupported schema encoding "
+                                 f"{sc.encoding!r} / message encoding {ch.message_encoding!r} "
+                                 f"(expected ros2msg / cdr)")
+
+
+def _fields(rec: Recording, topic: str, extract, msgtype: str | None = None) -> list:
+    """``[(log_time_ns, extract(msg)), ...]``; a message without the expected fields is a named error."""
+    check_topic(rec, topic, msgtype)
+    out = []
+    for t, m in rec.decode_topic(topic):
+        try:
+            out.append((t, extract(m)))
+        except (AttributeError, TypeError, ValueError, IndexError) as exc:
+            raise RecordingError(f"{rec.path}: topic {topic}: malformed message at log time {t} ns "
+                                 f"({type(exc).__name__}: {exc})") from None
+    return out
+
+
 def _scalar_series(rec: Recording, topic: str) -> Series:
-    items = rec.decode_topic(topic)
+    items = _fields(rec, topic, lambda m: float(m.data))
     t = np.array([t for t, _ in items], dtype=np.int64)
-    v = np.array([float(m.data) for _, m in items], dtype=float)
+    v = np.array([v for _, v in items], dtype=float)
     return Series(t, v)
 
 
@@ -129,12 +170,13 @@ def road_from_msg(msg: Any, where: str) -> RoadProfile:
     try:
         dims = list(msg.layout.dim)
         data = np.asarray(list(msg.data), dtype=float)
-    except AttributeError:
+        sizes = [int(d.size) for d in dims]
+    except (AttributeError, TypeError, ValueError):
         raise RecordingError(f"{where}: not a Float64MultiArray") from None
-    if len(dims) != 2 or int(dims[0].size) != 3:
+    if len(sizes) != 2 or sizes[0] != 3:
         raise RecordingError(f"{where}: malformed road profile: expected layout dims [channel 3, sample N], "
                              f"got {[(d.label, int(d.size)) for d in dims]}")
-    n = int(dims[1].size)
+    n = sizes[1]
     if n < 2 or data.size != 3 * n:
         raise RecordingError(f"{where}: malformed road profile: {data.size} values for N = {n} samples "
                              f"(want 3*N, N >= 2)")
@@ -145,21 +187,26 @@ def road_from_msg(msg: Any, where: str) -> RoadProfile:
 
 
 def _imu_series(rec: Recording, topic: str) -> ImuSeries:
-    items = rec.decode_topic(topic)
+    items = _fields(rec, topic, lambda m: (
+        float(m.angular_velocity.x), float(m.angular_velocity.y), float(m.angular_velocity.z),
+        float(m.linear_acceleration.x), float(m.linear_acceleration.y), float(m.linear_acceleration.z)),
+        M.IMU)
     t = np.array([t for t, _ in items], dtype=np.int64)
-    g = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z] for _, m in items],
-                 dtype=float).reshape(-1, 3)
-    a = np.array([[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
-                  for _, m in items], dtype=float).reshape(-1, 3)
-    return ImuSeries(t, g, a)
+    v = np.array([x for _, x in items], dtype=float).reshape(-1, 6)
+    return ImuSeries(t, v[:, :3], v[:, 3:])
 
 
 def read_imu(path: str | os.PathLike, topic: str = IMU) -> ImuSeries:
     """The IMU samples of ``topic`` (``/imu/data`` measured, ``/sim/imu/data`` simulated)."""
-    rec = read_recording(path)
+    return imu_from_recording(read_recording(path), topic)
+
+
+def imu_from_recording(rec: Recording, topic: str = IMU) -> ImuSeries:
+    """The IMU samples of ``topic`` in an already read recording (RecordingError if none)."""
     if not rec.by_topic(topic):
-        raise RecordingError(f"{path}: no messages on topic {topic} (topics: "
-                             f"{', '.join(sorted(rec.topics())) or 'none'})")
+        why = f"; file damaged: {rec.error}" if rec.truncated else ""
+        raise RecordingError(f"{rec.path}: no messages on topic {topic} (topics: "
+                             f"{', '.join(sorted(rec.topics())) or 'none'}{why})")
     return _imu_series(rec, topic)
 
 
@@ -176,13 +223,14 @@ def drive_from_recording(rec: Recording, *, imu_topic: str = IMU) -> TestDrive:
     speed = _scalar_series(rec, SPEED)
     steering = _scalar_series(rec, STEERING)
     road = None
+    check_topic(rec, ROAD_PROFILE)
     prof = rec.decode_topic(ROAD_PROFILE)
     if prof:
         road = road_from_msg(prof[0][1], f"{path}: topic {ROAD_PROFILE}")
     wh = None
-    items = rec.decode_topic(WHEEL_HEIGHTS)
+    items = _fields(rec, WHEEL_HEIGHTS, lambda m: [float(x) for x in m.data])
     if items:
-        vals = [list(m.data) for _, m in items]
+        vals = [v for _, v in items]
         if any(len(v) != 4 for v in vals):
             raise RecordingError(f"{path}: topic {WHEEL_HEIGHTS}: expected 4 values [FL, FR, RL, RR] "
                                  "per message")
@@ -195,6 +243,43 @@ def drive_from_recording(rec: Recording, *, imu_topic: str = IMU) -> TestDrive:
     drive = TestDrive(metadata, speed, steering, road, wh, imu, extra)
     if "damper_oil_level" in metadata:
         parse_oil(metadata["damper_oil_level"], f"{path}: test_drive metadata damper_oil_level")
+    return drive
+
+
+def check_drive(drive: TestDrive, where: str | os.PathLike) -> TestDrive:
+    """Refuse a drive the offline tools cannot simulate faithfully: per input topic, log times strictly
+    increasing and values finite and within the node's limits (speed in [0, MAX_SPEED], |steering| <=
+    MAX_STEERING, |wheel heights| <= MAX_WHEEL_HEIGHT), the IMU finite with increasing times.
+    RecordingError naming the file, topic, sample and time; returns ``drive``."""
+    def series(topic, t, v, lo=None, hi=None, absmax=None):
+        t = np.asarray(t, np.int64)
+        v = np.asarray(v, float).reshape(len(t), -1)
+        back = np.nonzero(np.diff(t) <= 0)[0]
+        if back.size:
+            k = int(back[0]) + 1
+            raise RecordingError(f"{where}: topic {topic}: log times not strictly increasing at message "
+                                 f"{k} ({t[k]} ns after {t[k - 1]} ns)")
+        bad = ~np.isfinite(v).all(axis=1)
+        why = "non-finite value"
+        if lo is not None:
+            bad |= (v < lo).any(axis=1) | (v > hi).any(axis=1)
+            why = f"value outside [{lo:g}, {hi:g}] or non-finite"
+        if absmax is not None:
+            bad |= (np.abs(v) > absmax).any(axis=1)
+            why = f"value beyond +-{absmax:g} or non-finite"
+        if bad.any():
+            k = int(np.nonzero(bad)[0][0])
+            raise RecordingError(f"{where}: topic {topic}: {why} at message {k} (t = {t[k]} ns): "
+                                 f"{v[k].tolist()}")
+    series(SPEED, drive.speed.t_ns, drive.speed.values, 0.0, MAX_SPEED)
+    series(STEERING, drive.steering.t_ns, drive.steering.values, absmax=MAX_STEERING)
+    if drive.wheel_heights is not None:
+        series(WHEEL_HEIGHTS, drive.wheel_heights.t_ns, drive.wheel_heights.values, absmax=MAX_WHEEL_HEIGHT)
+    if drive.road is not None and len(drive.road) and (
+            np.abs(drive.road.zl).max() > MAX_WHEEL_HEIGHT or np.abs(drive.road.zr).max() > MAX_WHEEL_HEIGHT):
+        raise RecordingError(f"{where}: topic {ROAD_PROFILE}: elevation beyond +-{MAX_WHEEL_HEIGHT:g} m")
+    if drive.imu is not None:
+        series(IMU, drive.imu.t_ns, np.hstack([drive.imu.gyro, drive.imu.accel]))
     return drive
 
 
@@ -242,5 +327,6 @@ def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = 
 
 
 __all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "read_imu", "parse_oil",
-           "drive_from_recording", "drive_messages", "road_from_msg", "SPEED", "STEERING", "ROAD_PROFILE",
+           "drive_from_recording", "drive_messages", "road_from_msg", "imu_from_recording", "check_topic",
+           "TOPIC_TYPES", "check_drive", "MAX_SPEED", "MAX_STEERING", "MAX_WHEEL_HEIGHT", "SPEED", "STEERING", "ROAD_PROFILE",
            "WHEEL_HEIGHTS", "IMU", "SIM_IMU"]
