@@ -40,6 +40,7 @@ class LockstepResult:
     healthy: bool = True
     rejections: dict[str, int] = field(default_factory=dict)
     out_path: str | None = None
+    diverged: str = ""  # the divergence guard's reason when the run was stopped (SimCore.diverged)
     labels: tuple[str, ...] = OUTPUT_LABELS
 
     def __getitem__(self, label: str) -> np.ndarray:
@@ -74,7 +75,10 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
                  oil: Sequence[float] | None = None, step_s: float = 0.001, publish_rate_hz: float = 100.0,
                  out_path: str | os.PathLike | None = None, overwrite: bool = False,
                  input_timeout_s: float = 0.5, model: Model | None = None) -> LockstepResult:
-    """Run ``drive`` through a :class:`SimCore` as fast as possible (see the module docstring)."""
+    """Run ``drive`` through a :class:`SimCore` as fast as possible (see the module docstring).
+
+    If the divergence guard stops the core, the result ends at the last good sample, ``healthy`` is
+    False and ``diverged`` says why (the output file, if any, holds the samples up to there)."""
     oil = tuple(drive.oil_levels() if oil is None else oil)
     model = model or Model(vehicle, variant)
     core = SimCore(model, step_s=step_s, publish_rate_hz=publish_rate_hz, oil=oil,
@@ -124,7 +128,7 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
     Y = np.array(ys).reshape(-1, len(OUTPUT_LABELS))
     imu = ImuSeries(t_arr, Y[:, _GYRO], Y[:, _ACC])
     return LockstepResult(t_arr, Y, imu, meta, core.healthy, dict(core.rejections),
-                          None if out_path is None else str(out_path))
+                          None if out_path is None else str(out_path), diverged=core.diverged)
 
 
 def maneuver_drive(maneuver: Maneuver, oil: Sequence[float] = (1.0, 1.0, 1.0, 1.0), *,

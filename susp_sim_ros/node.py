@@ -16,10 +16,20 @@ Timing:
 Every input first steps the core to the current time, then replaces the held value, so inputs take
 effect at the instant they arrive. The callbacks only take inputs, step the shared core and publish.
 
+Bad input never stops the node: a rejected message (non-finite, out of range, mis-shaped layout,
+non-increasing profile, invalid or stale ``/clock``) is not integrated, counted per cause on
+``/diagnostics`` (``rejected_<cause>``, ``rejected_by_topic``) and logged once per topic and cause, then
+at most every ``REJECTION_LOG_INTERVAL_S`` with the number not logged in between. Divergence guard: if the
+simulation leaves the physical envelope (:mod:`~susp_sim_ros.sim_core`), nothing more is published on
+``/sim/...``; the node logs an error, publishes ``/diagnostics`` with the model status at ERROR level,
+finalises the recording and (``on_divergence: exit``, the default) exits with code 1; with
+``on_divergence: hold`` it stays up reporting ERROR.
+
 Parameters (all with defaults; ``--ros-args --params-file config/susp_sim_node.yaml``):
 ``vehicle``, ``friction_variant``, ``damper_oil_level`` [FL, FR, RL, RR], ``step_s`` [s],
 ``publish_rate_hz`` [Hz], ``record_path`` (empty: no recording), ``record_overwrite``,
-``input_timeout_s`` [s], ``diagnostics_rate_hz`` [Hz]. ``damper_oil_level``, ``friction_variant`` and
+``input_timeout_s`` [s], ``diagnostics_rate_hz`` [Hz], ``max_time_jump_s`` [s], ``on_divergence``
+(``exit``/``hold``). ``damper_oil_level``, ``friction_variant`` and
 ``vehicle`` may be changed while running; the others are fixed at start.
 """
 from __future__ import annotations
@@ -52,7 +62,7 @@ from .io import messages as M
 from .io.recorder import McapRecorder
 from .lockstep import simulated_metadata
 from .model.vehicle import Model, check_oil
-from .sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, SimCore
+from .sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
 
 NODE_NAME = "susp_sim_node"
 INPUT_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
@@ -75,7 +85,12 @@ DEFAULTS = {
                                     "this long after they were published (wall time) [s]"),
     "realtime_priority": (10, "SCHED_FIFO priority of the wall-time tick thread (0: normal scheduling; "
                               "falls back to normal scheduling when not permitted)"),
+    "max_time_jump_s": (10.0, "a jump of ROS time forward by more than this is not stepped through; the "
+                              "simulation continues from the new time [s]"),
+    "on_divergence": ("exit", "when the divergence guard stops the simulation: exit (code 1, after an ERROR "
+                              "diagnostic and finalising the recording) or hold (stay up reporting ERROR)"),
 }
+REJECTION_LOG_INTERVAL_S = 10.0
 SWITCH_INTERVAL_S = 0.0001
 RUNTIME = ("damper_oil_level", "friction_variant", "vehicle")
 
@@ -168,9 +183,17 @@ class SuspSimNode(Node):
         oil = check_oil(p["damper_oil_level"], "parameter damper_oil_level")
         self._vehicle, self._variant = str(p["vehicle"]), str(p["friction_variant"])
         model = Model(self._vehicle, self._variant)
+        self.on_divergence = str(p["on_divergence"])
+        if self.on_divergence not in ("exit", "hold"):
+            raise SuspInputError(f"parameter on_divergence: expected exit or hold, got {self.on_divergence!r}")
         self.core = SimCore(model, step_s=float(p["step_s"]), publish_rate_hz=float(p["publish_rate_hz"]),
-                            oil=oil, input_timeout_s=float(p["input_timeout_s"]))
+                            oil=oil, input_timeout_s=float(p["input_timeout_s"]),
+                            max_time_jump_s=float(p["max_time_jump_s"]))
         self.lock = threading.RLock()
+        self.failure = ""  # set when the divergence guard stopped the simulation
+        self.handler_errors = 0
+        self.rejection_log = RateLimitedLog(lambda text: self.get_logger().warning(text),
+                                            REJECTION_LOG_INTERVAL_S)
         self._sim_now = 0
         self.inputs_received = 0  # applied
         self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
@@ -229,7 +252,7 @@ class SuspSimNode(Node):
         return self.get_clock().now().nanoseconds
 
     def _record(self, topic: str, msgtype: str, t_ns: int, msg, latched: bool = False) -> None:
-        if self.recorder is not None:
+        if self.recorder is not None and not self.recorder.closed:
             self.recorder.write(topic, msgtype, t_ns, serialize_message(msg), latched=latched)
 
     # -- inputs ---------------------------------------------------------------------------------------
@@ -277,7 +300,12 @@ class SuspSimNode(Node):
                 if kind == 0:
                     self._sim_now = payload
                     if self.core.started:  # sim time starts with the first input (as lockstep)
+                        before = self.core.rejections_by_topic[("/clock", "clock_stale")] + \
+                            self.core.rejections_by_topic[("/clock", "time_jump")]
                         self.tick()
+                        if self.core.rejections_by_topic[("/clock", "clock_stale")] + \
+                                self.core.rejections_by_topic[("/clock", "time_jump")] != before:
+                            self.rejection_log(self.core.last_cause, self.core.last_rejection)
                 else:
                     self._apply_input(*payload)
 
@@ -293,11 +321,19 @@ class SuspSimNode(Node):
                 else:
                     self._publish_samples(self.core.advance_to(t, allow_restart=self.sim_time))
                     t = max(t, self.core.t_ns)
-            reason = apply(t)
+            try:
+                reason = apply(t)
+                cause = self.core.last_cause if reason else None
+            except Exception as exc:  # a bug must not take the node down; counted, logged, tested for
+                self.handler_errors += 1
+                reason = self.core.reject(topic, "handler_error", f"{topic}: internal error handling a "
+                                          f"message ({type(exc).__name__}: {exc}); message dropped")
+                cause = (topic, "handler_error")
             self.inputs_received += 1
             self._record(topic, msgtype, max(t, 0), msg, latched)
+            self._check_failure()
         if reason:
-            self.get_logger().warning(reason, throttle_duration_sec=1.0)
+            self.rejection_log(cause, reason)
 
     def _on_speed(self, msg: Float64, info) -> None:
         self._input("/vehicle/speed", M.FLOAT64, msg, lambda t: self.core.set_speed(t, msg.data), info)
@@ -307,13 +343,16 @@ class SuspSimNode(Node):
                     lambda t: self.core.set_steering(t, msg.data), info)
 
     def _on_profile(self, msg: Float64MultiArray, info) -> None:
-        dims = [(d.label, d.size) for d in msg.layout.dim]
+        dims = [(d.label, d.size, d.stride) for d in msg.layout.dim]
+        off = msg.layout.data_offset
         self._input("/road/profile", M.FLOAT64_ARRAY, msg,
-                    lambda t: self.core.set_road_profile(t, msg.data, dims), info, latched=True)
+                    lambda t: self.core.set_road_profile(t, msg.data, dims, off), info, latched=True)
 
     def _on_heights(self, msg: Float64MultiArray, info) -> None:
+        dims = [(d.label, d.size, d.stride) for d in msg.layout.dim]
+        off = msg.layout.data_offset
         self._input("/road/wheel_heights", M.FLOAT64_ARRAY, msg,
-                    lambda t: self.core.set_wheel_heights(t, msg.data), info)
+                    lambda t: self.core.set_wheel_heights(t, msg.data, dims, off), info)
 
     # -- stepping and publishing ----------------------------------------------------------------------
     def _publish_samples(self, samples) -> None:
@@ -349,10 +388,30 @@ class SuspSimNode(Node):
                 self._wall0 = time.monotonic()
                 return 0
             self._publish_samples(self.core.advance_to(t, allow_restart=self.sim_time))
+            self._check_failure()
             return self.published - n0
 
+    def _check_failure(self) -> None:
+        """After stepping: when the divergence guard has stopped the core, report it once (error log,
+        ERROR diagnostics right away, recording finalised); ``main`` then exits with code 1."""
+        if not self.core.diverged or self.failure:
+            return
+        self.failure = self.core.diverged
+        self.get_logger().error(f"{self.failure}; nothing more is published on /sim"
+                                + ("; exiting" if self.on_divergence == "exit" else ""))
+        self.publish_diagnostics()
+        if self.recorder is not None:
+            self.recorder.close()
+
     def _on_clock(self, msg: Clock, info) -> None:
-        self._push(info, 0, msg.clock.sec * 1_000_000_000 + msg.clock.nanosec)
+        sec, nsec = int(msg.clock.sec), int(msg.clock.nanosec)
+        if sec < 0 or not 0 <= nsec < 1_000_000_000 or (sec == 0 and nsec == 0):
+            with self.lock:
+                reason = self.core.reject("/clock", "clock_invalid", f"/clock: rejected invalid time "
+                                          f"sec={sec} nanosec={nsec} (need sec >= 0, 0 <= nanosec < 1e9, not 0)")
+            self.rejection_log(("/clock", "clock_invalid"), reason)
+            return
+        self._push(info, 0, sec * 1_000_000_000 + nsec)
 
     def _realtime_loop(self) -> None:
         """Wall-time stepping: wake at each tick (absolute deadline), step, publish, measure."""
@@ -414,8 +473,11 @@ class SuspSimNode(Node):
             core = self.core
             stale = core.stale_inputs(t) if core.started else []
             rej = dict(core.rejections)
+            by_topic = ",".join(f"{tp}:{c}={n}" for (tp, c), n in sorted(core.rejections_by_topic.items()))
             last_rej = core.last_rejection
             healthy = core.healthy
+            diverged = core.diverged
+            clamped, jumps = core.accel_clamped, core.time_jumps
             sim_s = core.total_sim_time_s
             restarts = core.restarts
             oil = core.oil.tolist()
@@ -432,7 +494,9 @@ class SuspSimNode(Node):
                   "message": ("stale: " + ", ".join(stale)) if stale else ("waiting for inputs" if not core.started else "fresh"),
                   "values": {"stale": ",".join(stale), "rejected_total": sum(rej.values()),
                              "queued_sim_events": len(self._events),
-                             **{f"rejected_{k}": v for k, v in rej.items()}, "last_rejection": last_rej}}
+                             **{f"rejected_{k}": v for k, v in rej.items()}, "rejected_by_topic": by_topic,
+                             "last_rejection": last_rej, "accel_clamped": clamped, "time_jumps": jumps,
+                             "handler_errors": self.handler_errors}}
         timing = {"level": 1 if tm["deadline_misses"] else 0, "name": f"{NODE_NAME}: timing",
                   "message": f"real-time factor {rtf:.3f}, {tm['deadline_misses']} deadline misses",
                   "values": {"real_time_factor": f"{rtf:.6f}", "sim_time_s": f"{sim_s:.6f}",
@@ -440,8 +504,9 @@ class SuspSimNode(Node):
                              "mode": "sim_time" if self.sim_time else "wall_time",
                              **{k: (f"{v:.6f}" if isinstance(v, float) else v) for k, v in tm.items()}}}
         model = {"level": 0 if healthy else 2, "name": f"{NODE_NAME}: model",
-                 "message": "numerically healthy" if healthy else "numerically unhealthy: stepping stopped",
-                 "values": {"healthy": healthy, "vehicle": self._vehicle, "friction_variant": self._variant,
+                 "message": "numerically healthy" if healthy else (diverged or "numerically unhealthy: stepping stopped"),
+                 "values": {"healthy": healthy, "diverged": diverged, "on_divergence": self.on_divergence,
+                            "vehicle": self._vehicle, "friction_variant": self._variant,
                             "damper_oil_level": ",".join(f"{x:g}" for x in oil),
                             "published_samples": self.published}}
         return [inputs, timing, model]
@@ -458,7 +523,9 @@ class SuspSimNode(Node):
                       for s in d["status"]]
         self.pub_diag.publish(msg)
         with self.lock:
-            self._record(DIAGNOSTICS, M.DIAGNOSTIC_ARRAY, max(t, 0), msg)
+            if self.recorder is not None and not self.recorder.closed:
+                self._record(DIAGNOSTICS, M.DIAGNOSTIC_ARRAY, max(t, 0), msg)
+                self.recorder.flush_if_due()  # idle periods (sim time paused) still reach the disk
 
     # -- shutdown -------------------------------------------------------------------------------------
     def close(self) -> None:
@@ -487,7 +554,14 @@ def main(args: list[str] | None = None) -> int:
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         gc.freeze()  # start-up objects out of the collector's way: shorter pauses in real time
-        executor.spin()
+        while rclpy.ok() and not (node.failure and node.on_divergence == "exit"):
+            executor.spin_once(timeout_sec=0.1)
+        if node.failure:
+            end = time.monotonic() + 0.5  # let the ERROR diagnostic reach its subscribers
+            while rclpy.ok() and time.monotonic() < end:
+                executor.spin_once(timeout_sec=0.05)
+            print(f"{NODE_NAME}: stopped: {node.failure}", file=sys.stderr)
+            return 1
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except SuspInputError as exc:

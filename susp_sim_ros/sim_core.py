@@ -7,25 +7,100 @@ the caller only has to call :meth:`SimCore.advance_to` with the message time bef
 
 Tick ``k`` (k >= 1) is at ``t_start + k * period``; the sample of a tick is the model output after the
 last whole step at or before it. Inputs are zero-order held between messages; the longitudinal
-acceleration is derived from successive speed messages and held as well.
+acceleration is derived from successive speed messages (limited to +-``MAX_ACCEL``) and held as well.
+
+Reliability rules (each counted per cause in :attr:`SimCore.rejections` and reported on ``/diagnostics``):
+
+- a rejected input (non-finite, out of range, mis-shaped layout, non-increasing profile) is never
+  integrated: the previous value is held;
+- time going back by at most ``STALE_CLOCK_NS`` (a stale or reordered ``/clock``) is ignored; further
+  back (a looped replay) restarts the simulation from rest; a jump forward by more than
+  ``max_time_jump_s`` is not stepped through (that would take as long as the gap): the simulation
+  continues from the new time with its state held over the gap;
+- divergence guard: after every publish tick the output vector must be finite and inside
+  :data:`OUTPUT_ENVELOPE` (far beyond anything physical); otherwise the core stops for good
+  (:attr:`SimCore.diverged` says why and when) and returns no further samples, so nothing non-finite or
+  absurd is ever published or recorded.
 """
 from __future__ import annotations
 
 import math
+import time
 from collections import Counter
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Hashable, Sequence
 
 import numpy as np
 
 from .errors import SuspInputError
 from .io import messages as M
+from .io.drive import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT
+from .model.layout import OUTPUT_LABELS
 from .model.road import RoadProfile
 from .model.vehicle import Model, Stepper, check_oil
 
-MAX_STEERING = 4.0 * math.pi  # rad, steering-wheel angle beyond which an input is absurd
-MAX_SPEED = 100.0             # m/s
-MAX_WHEEL_HEIGHT = 1.0        # m
+MAX_ACCEL = 20.0              # m/s^2 (2 g): longitudinal acceleration derived from speed messages is limited to this
+MAX_PATH = 1.0e7              # m, |s| of a road profile sample
+MAX_PROFILE_SAMPLES = 2_000_000
+STALE_CLOCK_NS = 10_000_000   # time going back by at most this (jitter, a reordered /clock) is a stale reading, not a restart
+
+
+def _envelope() -> np.ndarray:
+    """Per output, the magnitude beyond which the state is numerical garbage (inf: finiteness only)."""
+    lim = np.full(len(OUTPUT_LABELS), np.inf)
+    for k, name in enumerate(OUTPUT_LABELS):
+        if name.endswith("_RATE"):
+            lim[k] = 50.0          # rad/s
+        elif name.endswith("_SF"):
+            lim[k] = 1000.0        # m/s^2 (100 g)
+        elif name in ("ROLL", "PITCH"):
+            lim[k] = 1.0           # rad (the small-angle model means nothing beyond)
+        elif name in ("VEL_X", "VEL_Y"):
+            lim[k] = 200.0         # m/s
+        elif name == "HEAVE" or name.startswith("Z_ROAD"):
+            lim[k] = 10.0          # m
+        elif name.startswith("DEFL_VEL"):
+            lim[k] = 100.0         # m/s
+        elif name.startswith("DEFL"):
+            lim[k] = 1.0           # m
+        elif name.startswith("F_"):
+            lim[k] = 1.0e7         # N
+    return lim
+
+
+#: Divergence guard: |output| must stay within these (and finite); see the module docstring.
+OUTPUT_ENVELOPE = _envelope()
+
+
+class DivergenceError(RuntimeError):
+    """The simulation left the physical envelope (non-finite or absurd state) and was stopped."""
+
+
+class RateLimitedLog:
+    """Log each cause (any hashable key) the first time at once, then at most once per ``interval_s``
+    with the number of occurrences not logged in between: a flood of bad messages gives one line per
+    cause, not one per message. ``counts`` holds every occurrence, ``emitted`` the lines logged."""
+
+    def __init__(self, emit: Callable[[str], None], interval_s: float = 10.0,
+                 clock: Callable[[], float] = time.monotonic):
+        self._emit, self.interval_s, self._clock = emit, float(interval_s), clock
+        self._last: dict[Hashable, float] = {}
+        self._suppressed: Counter = Counter()
+        self.counts: Counter = Counter()
+        self.emitted: Counter = Counter()
+
+    def __call__(self, key: Hashable, message: str) -> bool:
+        self.counts[key] += 1
+        now = self._clock()
+        last = self._last.get(key)
+        if last is not None and now - last < self.interval_s:
+            self._suppressed[key] += 1
+            return False
+        n = self._suppressed.pop(key, 0)
+        self._last[key] = now
+        self.emitted[key] += 1
+        self._emit(message + (f" ({n} more like this since the last report)" if n else ""))
+        return True
 
 #: Topic names of the interface (the node may be remapped; the core does not care).
 SIM_IMU, SIM_ODOM, SIM_SUSPENSION, DIAGNOSTICS = "/sim/imu/data", "/sim/odom", "/sim/suspension", "/diagnostics"
@@ -55,7 +130,10 @@ class SimCore:
     """
 
     def __init__(self, model: Model, *, step_s: float = 0.001, publish_rate_hz: float = 100.0,
-                 oil: Sequence[float] = (1.0, 1.0, 1.0, 1.0), input_timeout_s: float = 0.5):
+                 oil: Sequence[float] = (1.0, 1.0, 1.0, 1.0), input_timeout_s: float = 0.5,
+                 max_time_jump_s: float = 10.0):
+        if not (math.isfinite(max_time_jump_s) and max_time_jump_s > 0):
+            raise SuspInputError(f"max_time_jump_s: expected a time > 0 s, got {max_time_jump_s}")
         if not (math.isfinite(publish_rate_hz) and 0 < publish_rate_hz <= 1000.0):
             raise SuspInputError(f"publish_rate_hz: expected a rate in (0, 1000] Hz, got {publish_rate_hz}")
         if not (math.isfinite(input_timeout_s) and input_timeout_s > 0):
@@ -75,8 +153,15 @@ class SimCore:
         self.road: RoadProfile | None = None
         self._last_speed_t: int | None = None
         self.last_input_ns: dict[str, int] = {}
+        self.max_jump_ns = int(round(max_time_jump_s * 1e9))
         self.rejections: Counter[str] = Counter()
+        self.rejections_by_topic: Counter[tuple[str, str]] = Counter()
         self.last_rejection = ""
+        self.last_cause: tuple[str, str] | None = None  # (topic, cause) of the last rejection
+        self.accel_clamped = 0
+        self.time_jumps = 0
+        self.diverged = ""  # why the divergence guard stopped the core ("" while healthy)
+        self.diverged_at_ns: int | None = None
         self.t_start_ns: int | None = None
         self.t_ns: int | None = None
         self.next_tick_ns = 0
@@ -92,7 +177,7 @@ class SimCore:
 
     @property
     def healthy(self) -> bool:
-        return self.stepper.healthy
+        return self.stepper.healthy and not self.diverged
 
     @property
     def oil(self) -> np.ndarray:
@@ -134,10 +219,16 @@ class SimCore:
         self.model = model
 
     # -- inputs ---------------------------------------------------------------------------------------
-    def _reject(self, cause: str, reason: str) -> str:
+    def reject(self, topic: str, cause: str, reason: str) -> str:
+        """Count a rejected message of ``topic`` under ``cause``; returns ``reason`` (for the caller's log)."""
         self.rejections[cause] += 1
+        self.rejections_by_topic[(topic, cause)] += 1
         self.last_rejection = reason
+        self.last_cause = (topic, cause)
         return reason
+
+    def _reject(self, cause: str, reason: str) -> str:
+        return self.reject(reason.split(":", 1)[0], cause, reason)
 
     def set_speed(self, t_ns: int, v: float) -> str | None:
         v = float(v)
@@ -149,7 +240,11 @@ class SimCore:
             return self._reject("speed_range", f"/vehicle/speed: rejected absurd speed {v} m/s (> {MAX_SPEED})")
         t_ns = int(t_ns)
         if self._last_speed_t is not None and t_ns > self._last_speed_t:
-            self.accel = (v - self.speed) / ((t_ns - self._last_speed_t) * 1e-9)
+            a = (v - self.speed) / ((t_ns - self._last_speed_t) * 1e-9)
+            if abs(a) > MAX_ACCEL:  # a glitch (or a jump after a restart), not a car
+                self.accel_clamped += 1
+                a = math.copysign(MAX_ACCEL, a)
+            self.accel = a
         self._last_speed_t = t_ns
         self.speed = v
         self.last_input_ns["/vehicle/speed"] = t_ns
@@ -166,17 +261,34 @@ class SimCore:
         self.last_input_ns["/vehicle/steering_wheel_angle"] = int(t_ns)
         return None
 
-    def set_road_profile(self, t_ns: int, data: Sequence[float], dims: Sequence[tuple[str, int]]) -> str | None:
-        """``/road/profile`` from its data and layout dims ``[(label, size), ...]`` (interface layout)."""
+    def set_road_profile(self, t_ns: int, data: Sequence[float], dims: Sequence[tuple],
+                         data_offset: int = 0) -> str | None:
+        """``/road/profile`` from its data and layout dims ``[(label, size[, stride]), ...]`` (interface
+        layout; a stride of 0 means "not given"); ``data_offset`` as in ``MultiArrayLayout``."""
         try:
-            arr = np.asarray(data, dtype=float)
             if len(dims) != 2 or int(dims[0][1]) != 3:
-                raise SuspInputError(f"expected layout dims [channel 3, sample N], got {list(dims)}")
+                raise SuspInputError(f"expected layout dims [channel 3, sample N], got {[tuple(d) for d in dims]}")
+            if str(dims[0][0]) == "sample" and str(dims[1][0]) == "channel":
+                raise SuspInputError("layout dims are swapped (sample before channel); the interface "
+                                     "layout is [channel 3, sample N]")
             n = int(dims[1][1])
-            if n < 2:
-                raise SuspInputError(f"need at least 2 samples, got {n}")
+            if n < 2 or n > MAX_PROFILE_SAMPLES:
+                raise SuspInputError(f"need 2 to {MAX_PROFILE_SAMPLES} samples, got {n}")
+            strides = [int(d[2]) if len(d) > 2 else 0 for d in dims]
+            if (strides[0] and strides[0] != 3 * n) or (strides[1] and strides[1] != n):
+                raise SuspInputError(f"layout strides {strides} do not fit [channel 3, sample {n}] "
+                                     f"(want [{3 * n}, {n}])")
+            off = int(data_offset)
+            if off < 0 or len(data) != off + 3 * n:
+                raise SuspInputError(f"expected 3*{n} = {3 * n} values after data_offset {off}, got "
+                                     f"{len(data) - off}")
+            arr = np.asarray(data, dtype=float)[off:]
             road = RoadProfile.from_flat_array(arr, n)
-        except (SuspInputError, ValueError, TypeError) as exc:
+            if np.abs(road.s).max() > MAX_PATH:
+                raise SuspInputError(f"path coordinate beyond +-{MAX_PATH:g} m")
+            if max(np.abs(road.zl).max(), np.abs(road.zr).max()) > MAX_WHEEL_HEIGHT:
+                raise SuspInputError(f"elevation beyond +-{MAX_WHEEL_HEIGHT:g} m")
+        except (SuspInputError, ValueError, TypeError, OverflowError, IndexError) as exc:
             return self._reject("road_profile", f"/road/profile: rejected: {exc}")
         self.road = road
         if self.wheel_heights is None:
@@ -184,9 +296,17 @@ class SimCore:
         self.last_input_ns["/road/profile"] = int(t_ns)
         return None
 
-    def set_wheel_heights(self, t_ns: int, z: Sequence[float]) -> str | None:
-        arr = np.asarray(z, dtype=float)
-        if arr.shape != (4,):
+    def set_wheel_heights(self, t_ns: int, z: Sequence[float], dims: Sequence[tuple] = (),
+                          data_offset: int = 0) -> str | None:
+        """``/road/wheel_heights``: data [FL, FR, RL, RR] (after ``data_offset``); layout dims, if given,
+        must describe 4 values."""
+        sizes = [int(d[1]) for d in dims]
+        if sizes and int(np.prod(sizes, dtype=np.int64)) != 4:
+            return self._reject("wheel_heights", f"/road/wheel_heights: rejected: layout dims {sizes} do not "
+                                                 f"describe 4 values [FL, FR, RL, RR]")
+        off = int(data_offset)
+        arr = np.asarray(z, dtype=float)[max(off, 0):]
+        if off < 0 or arr.shape != (4,):
             return self._reject("wheel_heights", f"/road/wheel_heights: rejected: expected 4 values "
                                                  f"[FL, FR, RL, RR], got {arr.size}")
         if not np.all(np.isfinite(arr)):
@@ -215,42 +335,79 @@ class SimCore:
         return out
 
     # -- stepping -------------------------------------------------------------------------------------
-    def _step_until(self, t_ns: int) -> None:
+    def _step_until(self, t_ns: int) -> bool:
+        """Step to ``t_ns``; False (and :attr:`diverged` set) if the state left the envelope."""
         target = (t_ns - self.t_start_ns) // self.step_ns
         n = target - self.steps_done
         if n > 0:
-            self.stepper.advance(int(n), self.speed, self.steering, self.accel, self.wheel_heights)
+            y = self.stepper.advance(int(n), self.speed, self.steering, self.accel, self.wheel_heights)
             self.steps_done = target
             self.total_steps += int(n)
+            if not self.stepper.healthy or not bool(np.all(np.abs(y) <= OUTPUT_ENVELOPE)):
+                self._diverge(t_ns, y)
+                return False
+        return True
+
+    def _diverge(self, t_ns: int, y: np.ndarray) -> None:
+        bad = [f"{OUTPUT_LABELS[k]}={y[k]:.6g}" for k in np.nonzero(~(np.abs(y) <= OUTPUT_ENVELOPE))[0][:6]]
+        self.diverged = (f"simulation diverged at t = {t_ns * 1e-9:.3f} s (sim time {self.sim_time_s:.3f} s): "
+                         + (", ".join(bad) if bad else "non-finite state")
+                         + f"; inputs speed {self.speed:g} m/s, steering {self.steering:g} rad, "
+                           f"accel {self.accel:g} m/s^2; stepping stopped")
+        self.diverged_at_ns = int(t_ns)
 
     def advance_to(self, t_ns: int, *, allow_restart: bool = True) -> list[Sample]:
         """Step to ROS time ``t_ns`` with the held inputs; the samples of the publish ticks passed.
 
-        The first call only fixes the time origin. Time going backwards restarts the core from rest at
-        ``t_ns`` (a looped replay) when ``allow_restart``, else it is a no-op (wall time: a callback that
-        read the clock just before another one stepped further; a clock adjustment).
+        The first call only fixes the time origin. Time going backwards by more than
+        ``STALE_CLOCK_NS`` restarts the core from rest at ``t_ns`` (a looped replay) when
+        ``allow_restart``; a smaller step back is a stale reading and ignored (counted as a ``/clock``
+        rejection when ``allow_restart``); without ``allow_restart`` any step back is a no-op (wall time:
+        a callback that read the clock just before another one stepped further; a clock adjustment). A
+        jump forward by more than ``max_time_jump_s`` is not stepped through (module docstring). After a
+        divergence nothing is stepped or returned any more.
         """
         t_ns = int(t_ns)
+        if self.diverged:
+            return []
         if self.t_start_ns is None:
             self.start(t_ns)
             return []
         if t_ns < self.t_ns:
             if not allow_restart:
                 return []
+            if self.t_ns - t_ns <= STALE_CLOCK_NS:
+                self.reject("/clock", "clock_stale", f"/clock: ignored a stale time {t_ns * 1e-9:.9f} s "
+                            f"({(self.t_ns - t_ns) * 1e-6:.3f} ms behind the simulation)")
+                return []
             self.reset()
             self.start(t_ns)
             self.restarts += 1
             return []
+        if t_ns - self.t_ns > self.max_jump_ns:
+            self.time_jumps += 1
+            self.reject("/clock", "time_jump", f"time jumped forward by {(t_ns - self.t_ns) * 1e-9:.3f} s "
+                        f"(> max_time_jump_s {self.max_jump_ns * 1e-9:g} s): not stepped through, the "
+                        f"simulation continues from {t_ns * 1e-9:.3f} s with its state held")
+            self.t_start_ns = t_ns - self.steps_done * self.step_ns
+            self.t_ns = t_ns
+            self.next_tick_ns = t_ns + self.period_ns
+            return []
         out = []
         while self.next_tick_ns <= t_ns:
-            self._step_until(self.next_tick_ns)
+            if not self._step_until(self.next_tick_ns):
+                self.samples_out += len(out)
+                return out
             out.append(Sample(self.next_tick_ns, self.stepper.y.copy()))
             self.next_tick_ns += self.period_ns
-        self._step_until(t_ns)
+        if not self._step_until(t_ns):
+            self.samples_out += len(out)
+            return out
         self.t_ns = t_ns
         self.samples_out += len(out)
         return out
 
 
 __all__ = ["SimCore", "Sample", "sample_messages", "SIM_IMU", "SIM_ODOM", "SIM_SUSPENSION", "DIAGNOSTICS",
-           "MAX_STEERING"]
+           "MAX_STEERING", "MAX_SPEED", "MAX_WHEEL_HEIGHT", "MAX_ACCEL", "OUTPUT_ENVELOPE", "RateLimitedLog",
+           "DivergenceError", "STALE_CLOCK_NS"]

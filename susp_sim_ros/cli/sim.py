@@ -5,6 +5,10 @@ possible; ``--out`` writes the simulated MCAP the node would record (inputs, ``/
 ``test_drive`` metadata with ``source: simulated:<variant>``). A paper maneuver becomes a test drive with
 inputs at the integration step (so it equals the offline :func:`simulate` run), a recorded drive uses its
 recorded message times.
+
+Exit 1 (after writing ``--out`` up to the last good sample) when the divergence guard stopped the run
+(non-finite or absurd state, e.g. from an absurd vehicle parameter file); the message says when and
+which outputs left the envelope.
 """
 from __future__ import annotations
 
@@ -15,6 +19,7 @@ from ..io.drive import parse_oil, read_drive
 from ..lockstep import maneuver_drive, run_lockstep
 from ..model import Model
 from ..model.maneuvers import STATES, paper_maneuver, vehicle_state
+from ..sim_core import DivergenceError
 
 
 def add_arguments(p) -> None:
@@ -43,6 +48,8 @@ def run(args) -> dict:
         oil, state = vehicle_state(args.state), args.state
     else:
         oil, state = None, ("from_metadata" if args.drive else "intact")
+    if not (np.isfinite(args.step) and 0 < args.step <= 0.01):
+        raise SuspInputError(f"--step: expected a step in (0, 0.01] s, got {args.step}")
     if args.drive:
         drive = read_drive(args.drive)
         name = drive.metadata.get("maneuver", "") or str(args.drive)
@@ -53,6 +60,10 @@ def run(args) -> dict:
         name = man.name
     res = run_lockstep(drive, vehicle=args.config, variant=args.variant, oil=oil, step_s=args.step,
                        publish_rate_hz=args.rate, out_path=args.out, overwrite=args.overwrite, model=model)
+    if res.diverged:
+        raise DivergenceError(f"{name}: {res.diverged} (variant {model.variant.name}, vehicle "
+                              f"{model.vehicle.name}, step {args.step} s"
+                              + (f"; {args.out} holds the samples before" if args.out else "") + ")")
     deg = np.degrees
     peak = lambda label: float(np.max(np.abs(res[label]))) if len(res.t_ns) else 0.0
     out = {
