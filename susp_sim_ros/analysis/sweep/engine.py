@@ -17,6 +17,7 @@ import threading
 from typing import Mapping, Sequence
 
 import numpy as np
+from numba import njit
 
 from ...model.layout import OUTPUT_LABELS, P_INDEX
 from .spec import MANEUVER_KEYS, SIGNAL, vehicle_key
@@ -54,14 +55,10 @@ def model_of(data: Mapping, run: Mapping):
 
 
 def oil_of(run: Mapping) -> tuple[float, float, float, float]:
-    oil = {w: 1.0 for w in ("FL", "FR", "RL", "RR")}
-    if "oil_front" in run:
-        oil["FL"] = oil["FR"] = run["oil_front"]
-    if "oil_rear" in run:
-        oil["RL"] = oil["RR"] = run["oil_rear"]
-    for w in oil:
-        oil[w] = run.get(f"oil_{w}", oil[w])
-    return tuple(float(oil[w]) for w in ("FL", "FR", "RL", "RR"))
+    """Oil levels FL, FR, RL, RR: ``oil_<wheel>``, else ``oil_front``/``oil_rear``, else 1."""
+    front, rear = run.get("oil_front", 1.0), run.get("oil_rear", 1.0)
+    return (float(run.get("oil_FL", front)), float(run.get("oil_FR", front)),
+            float(run.get("oil_RL", rear)), float(run.get("oil_RR", rear)))
 
 
 def params_of(data: Mapping, run: Mapping, base: np.ndarray | None = None) -> np.ndarray:
@@ -118,49 +115,83 @@ def selection(data: Mapping) -> list[str]:
 
 
 # ---- the batched simulation ---------------------------------------------------------------------------
-def simulate_runs(data: Mapping, runs: Sequence[Mapping], threads: int | None = None):
-    """Simulate ``runs``; batched per (variant, step count). Returns per run ``(Y[n, n_sel], done,
-    t_after, dt_out)`` in the order given."""
+def _prepare(data: Mapping, runs: Sequence[Mapping]):
+    """Per run: model, base parameter vector, maneuver, wheelbase and oil levels; the cache is consulted
+    once per distinct (vehicle, variant) and maneuver in ``runs``, not once per run."""
+    models: dict = {}
+    mans: dict = {}
+    prepared = []
+    for run in runs:
+        mk = (run.get("vehicle_class"), run.get("vehicle"), run.get("variant", "full"))
+        mb = models.get(mk)
+        if mb is None:
+            mb = models[mk] = model_of(data, run)
+        wb = mb[0].vehicle.wheelbase
+        gk = (tuple(run.get(k) for k in MANEUVER_KEYS), wb)
+        man = mans.get(gk)
+        if man is None:
+            man = mans[gk] = maneuver_of(data, run, wb)
+        prepared.append((mb[0], mb[1], man, wb, oil_of(run)))
+    return prepared
+
+
+def simulate_groups(data: Mapping, runs: Sequence[Mapping], threads: int | None = None) -> list:
+    """Simulate ``runs`` batched per (kernel, step count). Returns one entry per batch: ``(idx, Y, ok,
+    t_after, dt_out)`` with ``idx`` the positions in ``runs``, ``Y[B, n, n_sel]`` the recorded outputs
+    (the signal first), ``ok[B]`` (ran to the end and finite) and ``t_after[B]`` (end of the excitation)."""
     from ...model import simulate_batch
     if threads is not None:
         import numba
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
     dt, decim = data["step_s"], data["decim"]
     labels = selection(data)
-    prepared = []
-    for run in runs:
-        model, base = model_of(data, run)
-        wb = model.vehicle.wheelbase
-        man = maneuver_of(data, run, wb)
-        prepared.append((model, man, wb, params_of(data, run, base)))
+    prepared = _prepare(data, runs)
+    n_steps: dict = {}
     groups: dict = {}
-    for i, (model, man, _, _) in enumerate(prepared):
-        groups.setdefault((id(model.kernel), model.layout.n_p, man.n_steps(dt)), []).append(i)
-    out: list = [None] * len(runs)
-    for idx in groups.values():
+    for i, (model, _, man, _, _) in enumerate(prepared):
+        n = n_steps.get(id(man))
+        if n is None:
+            n = n_steps[id(man)] = man.n_steps(dt)
+        groups.setdefault((id(model.kernel), model.layout.n_p, n), []).append(i)
+    k_oil = P_INDEX["OIL"]
+    out = []
+    for (_, _, n_req), idx in groups.items():
         model = prepared[idx[0]][0]
         u_keys, U, r_keys, roads = {}, [], {}, []
-        u_row, road_row = [], []
+        row_of: dict = {}                       # (id(maneuver), wheelbase) -> (input row, road row, t_after)
+        u_row, road_row, t_after = [], [], []
         for i in idx:
-            man = prepared[i][1]
-            uk = (man.speed, man.steer_amplitude, man.steer_frequency, man.steer_start, man.steer_periods)
-            if uk not in u_keys:
-                u_keys[uk] = len(U)
-                U.append(inputs_of(man, dt))
-            rk = (man.road.s.tobytes(), man.road.zl.tobytes(), man.road.zr.tobytes())
-            if rk not in r_keys:
-                r_keys[rk] = len(roads)
-                roads.append(man.road)
-            u_row.append(u_keys[uk])
-            road_row.append(r_keys[rk])
-        P = np.stack([prepared[i][3] for i in idx])
+            man, wb = prepared[i][2], prepared[i][3]
+            rows = row_of.get((id(man), wb))
+            if rows is None:
+                uk = (man.speed, man.steer_amplitude, man.steer_frequency, man.steer_start, man.steer_periods)
+                if uk not in u_keys:
+                    u_keys[uk] = len(U)
+                    U.append(inputs_of(man, dt))
+                rk = (man.road.s.tobytes(), man.road.zl.tobytes(), man.road.zr.tobytes())
+                if rk not in r_keys:
+                    r_keys[rk] = len(roads)
+                    roads.append(man.road)
+                rows = row_of[(id(man), wb)] = (u_keys[uk], r_keys[rk], after_time(man, wb))
+            u_row.append(rows[0])
+            road_row.append(rows[1])
+            t_after.append(rows[2])
+        P = np.stack([prepared[i][1] for i in idx])
+        P[:, k_oil:k_oil + 4] = [prepared[i][4] for i in idx]
         _, Y, done = simulate_batch(model, P, np.stack(U), dt=dt, roads=roads, u_row=np.array(u_row),
                                     road_row=np.array(road_row), decim=decim, outputs=labels)
-        n_req = prepared[idx[0]][1].n_steps(dt)
+        ok = (done == n_req) & np.isfinite(Y).all(axis=(1, 2))
+        out.append((idx, Y, ok, np.array(t_after), dt * decim))
+    return out
+
+
+def simulate_runs(data: Mapping, runs: Sequence[Mapping], threads: int | None = None):
+    """Simulate ``runs``; batched per (variant, step count). Returns per run ``(Y[n, n_sel], done,
+    t_after, dt_out)`` in the order given."""
+    out: list = [None] * len(runs)
+    for idx, Y, ok, t_after, dt_out in simulate_groups(data, runs, threads):
         for j, i in enumerate(idx):
-            _, man, wb, _ = prepared[i]
-            out[i] = (Y[j], int(done[j]) == n_req and bool(np.all(np.isfinite(Y[j]))),
-                      after_time(man, wb), dt * decim)
+            out[i] = (Y[j], bool(ok[j]), float(t_after[j]), dt_out)
     return out
 
 
@@ -190,25 +221,62 @@ def decay_ratio(q: np.ndarray, k0: int) -> float:
 
 
 def decay_ratios(q: np.ndarray, k0: np.ndarray) -> np.ndarray:
-    """:func:`decay_ratio` of every row of ``q[B, n]`` (from ``k0[B]`` on), vectorised; equal values."""
-    B, n = q.shape
-    idx = np.arange(n)[None, :]
-    x = np.where(idx >= k0[:, None], q, 0.0)
-    a = np.abs(x)
-    rows = np.arange(B)
-    k = np.argmax(a, axis=1)
-    peak = a[rows, k]
-    s = np.sign(x)
-    opp = (s * s[rows, k][:, None] < 0) & (idx > k[:, None])
-    has = opp.any(axis=1)
-    j0 = np.argmax(opp, axis=1)
-    opp2 = (s * s[rows, j0][:, None] < 0) & (idx > j0[:, None])
-    j1 = np.where(opp2.any(axis=1), np.argmax(opp2, axis=1), n)
-    second = np.where((idx >= j0[:, None]) & (idx < j1[:, None]), a, 0.0).max(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        r = np.where(has, second / np.where(peak > 0, peak, 1.0), 0.0)
-    r[(peak == 0) | (k0 >= n)] = math.nan
-    return r
+    """:func:`decay_ratio` of every row of ``q[B, n]`` (from ``k0[B]`` on); equal values (one compiled pass
+    per row: comparisons, a maximum and one division, so no rounding can differ from the scalar form)."""
+    q = np.ascontiguousarray(q, dtype=np.float64)
+    B = q.shape[0]
+    out, peak, last = np.empty(B), np.empty(B), np.empty(B, np.int64)
+    _row_metrics(q[:, :, None], 0, 1.0, np.ascontiguousarray(k0, dtype=np.int64), math.inf, peak, out, last)
+    return out
+
+
+_DEG = 180.0 / math.pi     # np.degrees(x) is x * (180 / pi): the same product, bit for bit
+
+
+@njit(cache=True, nogil=True)
+def _row_metrics(Y, col, scale, k0, threshold, peak_out, decay_out, last_out):
+    """Per row ``b`` of the signal ``q = Y[b, :, col] * scale``: the largest |q| (``peak_out``), the decay
+    ratio from sample ``k0[b]`` on (:func:`decay_ratio`) and the last sample with |q| > ``threshold``
+    (-1: none). Only comparisons, maxima and one division: the values numpy's forms give, exactly."""
+    B, n = Y.shape[0], Y.shape[1]
+    for b in range(B):
+        top, last = 0.0, -1
+        for i in range(n):
+            v = abs(Y[b, i, col] * scale)
+            if v > top:
+                top = v
+            if v > threshold:
+                last = i
+        peak_out[b], last_out[b] = top, last
+        decay_out[b] = math.nan
+        if k0[b] >= n:
+            continue
+        k, peak = -1, 0.0
+        for i in range(max(k0[b], 0), n):          # the first largest |q| (as argmax)
+            v = abs(Y[b, i, col] * scale)
+            if v > peak:
+                k, peak = i, v
+        if peak == 0.0:
+            continue
+        pos = Y[b, k, col] * scale > 0.0
+        j0 = -1
+        for i in range(k + 1, n):                   # the next half-wave starts at the first sign change
+            v = Y[b, i, col] * scale
+            if (v < 0.0) if pos else (v > 0.0):
+                j0 = i
+                break
+        if j0 < 0:
+            decay_out[b] = 0.0
+            continue
+        pos = Y[b, j0, col] * scale > 0.0
+        second = abs(Y[b, j0, col] * scale)
+        for i in range(j0 + 1, n):                  # ... and ends at the one after
+            v = Y[b, i, col] * scale
+            if (v < 0.0) if pos else (v > 0.0):
+                break
+            if abs(v) > second:
+                second = abs(v)
+        decay_out[b] = second / peak
 
 
 def damping_ratio(r: float) -> float:
@@ -229,73 +297,95 @@ def batch_metrics(data: Mapping, Y: np.ndarray, t_after: np.ndarray, dt_out: flo
     Every value is a function of its own run only (row-wise reductions)."""
     labels = selection(data)
     B, n = Y.shape[0], Y.shape[1]
-    q = np.degrees(Y[:, :, 0])
-    a = np.abs(q)
+    Y = np.ascontiguousarray(Y, dtype=np.float64)
     # sample k is at (k+1) dt_out: first sample at or after t_after
     k0 = np.clip(np.ceil(t_after / dt_out - 1e-9).astype(np.int64) - 1, 0, n)
     rows = np.arange(B)
+    # one compiled pass over the signal (deg/s) for the peak, the decay ratio and the ring-out; sums (RMS)
+    # stay numpy reductions (their rounding is numpy's pairwise summation)
+    peak, decay, last = np.empty(B), np.empty(B), np.empty(B, np.int64)
+    _row_metrics(Y, 0, _DEG, k0, float(data["ring_out_threshold_deg_s"]), peak, decay, last)
     cols = []
-    decay = None
     for m in data["outputs"]:
         if isinstance(m, dict):
             kind, lab = next(iter(m.items()))
             x = Y[:, :, labels.index(lab)]
             cols.append(np.abs(x).max(axis=1) if kind == "peak" else np.sqrt(np.mean(x * x, axis=1)))
         elif m == "peak_rate":
-            cols.append(a.max(axis=1))
-        elif m in ("decay_ratio", "damping_ratio"):
-            if decay is None:
-                decay = decay_ratios(q, k0)
-            cols.append(decay if m == "decay_ratio" else np.array([damping_ratio(x) for x in decay]))
+            cols.append(peak)
+        elif m == "decay_ratio":
+            cols.append(decay)
+        elif m == "damping_ratio":
+            cols.append(np.array([damping_ratio(x) for x in decay.tolist()]))
         elif m == "ring_out":
-            above = a > data["ring_out_threshold_deg_s"]
-            last = n - 1 - np.argmax(above[:, ::-1], axis=1)
-            cols.append(np.where(above.any(axis=1), np.maximum((last + 1) * dt_out - t_after, 0.0), 0.0))
+            cols.append(np.where(last >= 0, np.maximum((last + 1) * dt_out - t_after, 0.0), 0.0))
         elif m == "rms_after":
             w = max(int(round(data["after_window_s"] / dt_out)), 1)
             idx = k0[:, None] + np.arange(w)[None, :]
             valid = idx < n
-            x = np.where(valid, q[rows[:, None], np.minimum(idx, n - 1)], 0.0)
+            x = np.where(valid, np.degrees(Y[rows[:, None], np.minimum(idx, n - 1), 0]), 0.0)
             cnt = valid.sum(axis=1)
             cols.append(np.where(cnt > 0, np.sqrt((x * x).sum(axis=1) / np.maximum(cnt, 1)), math.nan))
         elif m == "rmse_ref" and ref is None:
             cols.append(np.full(B, math.nan))
         elif m == "rmse_ref":
             k = min(n, ref.shape[1])
-            d = q[:, :k] - ref[:, :k]
-            cols.append(np.sqrt(np.mean(d * d, axis=1)))
+            d = np.degrees(Y[:, :k, 0])
+            np.subtract(d, ref[:, :k], out=d)
+            cols.append(np.sqrt(np.mean(np.multiply(d, d, out=d), axis=1)))
     return np.stack(cols, axis=1) if cols else np.zeros((B, 0))
 
 
 # ---- tasks ---------------------------------------------------------------------------------------------
 def reference_task(data: Mapping, refs: Sequence[Mapping], threads: int | None = None) -> list:
     """Signal traces [deg/s] of reference runs."""
-    res = simulate_runs(data, refs, threads)
-    for (Y, ok, _, _), r in zip(res, refs):
-        if not ok:
-            raise RuntimeError(f"reference run {json.dumps(dict(r))} became non-finite")
-    return [np.degrees(Y[:, 0]) for Y, _, _, _ in res]
+    out: list = [None] * len(refs)
+    for idx, Y, ok, _, _ in simulate_groups(data, refs, threads):
+        for j, i in enumerate(idx):
+            if not ok[j]:
+                raise RuntimeError(f"reference run {json.dumps(dict(refs[i]))} became non-finite")
+            out[i] = np.degrees(Y[j, :, 0])
+    return out
 
 
-def chunk_task(data: Mapping, runs: Sequence[Mapping], refs: Sequence[np.ndarray | None],
-               threads: int | None = None) -> dict:
+def chunk_task(data: Mapping, runs: Sequence[Mapping], refs: Sequence[np.ndarray | None] | None = None,
+               threads: int | None = None, ref_rows: Sequence[int] | None = None) -> dict:
     """One chunk: batched simulation and metrics. Returns ``{"ok": [...], "metrics": [[...], ...]}``
-    (metrics NaN for a run that became non-finite)."""
-    res = simulate_runs(data, runs, threads)
+    (metrics NaN for a run that became non-finite).
+
+    ``refs``: the reference trace of each run (or ``None``); or, with ``ref_rows``, the distinct traces
+    and ``ref_rows[i]`` the one of run ``i`` (-1: none), so a chunk ships each trace once."""
+    if refs is None:
+        refs = [None] * len(runs)
+    elif ref_rows is not None:
+        refs = [refs[r] if r >= 0 else None for r in ref_rows]
+    groups = simulate_groups(data, runs, threads)
     n_out = len(data["outputs"])
     metrics = np.full((len(runs), n_out), math.nan)
-    ok = [bool(r[1]) for r in res]
-    by_len: dict = {}
-    for i, (Y, good, _, _) in enumerate(res):
-        if good:
-            by_len.setdefault(Y.shape, []).append(i)
-    for idx in by_len.values():
-        Y = np.stack([res[i][0] for i in idx])
-        ta = np.array([res[i][2] for i in idx])
-        have = data.get("reference") is not None and all(refs[i] is not None for i in idx)
+    ok = np.zeros(len(runs), bool)
+    for idx, _, good, _, _ in groups:
+        ok[idx] = good
+    want_ref = data.get("reference") is not None
+    if len(groups) == 1 and ok.all():           # the usual chunk: one batch, every run finished
+        idx, Y, _, ta, dt_out = groups[0]
+        have = want_ref and all(refs[i] is not None for i in idx)
         ref = np.stack([refs[i] for i in idx]) if have else None
-        metrics[idx] = batch_metrics(data, Y, ta, res[idx[0]][3], ref)
-    return {"ok": ok, "metrics": metrics.tolist()}
+        metrics[idx] = batch_metrics(data, Y, ta, dt_out, ref)
+        return {"ok": ok.tolist(), "metrics": metrics.tolist()}
+    # runs of equal output length together (as one batch: the metrics are row-wise)
+    rows: dict = {}
+    for g, (idx, Y, good, _, _) in enumerate(groups):
+        for j, i in enumerate(idx):
+            if good[j]:
+                rows.setdefault(Y.shape[1:], []).append((i, g, j))
+    for sel in rows.values():
+        idx = [i for i, _, _ in sel]
+        Y = np.stack([groups[g][1][j] for _, g, j in sel])
+        ta = np.array([groups[g][3][j] for _, g, j in sel])
+        have = want_ref and all(refs[i] is not None for i in idx)
+        ref = np.stack([refs[i] for i in idx]) if have else None
+        metrics[idx] = batch_metrics(data, Y, ta, groups[sel[0][1]][4], ref)
+    return {"ok": ok.tolist(), "metrics": metrics.tolist()}
 
 
 def drive_task(path: str, variants: Sequence[str], diagnose: bool = False) -> dict:

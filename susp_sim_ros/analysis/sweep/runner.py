@@ -8,6 +8,7 @@ scheduler.
 """
 from __future__ import annotations
 
+import csv
 import logging
 import math
 import os
@@ -205,22 +206,30 @@ def _references(spec: StudySpec, store: ResultStore, executor, todo) -> list | N
 
 def _finish_sweep(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
     header = store.columns()
-    rows = store.rows()
-    fmt = spec.data["results"]
-    table = store.write_table(header, rows if fmt == "csv" else rows, "results", fmt)
-    cols = {h: [_parse(r[i]) for r in rows] for i, h in enumerate(header)}
+    lines = store.lines()
+    metric_cols = spec.metric_columns()
+    # "ok" and the metrics are the last fields of a row (numbers: never quoted)
+    tail = [ln.rsplit(",", len(metric_cols) + 1)[1:] for ln in lines]
+    rows = None
+    if spec.data["results"] == "csv":
+        table = store.write_lines(header, lines, "results")
+    else:
+        rows = list(csv.reader(lines))
+        table = store.write_table(header, rows, "results", spec.data["results"])
     plots = []
     if plot and spec.data.get("plot"):
         from .plot import plot_sweep
+        rows = rows if rows is not None else list(csv.reader(lines))
+        cols = {h: [_parse(r[i]) for r in rows] for i, h in enumerate(header)}
         plots.append(str(plot_sweep(spec, cols, store.out / f"{spec.name}.png")))
-    ok = sum(int(x) for x in cols["ok"])
+    good = [t[1:] for t in tail if t[0] == "1"]
     ranges = {}
-    for c in spec.metric_columns():
-        vals = [v for v, good in zip(cols[c], cols["ok"]) if good and isinstance(v, float) and math.isfinite(v)]
+    for j, c in enumerate(metric_cols):
+        vals = [v for v in (float(t[j]) for t in good) if math.isfinite(v)]
         if vals:
             ranges[c] = [min(vals), max(vals)]
-    return {"table": str(table), "columns": header, "plots": plots, "runs_ok": ok,
-            "runs_failed": len(rows) - ok, "metric_ranges": ranges}
+    return {"table": str(table), "columns": header, "plots": plots, "runs_ok": len(good),
+            "runs_failed": len(lines) - len(good), "metric_ranges": ranges}
 
 
 def _finish_drives(spec: StudySpec, store: ResultStore, plot: bool) -> dict:

@@ -40,6 +40,9 @@ def _fmt(v) -> str:
     return str(v)
 
 
+_PLAIN = (float, int, str)      # types the csv writer formats as _fmt does (bool and numpy types are not)
+
+
 def _atomic_write(path: Path, data: bytes, sync: bool = True) -> None:
     """Write to a temporary name, then rename: readers see the old file or the whole new one.
 
@@ -131,9 +134,12 @@ class ResultStore:
             buf = io.StringIO()
             w = csv.writer(buf, lineterminator="\n")
             w.writerow(self.columns())
-            for rid, ok, metrics in zip(chunk.runs, result["ok"], result["metrics"]):
-                run = self.spec.runs[rid]
-                w.writerow([rid, *(_fmt(run[k]) for k in self.spec.swept), _fmt(ok), *map(_fmt, metrics)])
+            # the csv writer turns a Python float into repr() and an int or str into str(): as _fmt does
+            metrics = np.asarray(result["metrics"], dtype=float).reshape(len(chunk.runs), -1).tolist()
+            runs, swept = self.spec.runs, self.spec.swept
+            w.writerows([rid, *[v if type(v) in _PLAIN else _fmt(v) for v in map(runs[rid].__getitem__, swept)],
+                         "1" if ok else "0", *m]
+                        for rid, ok, m in zip(chunk.runs, result["ok"], metrics))
             data = buf.getvalue().encode()
         else:
             data = json.dumps(result, default=_fmt).encode()
@@ -175,14 +181,33 @@ class ResultStore:
     # -- the final table ---------------------------------------------------------------------------------
     def rows(self) -> list[list[str]]:
         """All sweep rows (strings, as stored) ordered by run id."""
-        rows = []
+        return list(csv.reader(self.lines()))
+
+    def lines(self) -> list[str]:
+        """All sweep rows as stored (CSV lines without the line end), ordered by run id.
+
+        The chunk files are merged as text; a chunk with quoted fields is parsed and written again with
+        the same writer, which gives the same text (so the table is what parsing every row would give)."""
+        lines: list[str] = []
         for cid in sorted(self.done):
-            with open(self._chunk_path(cid), newline="") as f:
-                r = csv.reader(f)
-                next(r)
-                rows.extend(r)
-        rows.sort(key=lambda row: int(row[0]))
-        return rows
+            body = self._chunk_path(cid).read_text().split("\n", 1)[1]
+            if '"' not in body and "\r" not in body:
+                lines.extend(body.split("\n")[:-1])
+                continue
+            for row in csv.reader(io.StringIO(body, newline="")):      # a field may hold a line end
+                buf = io.StringIO()
+                csv.writer(buf, lineterminator="\n").writerow(row)
+                lines.append(buf.getvalue()[:-1])
+        lines.sort(key=lambda ln: int(ln[:ln.index(",")]))
+        return lines
+
+    def write_lines(self, header: Sequence[str], lines: Sequence[str], name: str) -> Path:
+        """The CSV table from rows already formatted (:meth:`lines`)."""
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerow(header)
+        path = self.out / f"{name}.csv"
+        _atomic_write(path, (buf.getvalue() + "".join(ln + "\n" for ln in lines)).encode())
+        return path
 
     def drive_rows(self) -> list[dict]:
         return [json.loads(self._chunk_path(cid).read_text()) for cid in sorted(self.done)]
