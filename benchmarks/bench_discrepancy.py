@@ -50,9 +50,9 @@ from susp_sim_ros.analysis.discrepancy.report import verdict  # noqa: E402
 from susp_sim_ros.analysis.synthetic import HiddenPhysics, generate_drive  # noqa: E402
 from susp_sim_ros.io.drive import ImuSeries  # noqa: E402
 
-NO_HIDDEN = HiddenPhysics(amplitude_extra=(0.0, 0.0), sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0,
+NO_HIDDEN = HiddenPhysics.reference().replace(amplitude_extra=(0.0, 0.0), sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0,
                           wheel_rate=(1.0, 1.0))
-AMPLITUDE = HiddenPhysics(sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0, wheel_rate=(1.0, 1.0))
+AMPLITUDE = HiddenPhysics.reference().replace(sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0, wheel_rate=(1.0, 1.0))
 TRUE_PARAMS = {"damper_friction_velocity": {"plateau": 2.2, "speed": 0.02},
                "friction_lateral_force": {"ky_front": 0.25, "ky_rear": 0.30},
                "friction_longitudinal_force": {"kx_front": 0.15, "kx_rear": 0.0},

@@ -21,9 +21,9 @@ INTERFACE_TERMS = {"damper_friction_velocity", "damper_friction_oil", "friction_
                    "friction_lateral_force", "friction_amplitude", "damper_gas_preload", "extra_viscous_damping",
                    "mass_error", "inertia_error", "spring_rate_error", "tyre_relaxation_error", "sensor_bias",
                    "time_offset"}
-NO_HIDDEN = HiddenPhysics(amplitude_extra=(0.0, 0.0), sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0,
+NO_HIDDEN = HiddenPhysics.reference().replace(amplitude_extra=(0.0, 0.0), sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0,
                           wheel_rate=(1.0, 1.0))
-AMPLITUDE = HiddenPhysics(sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0, wheel_rate=(1.0, 1.0))
+AMPLITUDE = HiddenPhysics.reference().replace(sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0, wheel_rate=(1.0, 1.0))
 
 
 def _case(man, state, hidden, seed=7):

@@ -74,7 +74,7 @@ def test_drive_is_reproducible_from_the_seed_and_labelled_synthetic():
     # before the bump (first 0.3 s: the car stands still on a flat road)
     quiet = (a.imu.t_ns - a.imu.t_ns[0]) < 0.3e9
     noise = np.degrees(np.std(np.diff(a.imu.gyro[quiet, 0]))) / np.sqrt(2)
-    np.testing.assert_allclose(noise, syn.ImuSpec().gyro_noise_deg_s, rtol=0.35)
+    np.testing.assert_allclose(noise, syn.ImuSpec.reference().gyro_noise_deg_s, rtol=0.35)
 
 
 def test_bundled_drives_are_what_the_generator_makes():
@@ -105,7 +105,7 @@ def test_amplitude_friction_is_clearly_present_in_the_rear_empty_bump_drive():
 
     with_term = rmse_full(syn.generate_drive("bump_crossing", "rear_empty"))
     without = rmse_full(syn.generate_drive("bump_crossing", "rear_empty",
-                                           hidden=syn.HiddenPhysics(amplitude_extra=(0.0, 0.0))))
+                                           hidden=syn.HiddenPhysics.reference().replace(amplitude_extra=(0.0, 0.0))))
     # what the hidden term alone adds (errors add in quadrature) is far above the gyro noise
-    assert np.sqrt(with_term ** 2 - without ** 2) > 4 * syn.ImuSpec().gyro_noise_deg_s
+    assert np.sqrt(with_term ** 2 - without ** 2) > 4 * syn.ImuSpec.reference().gyro_noise_deg_s
     assert without < 0.6 * with_term

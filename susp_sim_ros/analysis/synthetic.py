@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import sys
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -119,15 +120,23 @@ class HiddenPhysics:
     +0.5 % front / -0.5 % rear wheel rate).
     """
 
-    amplitude_extra: tuple[float, float] = (15.0, 24.0)
-    amplitude_onset: float = 0.005
-    amplitude_scale: float = 0.008
-    amplitude_band: float = 0.001
-    sprung_mass: float = 1.01
-    pitch_inertia: float = 1.01
-    roll_inertia: float = 0.985
-    wheel_rate: tuple[float, float] = (1.005, 0.995)
-    step_s: float = 0.00025
+    amplitude_extra: tuple[float, float]
+    amplitude_onset: float
+    amplitude_scale: float
+    amplitude_band: float
+    sprung_mass: float
+    pitch_inertia: float
+    roll_inertia: float
+    wheel_rate: tuple[float, float]
+    step_s: float
+
+    @classmethod
+    def reference(cls) -> "HiddenPhysics":
+        """The hidden physics of the bundled drives (``config/synthetic.yaml``)."""
+        return cls(**_section("hidden_physics"))
+
+    def replace(self, **changes) -> "HiddenPhysics":
+        return dataclasses.replace(self, **changes)
 
     def describe(self) -> str:
         fe, re_ = self.amplitude_extra
@@ -150,24 +159,49 @@ class ImuSpec:
     bias; first-order sensor bandwidth 60 Hz; timestamps with 50 us standard-deviation jitter.
     """
 
-    rate_hz: float = 200.0
-    jitter_s: float = 50e-6
-    gyro_noise_deg_s: float = 0.04
-    gyro_bias_deg_s: float = 0.02
-    accel_noise_m_s2: float = 0.02
-    accel_bias_m_s2: float = 0.03
-    bandwidth_hz: float = 60.0
-    steering_resolution_deg: float = 0.1
-    input_rate_hz: float = 100.0
+    rate_hz: float
+    jitter_s: float
+    gyro_noise_deg_s: float
+    gyro_bias_deg_s: float
+    accel_noise_m_s2: float
+    accel_bias_m_s2: float
+    bandwidth_hz: float
+    steering_resolution_deg: float
+    input_rate_hz: float
+
+
+    @classmethod
+    def reference(cls) -> "ImuSpec":
+        """The measurement IMU of the bundled drives (``config/synthetic.yaml``)."""
+        return cls(**_section("imu"))
+
+    def replace(self, **changes) -> "ImuSpec":
+        return dataclasses.replace(self, **changes)
+
+
+def _section(name: str) -> dict:
+    """Values of one section of ``config/synthetic.yaml``; {front, rear} pairs become tuples."""
+    import yaml
+
+    from ..errors import ConfigError
+    from ..model.params import config_dir
+    path = config_dir() / "synthetic.yaml"
+    try:
+        sec = yaml.safe_load(path.read_text())[name]
+        return {k: (v["value"]["front"], v["value"]["rear"]) if isinstance(v["value"], dict) else v["value"]
+                for k, v in sec.items()}
+    except (OSError, KeyError, TypeError, yaml.YAMLError) as exc:
+        raise ConfigError(f"{path}: cannot read section {name!r}: {exc}") from None
 
 
 MANEUVER_LABEL = {"bump_crossing": "bump_crossing_8kmh", "sine_steer": "sine_steer_50kmh"}
 DEFAULT_SEED = 20240501
 
 
-def synthetic_vehicle(hidden: HiddenPhysics = HiddenPhysics(), base: str = "passat_b8_like"):
+def synthetic_vehicle(hidden: HiddenPhysics | None = None, base: str = "passat_b8_like"):
     """The synthetic car's parameter set: the reference set with ``hidden``'s parameter differences."""
     from ..model.params import load_vehicle
+    hidden = hidden or HiddenPhysics.reference()
     vp = load_vehicle(base)
     return vp.replace(name=f"{vp.name}+synthetic", sprung_mass=vp.sprung_mass * hidden.sprung_mass,
                       pitch_inertia=vp.pitch_inertia * hidden.pitch_inertia,
@@ -176,17 +210,19 @@ def synthetic_vehicle(hidden: HiddenPhysics = HiddenPhysics(), base: str = "pass
                                   vp.wheel_rate[1] * hidden.wheel_rate[1]))
 
 
-def synthetic_variant(hidden: HiddenPhysics = HiddenPhysics()):
+def synthetic_variant(hidden: HiddenPhysics | None = None):
     """The paper's ``full`` friction model plus the amplitude-dependent friction term."""
     import dataclasses
 
-    from ..model.params import TermSetting, load_variant
+    from ..model.params import TermSetting, load_variant, load_vehicle
+    hidden = hidden or HiddenPhysics.reference()
     full = load_variant("full")
+    sigma = load_vehicle("passat_b8_like").dahl_stiffness
     fe, re_ = hidden.amplitude_extra
     setting = TermSetting(FRICTION_AMPLITUDE, {
         "extra_level": (fe, fe, re_, re_), "onset": (hidden.amplitude_onset,) * 4,
         "scale": (hidden.amplitude_scale,) * 4, "band": (hidden.amplitude_band,) * 4,
-        "sigma": (1e5,) * 4})
+        "sigma": (sigma,) * 4})
     return dataclasses.replace(full, name="full+friction_amplitude", terms=full.terms + (setting,))
 
 
@@ -203,7 +239,7 @@ def _lowpass(y: np.ndarray, dt: float, f_c: float) -> np.ndarray:
 
 
 def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
-                   hidden: HiddenPhysics = HiddenPhysics(), imu: ImuSpec = ImuSpec(),
+                   hidden: HiddenPhysics | None = None, imu: ImuSpec | None = None,
                    t0_ns: int = 1_000_000_000):
     """One synthetic test drive (:class:`~susp_sim_ros.io.drive.TestDrive`) of a paper maneuver
     (``bump_crossing``/``sine_steer``) in a vehicle state (``intact``/``front_empty``/``rear_empty``).
@@ -214,6 +250,8 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
     from ..io.drive import ImuSeries, Series, TestDrive
     from ..model import Model, simulate
     from ..model.maneuvers import MANEUVERS, STATES, paper_maneuver, vehicle_state
+    hidden = hidden or HiddenPhysics.reference()
+    imu = imu or ImuSpec.reference()
 
     if maneuver not in MANEUVERS or state not in STATES:
         raise ValueError(f"maneuver must be one of {MANEUVERS} and state one of {STATES}, got "
@@ -285,7 +323,7 @@ def bundle_names() -> list[tuple[str, str, str]]:
 
 
 def generate_bundle(out_dir, *, seed: int = DEFAULT_SEED, overwrite: bool = False,
-                    hidden: HiddenPhysics = HiddenPhysics(), imu: ImuSpec = ImuSpec(),
+                    hidden: HiddenPhysics | None = None, imu: ImuSpec | None = None,
                     progress: bool = False) -> list[dict]:
     """Write the six bundled drives (2 maneuvers x 3 states) into ``out_dir``; returns one summary per
     file. Refuses to overwrite existing files unless ``overwrite``."""
@@ -293,6 +331,7 @@ def generate_bundle(out_dir, *, seed: int = DEFAULT_SEED, overwrite: bool = Fals
 
     from ..errors import RecordingExistsError
     from ..io.drive import write_drive
+    imu = imu or ImuSpec.reference()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     names = bundle_names()

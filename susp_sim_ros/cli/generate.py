@@ -27,5 +27,5 @@ def run(args) -> dict:
              f"{total / 1e6:.2f} MB:"]
     lines += [f"  {f['file']}  {f['bytes'] / 1e3:.0f} kB, {f['duration_s']:.2f} s" for f in files]
     return {"out": str(args.out), "seed": args.seed, "source": synthetic.SOURCE,
-            "hidden_physics": synthetic.HiddenPhysics().describe(), "files": files, "total_bytes": total,
+            "hidden_physics": synthetic.HiddenPhysics.reference().describe(), "files": files, "total_bytes": total,
             "summary": "\n".join(lines)}
