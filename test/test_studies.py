@@ -372,3 +372,21 @@ def test_cli_batch_diagnosis_over_a_folder(tmp_path, capsys):
     rep = DiscrepancyFinder(variant="full", heldout=False).fit([str(folder / "bump_crossing_rear_empty.mcap")]).report()
     assert row["diag_verdict"] == rep["verdict"]
     assert float(row["diag_rmse_after_deg_s"]) == rep["heldout_rmse_after_deg_s"]
+
+
+def test_table_with_quoted_fields_equals_a_parsed_and_rewritten_one(tmp_path):
+    """The final table is merged from the chunk files as text; a field the CSV writer had to quote (a
+    vehicle class named with a comma and a quote) comes out as parsing and writing every row would give."""
+    data = {**json.loads(json.dumps(TINY)), "chunk_size": 2, "plot": None,
+            "parameters": {"vehicle_class": ['heavy, "B"', "stock"], "oil_rear": [0.0, 1.0]},
+            "vehicle_classes": {"stock": {}, 'heavy, "B"': {"sprung_mass": 1900.0}}}
+    spec = study_from_dict(data, "quoted.yaml")
+    res = run_study(spec, tmp_path / "out", InProcessExecutor(), progress=False, plot=False)
+    text = (tmp_path / "out" / "results.csv").read_text()
+    rows = list(csv.reader(text.splitlines()))
+    assert rows[0][:2] == ["run_id", "vehicle_class"] and [r[1] for r in rows[1:]] == ['heavy, "B"'] * 2 + ["stock"] * 2
+    import io
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerows(rows)
+    assert buf.getvalue() == text and res["runs_ok"] == 4
+    assert [int(r[0]) for r in rows[1:]] == [0, 1, 2, 3]

@@ -349,16 +349,17 @@ def reference_task(data: Mapping, refs: Sequence[Mapping], threads: int | None =
 
 
 def chunk_task(data: Mapping, runs: Sequence[Mapping], refs: Sequence[np.ndarray | None] | None = None,
-               threads: int | None = None, ref_rows: Sequence[int] | None = None) -> dict:
+               ref_rows: Sequence[int] | None = None, threads: int | None = None) -> dict:
     """One chunk: batched simulation and metrics. Returns ``{"ok": [...], "metrics": [[...], ...]}``
     (metrics NaN for a run that became non-finite).
 
-    ``refs``: the reference trace of each run (or ``None``); or, with ``ref_rows``, the distinct traces
-    and ``ref_rows[i]`` the one of run ``i`` (-1: none), so a chunk ships each trace once."""
+    ``refs``: the reference trace of each run (or ``None``); or, with ``ref_rows``, outputs of
+    :func:`reference_task` (lists of traces) and ``ref_rows[i] = (list, trace)`` the one of run ``i``, so
+    a chunk ships each trace once."""
     if refs is None:
         refs = [None] * len(runs)
     elif ref_rows is not None:
-        refs = [refs[r] if r >= 0 else None for r in ref_rows]
+        refs = [refs[t][k] for t, k in ref_rows]
     groups = simulate_groups(data, runs, threads)
     n_out = len(data["outputs"])
     metrics = np.full((len(runs), n_out), math.nan)

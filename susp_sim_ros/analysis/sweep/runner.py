@@ -40,6 +40,16 @@ class InProcessExecutor:
     def _kw(self, fn) -> dict:
         return {"threads": self.threads} if fn is not engine.drive_task else {}
 
+    def submit(self, fn: Callable, *args):
+        """A task whose result later tasks take as an argument (here: computed now)."""
+        return fn(*args, **self._kw(fn))
+
+    def ready(self, handles) -> bool:
+        return True
+
+    def result(self, handle):
+        return handle
+
     def close(self) -> None:
         pass
 
@@ -59,6 +69,17 @@ class DaskExecutor:
         self.workers = len(info.get("workers", {})) or 1
         self.slots = max(1, sum(w.get("nthreads", 1) for w in info.get("workers", {}).values())) * in_flight
 
+    def submit(self, fn: Callable, *args):
+        """A task whose result later tasks take as an argument: a future, resolved on the worker (no
+        round trip through this process before the dependent tasks can start)."""
+        return self.client.submit(fn, *args, pure=False, **({"threads": self.threads} if fn is not engine.drive_task else {}))
+
+    def ready(self, handles) -> bool:
+        return all(f.done() for f in handles)
+
+    def result(self, handle):
+        return handle.result()
+
     def map(self, fn: Callable, tasks: Sequence[tuple]) -> Iterator[tuple]:
         from distributed import as_completed
         kw = {"threads": self.threads} if fn is not engine.drive_task else {}
@@ -71,11 +92,11 @@ class DaskExecutor:
             pending[f] = key
             return f
 
-        ac = as_completed([submit() for _ in range(min(self.slots, len(todo)))])
+        # with_results: each result is fetched as its task finishes (no extra round trip per chunk)
+        ac = as_completed([submit() for _ in range(min(self.slots, len(todo)))], with_results=True)
         try:
-            for f in ac:
+            for f, (result, elapsed) in ac:
                 key = pending.pop(f)
-                result, elapsed = f.result()
                 if todo:
                     ac.add(submit())
                 yield key, result, elapsed
@@ -139,21 +160,25 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     computed: list[int] = []
     t_compute, cpu_compute = time.perf_counter(), time.process_time()
     try:
+        refs = None
         if spec.kind == "sweep":
-            refs = _references(spec, store, executor, todo)    # run id -> reference trace, or None
-            tasks = [(c.id, (spec.data, [spec.runs[r] for r in c.runs],
-                             [refs[r] if refs else None for r in c.runs])) for c in todo]
+            refs = _references(spec, store, executor) if todo else None
+            tasks = [(c.id, (spec.data, [spec.runs[r] for r in c.runs], *_chunk_refs(refs, c.runs))) for c in todo]
             fn = engine.chunk_task
         else:
             tasks = [(c.id, (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
                      for c in todo]
             fn = engine.drive_task
         for cid, result, elapsed in executor.map(fn, tasks):
+            if refs is not None and refs.pending and executor.ready(refs.pending):
+                refs.save(store, executor)
             store.write_chunk(cid, result, elapsed)
             computed.append(cid)
             bar.update(len(spec.chunks[cid].runs))
             if on_chunk is not None:
                 on_chunk(cid)
+        if refs is not None and refs.pending:
+            refs.save(store, executor)
     finally:
         bar.close()
         store.finish_session(chunks_computed=len(computed),
@@ -179,29 +204,54 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     return result
 
 
-def _references(spec: StudySpec, store: ResultStore, executor, todo) -> list | None:
-    """Trace of each run's reference run (the distinct ones computed once, kept in the store for resumes)."""
+class _Refs:
+    """The study's distinct reference runs: ``tasks[t]`` is the output of reference task ``t`` (a list of
+    traces; a future on Dask) and ``where[r] = (t, k)`` the trace of run ``r``. The traces go into the store
+    (for resumes) as soon as their tasks are done; chunk tasks take the tasks' outputs as arguments."""
+
+    def __init__(self, tasks, where, names, size):
+        self.tasks, self.where, self.names, self.size = tasks, where, names, size
+        self.pending = list(tasks)
+
+    def save(self, store: ResultStore, executor) -> None:
+        outs = [executor.result(t) for t in self.pending]
+        traces = [tr for out in outs for tr in out]
+        store.save_references(dict(zip(self.names, traces)))
+        self.pending = []
+
+
+def _references(spec: StudySpec, store: ResultStore, executor) -> _Refs | None:
+    """The distinct reference runs of the study: from the store (a resumed study), or submitted as tasks
+    of ``chunk_size`` runs that the chunk tasks depend on; ``None`` without a reference."""
     if spec.data.get("reference") is None:
         return None
-    distinct, of_run = {}, []
+    distinct: dict = {}
+    of_run = []
     for r in spec.runs:
         ref = reference_run(spec.data, r)
-        k = tuple(sorted(ref.items()))
-        distinct.setdefault(k, ref)
-        of_run.append(k)
-    keys = list(distinct)
-    names = [run_key(distinct[k]) for k in keys]
+        of_run.append(distinct.setdefault(tuple(sorted(ref.items())), (len(distinct), ref))[0])
+    refs = [ref for _, ref in distinct.values()]
+    names = [run_key(ref) for ref in refs]
+    size = spec.data["chunk_size"]
+    where = [divmod(d, size) for d in of_run]
     stored = store.load_references(names)
-    if stored is None:
-        size = spec.data["chunk_size"]
-        tasks = [(j, (spec.data, [distinct[k] for k in keys[j:j + size]])) for j in range(0, len(keys), size)]
-        stored = {}
-        for j, res, _ in executor.map(engine.reference_task, tasks):
-            stored.update(zip(names[j:j + size], res))
-        stored = {n: stored[n] for n in names}
-        store.save_references(stored)
-    trace = {k: stored[n] for k, n in zip(keys, names)}
-    return [trace[k] for k in of_run]
+    if stored is not None:
+        traces = [stored[n] for n in names]
+        out = _Refs([traces[j:j + size] for j in range(0, len(traces), size)], where, names, size)
+        out.pending = []
+        return out
+    tasks = [executor.submit(engine.reference_task, spec.data, refs[j:j + size]) for j in range(0, len(refs), size)]
+    return _Refs(tasks, where, names, size)
+
+
+def _chunk_refs(refs: _Refs | None, run_ids) -> tuple:
+    """``(refs, ref_rows)`` arguments of a chunk task: the outputs of the reference tasks the chunk needs
+    (each once: less to ship to a worker) and ``(task, trace)`` of each run in them."""
+    if refs is None:
+        return None, None
+    rows = [refs.where[r] for r in run_ids]
+    local = {t: i for i, t in enumerate(dict.fromkeys(t for t, _ in rows))}
+    return [refs.tasks[t] for t in local], [(local[t], k) for t, k in rows]
 
 
 def _finish_sweep(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
