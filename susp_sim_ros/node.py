@@ -190,10 +190,13 @@ class SuspSimNode(Node):
                             oil=oil, input_timeout_s=float(p["input_timeout_s"]),
                             max_time_jump_s=float(p["max_time_jump_s"]))
         self.lock = threading.RLock()
-        self.failure = ""  # set when the divergence guard stopped the simulation
+        self.failure = ""  # the last divergence (set when the divergence guard stopped the simulation)
+        self.divergences = 0
+        self._failure_key: tuple | None = None
         self.handler_errors = 0
         self.rejection_log = RateLimitedLog(lambda text: self.get_logger().warning(text),
                                             REJECTION_LOG_INTERVAL_S)
+        self.core.on_reject = self.rejection_log  # every rejection, once per cause and interval
         self._sim_now = 0
         self.inputs_received = 0  # applied
         self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
@@ -215,6 +218,7 @@ class SuspSimNode(Node):
         self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
         self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
         if self.sim_time:
+            self._guard_time_source()
             # Our own /clock subscription, reliable and deep (rclpy's time source keeps only the latest
             # /clock, so a busy node would see the clock skip ahead of queued inputs): every clock value
             # is seen, in order, and each one steps the core exactly that far.
@@ -245,6 +249,20 @@ class SuspSimNode(Node):
             + (f", recording to {p['record_path']}" if self.recorder else ""))
 
     # -- time -----------------------------------------------------------------------------------------
+    def _guard_time_source(self) -> None:
+        """rclpy's own ``/clock`` subscription (``use_sim_time``) raises on a negative time, which would
+        take the executor and the node down: let it see only valid times (our own ``/clock`` subscription
+        rejects and counts the others)."""
+        sub = getattr(getattr(self, "_time_source", None), "_clock_sub", None)
+        if sub is None:
+            return
+        inner = sub.callback
+
+        def guarded(msg: Clock) -> None:
+            if msg.clock.sec >= 0 and msg.clock.nanosec < 1_000_000_000:
+                inner(msg)
+        sub.callback = guarded
+
     def now_ns(self) -> int:
         """ROS time [ns]: the last /clock value seen in sim time, else the wall clock."""
         if self.sim_time:
@@ -300,12 +318,9 @@ class SuspSimNode(Node):
                 if kind == 0:
                     self._sim_now = payload
                     if self.core.started:  # sim time starts with the first input (as lockstep)
-                        before = self.core.rejections_by_topic[("/clock", "clock_stale")] + \
-                            self.core.rejections_by_topic[("/clock", "time_jump")]
                         self.tick()
-                        if self.core.rejections_by_topic[("/clock", "clock_stale")] + \
-                                self.core.rejections_by_topic[("/clock", "time_jump")] != before:
-                            self.rejection_log(self.core.last_cause, self.core.last_rejection)
+                        if self.core.t_ns is not None:  # a stale /clock leaves the time where it was
+                            self._sim_now = self.core.t_ns
                 else:
                     self._apply_input(*payload)
 
@@ -322,18 +337,14 @@ class SuspSimNode(Node):
                     self._publish_samples(self.core.advance_to(t, allow_restart=self.sim_time))
                     t = max(t, self.core.t_ns)
             try:
-                reason = apply(t)
-                cause = self.core.last_cause if reason else None
+                apply(t)  # a rejection is counted and logged (rate-limited) by the core's on_reject
             except Exception as exc:  # a bug must not take the node down; counted, logged, tested for
                 self.handler_errors += 1
-                reason = self.core.reject(topic, "handler_error", f"{topic}: internal error handling a "
-                                          f"message ({type(exc).__name__}: {exc}); message dropped")
-                cause = (topic, "handler_error")
+                self.core.reject(topic, "handler_error", f"{topic}: internal error handling a message "
+                                 f"({type(exc).__name__}: {exc}); message dropped")
             self.inputs_received += 1
             self._record(topic, msgtype, max(t, 0), msg, latched)
             self._check_failure()
-        if reason:
-            self.rejection_log(cause, reason)
 
     def _on_speed(self, msg: Float64, info) -> None:
         self._input("/vehicle/speed", M.FLOAT64, msg, lambda t: self.core.set_speed(t, msg.data), info)
@@ -393,23 +404,26 @@ class SuspSimNode(Node):
 
     def _check_failure(self) -> None:
         """After stepping: when the divergence guard has stopped the core, report it once (error log,
-        ERROR diagnostics right away, recording finalised); ``main`` then exits with code 1."""
-        if not self.core.diverged or self.failure:
+        ERROR diagnostics right away, recording finalised); ``main`` then exits with code 1 (with
+        ``on_divergence: hold`` the node stays up; a restart from rest, a looped replay, clears it)."""
+        key = (self.core.restarts, self.core.diverged_at_ns)
+        if not self.core.diverged or key == self._failure_key:
             return
+        self._failure_key = key
+        self.divergences += 1
         self.failure = self.core.diverged
         self.get_logger().error(f"{self.failure}; nothing more is published on /sim"
                                 + ("; exiting" if self.on_divergence == "exit" else ""))
         self.publish_diagnostics()
-        if self.recorder is not None:
+        if self.recorder is not None and self.on_divergence == "exit":
             self.recorder.close()
 
     def _on_clock(self, msg: Clock, info) -> None:
         sec, nsec = int(msg.clock.sec), int(msg.clock.nanosec)
         if sec < 0 or not 0 <= nsec < 1_000_000_000 or (sec == 0 and nsec == 0):
             with self.lock:
-                reason = self.core.reject("/clock", "clock_invalid", f"/clock: rejected invalid time "
-                                          f"sec={sec} nanosec={nsec} (need sec >= 0, 0 <= nanosec < 1e9, not 0)")
-            self.rejection_log(("/clock", "clock_invalid"), reason)
+                self.core.reject("/clock", "clock_invalid", f"/clock: rejected invalid time sec={sec} "
+                                 f"nanosec={nsec} (need sec >= 0, 0 <= nanosec < 1e9, not 0)")
             return
         self._push(info, 0, sec * 1_000_000_000 + nsec)
 
@@ -439,7 +453,7 @@ class SuspSimNode(Node):
     # -- parameters -----------------------------------------------------------------------------------
     def _on_params(self, params) -> SetParametersResult:
         new = {p.name: p.value for p in params}
-        fixed = [n for n in new if n in DEFAULTS and n not in RUNTIME
+        fixed = [n for n in new if (n in DEFAULTS or n == "use_sim_time") and n not in RUNTIME
                  and new[n] != self.get_parameter(n).value]
         if fixed:
             return SetParametersResult(successful=False,
@@ -506,6 +520,7 @@ class SuspSimNode(Node):
         model = {"level": 0 if healthy else 2, "name": f"{NODE_NAME}: model",
                  "message": "numerically healthy" if healthy else (diverged or "numerically unhealthy: stepping stopped"),
                  "values": {"healthy": healthy, "diverged": diverged, "on_divergence": self.on_divergence,
+                            "divergences": self.divergences, "last_divergence": self.failure,
                             "vehicle": self._vehicle, "friction_variant": self._variant,
                             "damper_oil_level": ",".join(f"{x:g}" for x in oil),
                             "published_samples": self.published}}

@@ -20,7 +20,8 @@ Reliability rules (each counted per cause in :attr:`SimCore.rejections` and repo
 - divergence guard: after every publish tick the output vector must be finite and inside
   :data:`OUTPUT_ENVELOPE` (far beyond anything physical); otherwise the core stops for good
   (:attr:`SimCore.diverged` says why and when) and returns no further samples, so nothing non-finite or
-  absurd is ever published or recorded.
+  absurd is ever published or recorded; only a restart from rest (:meth:`SimCore.reset`, a looped
+  replay) clears it.
 """
 from __future__ import annotations
 
@@ -158,6 +159,7 @@ class SimCore:
         self.rejections_by_topic: Counter[tuple[str, str]] = Counter()
         self.last_rejection = ""
         self.last_cause: tuple[str, str] | None = None  # (topic, cause) of the last rejection
+        self.on_reject: Callable[[tuple[str, str], str], object] | None = None  # e.g. a RateLimitedLog
         self.accel_clamped = 0
         self.time_jumps = 0
         self.diverged = ""  # why the divergence guard stopped the core ("" while healthy)
@@ -200,13 +202,15 @@ class SimCore:
         self.steps_done = 0
 
     def reset(self) -> None:
-        """Back to rest (e.g. time jumped backwards when a replay loops); inputs are kept."""
+        """Back to rest (e.g. time jumped backwards when a replay loops); inputs are kept, a divergence
+        is cleared."""
         model, oil, road = self.model, self.stepper.oil, self.stepper.road
         self.stepper = Stepper(model, dt=self.step_ns * 1e-9, road=road, oil=oil)
         self.t_start_ns = self.t_ns = None
         self.steps_done = 0
         self._last_speed_t = None
         self.accel = 0.0
+        self.diverged, self.diverged_at_ns = "", None  # a fresh start from rest is healthy again
 
     # -- run-time parameter changes -------------------------------------------------------------------
     def set_oil(self, oil: Sequence[float]) -> None:
@@ -219,16 +223,21 @@ class SimCore:
         self.model = model
 
     # -- inputs ---------------------------------------------------------------------------------------
-    def reject(self, topic: str, cause: str, reason: str) -> str:
-        """Count a rejected message of ``topic`` under ``cause``; returns ``reason`` (for the caller's log)."""
+    def reject(self, topic: str, cause: str, reason: str, detail: str | None = None) -> str:
+        """Count a rejected message of ``topic`` under ``cause`` (:attr:`rejections`) and under
+        ``(topic, detail or cause)`` (:attr:`rejections_by_topic`, the key the node logs once per
+        interval) and pass it to :attr:`on_reject` (the node's rate-limited log); returns ``reason``."""
+        key = (topic, detail or cause)
         self.rejections[cause] += 1
-        self.rejections_by_topic[(topic, cause)] += 1
+        self.rejections_by_topic[key] += 1
         self.last_rejection = reason
-        self.last_cause = (topic, cause)
+        self.last_cause = key
+        if self.on_reject is not None:
+            self.on_reject(key, reason)
         return reason
 
-    def _reject(self, cause: str, reason: str) -> str:
-        return self.reject(reason.split(":", 1)[0], cause, reason)
+    def _reject(self, cause: str, reason: str, detail: str | None = None) -> str:
+        return self.reject(reason.split(":", 1)[0], cause, reason, detail)
 
     def set_speed(self, t_ns: int, v: float) -> str | None:
         v = float(v)
@@ -289,7 +298,11 @@ class SimCore:
             if max(np.abs(road.zl).max(), np.abs(road.zr).max()) > MAX_WHEEL_HEIGHT:
                 raise SuspInputError(f"elevation beyond +-{MAX_WHEEL_HEIGHT:g} m")
         except (SuspInputError, ValueError, TypeError, OverflowError, IndexError) as exc:
-            return self._reject("road_profile", f"/road/profile: rejected: {exc}")
+            text = str(exc)
+            detail = ("non_increasing" if "strictly increasing" in text else
+                      "non_finite" if "finite" in text else
+                      "range" if "beyond" in text else "layout")
+            return self._reject("road_profile", f"/road/profile: rejected: {exc}", detail)
         self.road = road
         if self.wheel_heights is None:
             self.stepper.set_road(road)
@@ -303,16 +316,17 @@ class SimCore:
         sizes = [int(d[1]) for d in dims]
         if sizes and int(np.prod(sizes, dtype=np.int64)) != 4:
             return self._reject("wheel_heights", f"/road/wheel_heights: rejected: layout dims {sizes} do not "
-                                                 f"describe 4 values [FL, FR, RL, RR]")
+                                                 f"describe 4 values [FL, FR, RL, RR]", "layout")
         off = int(data_offset)
         arr = np.asarray(z, dtype=float)[max(off, 0):]
         if off < 0 or arr.shape != (4,):
             return self._reject("wheel_heights", f"/road/wheel_heights: rejected: expected 4 values "
-                                                 f"[FL, FR, RL, RR], got {arr.size}")
+                                                 f"[FL, FR, RL, RR], got {arr.size}", "count")
         if not np.all(np.isfinite(arr)):
             return self._reject("non_finite", "/road/wheel_heights: rejected non-finite value")
         if np.any(np.abs(arr) > MAX_WHEEL_HEIGHT):
-            return self._reject("wheel_heights", f"/road/wheel_heights: rejected absurd heights {arr.tolist()} m")
+            return self._reject("wheel_heights", f"/road/wheel_heights: rejected absurd heights {arr.tolist()} m "
+                                                 f"(beyond +-{MAX_WHEEL_HEIGHT:g} m)", "range")
         if self.wheel_heights is None:
             self.stepper.set_road(None)  # per-wheel heights override the profile from now on
         self.wheel_heights = arr
