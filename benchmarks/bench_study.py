@@ -113,7 +113,9 @@ def breakdown(spec, tmp: Path, n: int = 7) -> dict:
     acc: dict = collections.defaultdict(float)
     saved = []
     for label, (owner, name) in parts.items():
-        orig = getattr(owner, name)
+        orig = getattr(owner, name, None)
+        if orig is None:            # (an older engine without this part)
+            continue
         saved.append((owner, name, orig))
 
         def wrapped(*a, _orig=orig, _label=label, **kw):

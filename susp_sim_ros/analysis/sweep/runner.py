@@ -92,8 +92,10 @@ class DaskExecutor:
             pending[f] = key
             return f
 
-        # with_results: each result is fetched as its task finishes (no extra round trip per chunk)
-        ac = as_completed([submit() for _ in range(min(self.slots, len(todo)))], with_results=True)
+        # with_results: each result is fetched as its task finishes (no extra round trip per chunk); on
+        # this client's loop (the default client's would hang when this process holds several clients)
+        ac = as_completed([submit() for _ in range(min(self.slots, len(todo)))], loop=self.client.loop,
+                          with_results=True)
         try:
             for f, (result, elapsed) in ac:
                 key = pending.pop(f)
