@@ -9,7 +9,10 @@ recorded QoS is transient-local (``/road/profile``) are published latched. By de
 restarts its simulation). A progress bar goes to stderr.
 
 Before anything is published the recording is read and checked: every message to be played must be a
-known ROS type and deserialise (a damaged file is a named error, exit 2, not garbage on the wire).
+known ROS type and deserialise (a damaged file is a named error, exit 2, not garbage on the wire). By
+default, topics of a type this ROS installation does not know are skipped with a warning (as ``ros2
+bag play`` does); asking for one with ``--topics`` is an error, and so is an interface topic
+(``/vehicle/speed``, ``/imu/data``, ...) recorded with another type or encoding.
 ``--dry-run`` stops after that check and prints what would be played (no ROS node is created).
 """
 from __future__ import annotations
@@ -22,6 +25,7 @@ import sys
 import time
 
 from ..errors import RecordingError, SuspInputError
+from ..io.drive import TOPIC_TYPES, check_topic
 from ..io.reader import read_recording
 
 OUTPUT_PREFIXES = ("/sim/", "/diagnostics", "/clock", "/rosout", "/parameter_events")
@@ -84,6 +88,7 @@ def plan(args):
         raise SuspInputError(f"--clock-period: expected a period > 0 s, got {args.clock_period}")
     rec = read_recording(args.recording)
     topics = rec.topics()
+    skipped: list[str] = []
     if args.topics:
         missing = [t for t in args.topics if t not in topics]
         if missing:
@@ -92,12 +97,22 @@ def plan(args):
         play = set(args.topics)
     else:
         play = {t for t in topics if not t.startswith(OUTPUT_PREFIXES)}
+        for t in sorted(play & set(TOPIC_TYPES)):  # the interface's topics must have their types
+            check_topic(rec, t)
+        for t in sorted(play):  # like ros2 bag play: topics of unknown type are skipped, with a warning
+            try:
+                _msg_class(topics[t] or "(no schema)", t)
+            except RecordingError as exc:
+                print(f"susp replay: warning: {args.recording}: skipping {exc}", file=sys.stderr)
+                play.discard(t)
+                skipped.append(t)
     msgs = sorted((m for m in rec.messages if m.topic in play), key=lambda m: m.log_time_ns)
     if not msgs:
         why = f" (file damaged: {rec.error})" if rec.truncated else ""
         raise RecordingError(f"{args.recording}: no messages to replay on "
                              f"{', '.join(sorted(play)) or 'any topic'}{why}")
     _check_messages(args.recording, rec, msgs, {t: topics[t] for t in play})
+    args.skipped_topics = skipped
     return rec, play, msgs
 
 
@@ -126,7 +141,8 @@ def run(args) -> dict:
     if args.dry_run:
         counts = {t: sum(1 for m in msgs if m.topic == t) for t in sorted(play)}
         return {"recording": str(args.recording), "dry_run": True, "messages": len(msgs),
-                "topics": sorted(play), "counts": counts, "duration_s": (t1 - t0) * 1e-9,
+                "topics": sorted(play), "skipped_topics": args.skipped_topics, "counts": counts,
+                "duration_s": (t1 - t0) * 1e-9,
                 "truncated": rec.truncated, "finalised": rec.finalised,
                 "summary": f"would replay {len(msgs)} messages on {len(play)} topics from {args.recording} "
                            f"({(t1 - t0) * 1e-9:.2f} s of recording"
@@ -199,7 +215,8 @@ def run(args) -> dict:
         rclpy.try_shutdown()
     wall = time.monotonic() - wall0
     return {"recording": str(args.recording), "messages": played, "loops": loops, "rate": args.rate,
-            "topics": sorted(play), "duration_s": (t1 - t0) * 1e-9, "wall_s": wall,
+            "topics": sorted(play), "skipped_topics": args.skipped_topics, "duration_s": (t1 - t0) * 1e-9,
+            "wall_s": wall,
             "interrupted": interrupted,
             "summary": f"replayed {played} messages on {len(play)} topics from {args.recording} "
                        f"({loops} play(s), rate {args.rate:g}x, {wall:.1f} s)"}
