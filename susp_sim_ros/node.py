@@ -28,6 +28,7 @@ finalises the recording and (``on_divergence: exit``, the default) exits with co
 Parameters (all with defaults; ``--ros-args --params-file config/susp_sim_node.yaml``):
 ``vehicle``, ``friction_variant``, ``damper_oil_level`` [FL, FR, RL, RR], ``step_s`` [s],
 ``publish_rate_hz`` [Hz], ``record_path`` (empty: no recording), ``record_overwrite``,
+``record_flush_interval_s`` [s],
 ``input_timeout_s`` [s], ``diagnostics_rate_hz`` [Hz], ``max_time_jump_s`` [s], ``on_divergence``
 (``exit``/``hold``). ``damper_oil_level``, ``friction_variant`` and
 ``vehicle`` may be changed while running; the others are fixed at start.
@@ -79,6 +80,8 @@ DEFAULTS = {
     "publish_rate_hz": (100.0, "publish rate of /sim topics [Hz]"),
     "record_path": ("", "MCAP file to record to (empty: no recording)"),
     "record_overwrite": (False, "overwrite an existing record_path"),
+    "record_flush_interval_s": (1.0, "the recording's open chunk is put on disk at least this often; a killed "
+                                     "node loses at most this much [s]"),
     "input_timeout_s": (0.5, "an input not refreshed for this long is reported stale [s]"),
     "diagnostics_rate_hz": (1.0, "publish rate of /diagnostics [Hz]"),
     "sim_reorder_window_s": (0.005, "sim time: /clock and inputs are put in publish order and processed "
@@ -116,6 +119,79 @@ def warm_up(model: Model) -> None:
     """Run the compiled kernel once on a throwaway stepper (JIT compile before real time starts)."""
     from .model.vehicle import Stepper
     Stepper(model, dt=0.001).advance(2, 1.0, 0.0)
+
+
+class RecordingQueue:
+    """The node's recording, off the real-time path: the tick thread and the callbacks only enqueue
+    ``(topic, type, time, CDR bytes or a function making them)``; a writer thread encodes input messages,
+    writes (mcap, chunk compression, the kill-safe commits of :class:`McapRecorder`) and flushes. A
+    full queue (``max_items``, a disk that cannot keep up) drops messages, counted in ``dropped``; a write
+    error (disk full) stops the recording with one error log (``error``) instead of the node."""
+
+    def __init__(self, recorder: McapRecorder, log_error, max_items: int = 200_000):
+        import queue
+        self.recorder, self._log_error = recorder, log_error
+        self._q: "queue.Queue" = queue.Queue(maxsize=max_items)
+        self._full = queue.Full
+        self.dropped = 0
+        self.error = ""
+        self.closed = False
+        self._thread = threading.Thread(target=self._run, name="susp_sim_record", daemon=True)
+        self._thread.start()
+
+    def write(self, topic: str, msgtype: str, t_ns: int, data, latched: bool = False) -> None:
+        if self.closed or self.error:
+            return
+        try:
+            self._q.put_nowait((topic, msgtype, t_ns, data, latched))
+        except self._full:
+            self.dropped += 1
+
+    def flush_if_due(self) -> None:
+        if not self.closed:
+            try:
+                self._q.put_nowait(None)
+            except self._full:
+                pass
+
+    def _run(self) -> None:
+        while True:
+            item = self._q.get()
+            if item is StopIteration:
+                return
+            if self.error:
+                continue
+            try:
+                if item is None:
+                    self.recorder.flush_if_due()
+                    continue
+                topic, msgtype, t_ns, data, latched = item
+                self.recorder.write(topic, msgtype, t_ns, data() if callable(data) else data, latched=latched)
+            except Exception as exc:  # disk full, file removed, ...: stop recording, keep simulating
+                self.error = f"{type(exc).__name__}: {exc}"
+                self._log_error(f"recording stopped: {self.error}")
+
+    def close(self) -> None:
+        """Write everything queued, then finalise the file (idempotent)."""
+        if self.closed:
+            return
+        self.closed = True
+        self._q.put(StopIteration)
+        if self._thread is not threading.current_thread():
+            self._thread.join()
+        try:
+            self.recorder.close()
+        except Exception as exc:
+            self.error = self.error or f"{type(exc).__name__}: {exc}"
+            self._log_error(f"recording not finalised: {exc}")
+
+
+def _input_cdr(msg):
+    """CDR bytes of a received input message, made in the recording thread (arrays by the fast encoder)."""
+    if isinstance(msg, Float64MultiArray):
+        return lambda: M.encode_float64_multiarray([(d.label, d.size, d.stride) for d in msg.layout.dim],
+                                                   msg.layout.data_offset, msg.data)
+    return lambda: serialize_message(msg)
 
 
 class TimingStats:
@@ -194,6 +270,7 @@ class SuspSimNode(Node):
         self.divergences = 0
         self._failure_key: tuple | None = None
         self.handler_errors = 0
+        self.tick_errors = 0
         self.rejection_log = RateLimitedLog(lambda text: self.get_logger().warning(text),
                                             REJECTION_LOG_INTERVAL_S)
         self.core.on_reject = self.rejection_log  # every rejection, once per cause and interval
@@ -208,10 +285,13 @@ class SuspSimNode(Node):
         self._rt_priority = int(p["realtime_priority"])
         warm_up(model)
         self.timing = TimingStats(self.core.period_ns)
-        self.recorder: McapRecorder | None = None
+        self.recorder: RecordingQueue | None = None
         if p["record_path"]:
             meta = simulated_metadata({"maneuver": "live", "node": NODE_NAME}, model.vehicle.name, model.variant.name, oil)
-            self.recorder = McapRecorder(p["record_path"], metadata=meta, overwrite=bool(p["record_overwrite"]))
+            self.recorder = RecordingQueue(
+                McapRecorder(p["record_path"], metadata=meta, overwrite=bool(p["record_overwrite"]),
+                             flush_interval_s=float(p["record_flush_interval_s"])),
+                lambda text: self.get_logger().error(text))
         self._imu, self._odom, self._susp = Imu(), Odometry(), Float64MultiArray()
         self.pub_imu = self.create_publisher(Imu, SIM_IMU, OUTPUT_QOS)
         self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
@@ -269,9 +349,10 @@ class SuspSimNode(Node):
             return self._sim_now
         return self.get_clock().now().nanoseconds
 
-    def _record(self, topic: str, msgtype: str, t_ns: int, msg, latched: bool = False) -> None:
-        if self.recorder is not None and not self.recorder.closed:
-            self.recorder.write(topic, msgtype, t_ns, serialize_message(msg), latched=latched)
+    def _record(self, topic: str, msgtype: str, t_ns: int, data, latched: bool = False) -> None:
+        """Queue a message for the recording: CDR bytes, or a function making them (see RecordingQueue)."""
+        if self.recorder is not None:
+            self.recorder.write(topic, msgtype, t_ns, data, latched=latched)
 
     # -- inputs ---------------------------------------------------------------------------------------
     def _input(self, topic: str, msgtype: str, msg, apply, info=None, latched: bool = False) -> None:
@@ -343,7 +424,7 @@ class SuspSimNode(Node):
                 self.core.reject(topic, "handler_error", f"{topic}: internal error handling a message "
                                  f"({type(exc).__name__}: {exc}); message dropped")
             self.inputs_received += 1
-            self._record(topic, msgtype, max(t, 0), msg, latched)
+            self._record(topic, msgtype, max(t, 0), _input_cdr(msg), latched)
             self._check_failure()
 
     def _on_speed(self, msg: Float64, info) -> None:
@@ -377,10 +458,10 @@ class SuspSimNode(Node):
             self.pub_odom.publish(odom)
             self.pub_susp.publish(susp)
             self.published += 1
-            if self.recorder is not None:
-                self._record(SIM_IMU, M.IMU, s.t_ns, imu)
-                self._record(SIM_ODOM, M.ODOMETRY, s.t_ns, odom)
-                self._record(SIM_SUSPENSION, M.FLOAT64_ARRAY, s.t_ns, susp)
+            if self.recorder is not None:  # the message objects are reused: serialise now
+                self._record(SIM_IMU, M.IMU, s.t_ns, serialize_message(imu))
+                self._record(SIM_ODOM, M.ODOMETRY, s.t_ns, serialize_message(odom))
+                self._record(SIM_SUSPENSION, M.FLOAT64_ARRAY, s.t_ns, serialize_message(susp))
 
     def tick(self, t_ns: int | None = None) -> int:
         """Step to ``t_ns`` (default: now) and publish the samples passed; returns how many."""
@@ -448,7 +529,13 @@ class SuspSimNode(Node):
             if wait > 0:
                 if self._stop.wait(wait):
                     break
-            self.tick(time.time_ns())
+            try:
+                self.tick(time.time_ns())
+            except Exception as exc:
+                if self._stop.is_set() or not ctx.ok():
+                    break  # shutting down (SIGINT): the context went away under a publish
+                self.tick_errors += 1  # never let the tick thread die silently
+                self.core.reject("tick", "tick_error", f"tick: {type(exc).__name__}: {exc}")
 
     # -- parameters -----------------------------------------------------------------------------------
     def _on_params(self, params) -> SetParametersResult:
@@ -523,7 +610,14 @@ class SuspSimNode(Node):
                             "divergences": self.divergences, "last_divergence": self.failure,
                             "vehicle": self._vehicle, "friction_variant": self._variant,
                             "damper_oil_level": ",".join(f"{x:g}" for x in oil),
-                            "published_samples": self.published}}
+                            "published_samples": self.published,
+                            "recording_dropped": self.recorder.dropped if self.recorder else 0,
+                            "recording_error": self.recorder.error if self.recorder else "",
+                            "tick_errors": self.tick_errors}}
+        if healthy and self.recorder is not None and (self.recorder.error or self.recorder.dropped):
+            model["level"] = 1
+            model["message"] = "numerically healthy; recording " + (
+                f"stopped: {self.recorder.error}" if self.recorder.error else f"dropped {self.recorder.dropped} messages")
         return [inputs, timing, model]
 
     def publish_diagnostics(self) -> None:
@@ -538,8 +632,8 @@ class SuspSimNode(Node):
                       for s in d["status"]]
         self.pub_diag.publish(msg)
         with self.lock:
-            if self.recorder is not None and not self.recorder.closed:
-                self._record(DIAGNOSTICS, M.DIAGNOSTIC_ARRAY, max(t, 0), msg)
+            if self.recorder is not None:
+                self._record(DIAGNOSTICS, M.DIAGNOSTIC_ARRAY, max(t, 0), serialize_message(msg))
                 self.recorder.flush_if_due()  # idle periods (sim time paused) still reach the disk
 
     # -- shutdown -------------------------------------------------------------------------------------

@@ -379,11 +379,9 @@ class SimCore:
         rejection when ``allow_restart``); without ``allow_restart`` any step back is a no-op (wall time:
         a callback that read the clock just before another one stepped further; a clock adjustment). A
         jump forward by more than ``max_time_jump_s`` is not stepped through (module docstring). After a
-        divergence nothing is stepped or returned any more.
+        divergence nothing is stepped or returned any more (the time is still followed) until a restart.
         """
         t_ns = int(t_ns)
-        if self.diverged:
-            return []
         if self.t_start_ns is None:
             self.start(t_ns)
             return []
@@ -398,6 +396,9 @@ class SimCore:
             self.start(t_ns)
             self.restarts += 1
             return []
+        if self.diverged:  # stopped: follow the time (a later restart is measured from here), step nothing
+            self.t_ns = t_ns
+            return []
         if t_ns - self.t_ns > self.max_jump_ns:
             self.time_jumps += 1
             self.reject("/clock", "time_jump", f"time jumped forward by {(t_ns - self.t_ns) * 1e-9:.3f} s "
@@ -410,13 +411,11 @@ class SimCore:
         out = []
         while self.next_tick_ns <= t_ns:
             if not self._step_until(self.next_tick_ns):
-                self.samples_out += len(out)
-                return out
+                break
             out.append(Sample(self.next_tick_ns, self.stepper.y.copy()))
             self.next_tick_ns += self.period_ns
-        if not self._step_until(t_ns):
-            self.samples_out += len(out)
-            return out
+        else:
+            self._step_until(t_ns)
         self.t_ns = t_ns
         self.samples_out += len(out)
         return out

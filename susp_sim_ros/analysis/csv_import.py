@@ -9,7 +9,10 @@ thousands separators, no ``nan``/``inf``. Lines starting with ``#`` are comments
 for the measurement's provenance). Every other line must be a complete, valid row: a blank line, a row
 with a missing or extra field, a cell that is not a finite number, or a time that does not increase
 raises :class:`~susp_sim_ros.errors.CsvImportError` naming the file, the line and the column. Nothing is
-skipped silently, and an unknown column is an error too (a misspelt column would otherwise vanish).
+skipped silently, and an unknown column is an error too (a misspelt column would otherwise vanish). A
+leading UTF-8 byte-order mark is ignored. Values the simulation node would reject (speed outside
+[0, 100] m/s, |steering-wheel angle| > 4 pi rad, |wheel height| or |road elevation| > 1 m) are errors
+too, naming file, line and column.
 
 **Drive file** (one row per sample; all channels share the row's time):
 
@@ -49,13 +52,14 @@ import csv
 import math
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
 
 from ..errors import CsvImportError
+from ..io.drive import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT
 
 _NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
@@ -91,6 +95,7 @@ class CsvTable:
     columns: dict[str, np.ndarray]
     lines: np.ndarray
     comments: list[str]
+    names: dict[str, tuple[str, int]] = field(default_factory=dict)  # quantity -> (column name, index)
 
 
 def _column_map(path: str, header: Sequence[str], quantities: Mapping[str, Mapping[str, float]],
@@ -134,6 +139,8 @@ def parse_csv(text: str, path: str, quantities: Mapping[str, Mapping[str, float]
     rows: list[list[float]] = []
     lines: list[int] = []
     order: list[str] = []
+    if text.startswith("\ufeff"):  # a UTF-8 byte-order mark (spreadsheet export) is not part of the header
+        text = text[1:]
     physical = text.splitlines()
     for lineno, raw in enumerate(physical, start=1):
         stripped = raw.strip()
@@ -143,20 +150,30 @@ def parse_csv(text: str, path: str, quantities: Mapping[str, Mapping[str, float]
         if stripped == "":
             if lineno == len(physical):
                 break
-            raise CsvImportError(f"{path}:{lineno}: blank line (every non-comment line must be a "
+            raise CsvImportError(f"{path}:{lineno}: column 1: blank line (every non-comment line must be a "
                                  f"{'header' if header is None else 'data row'})")
+        if "\x00" in raw:
+            raise CsvImportError(f"{path}:{lineno}: column {raw[:raw.index(chr(0))].count(',') + 1}: NUL "
+                                 f"character (binary data in a text file?)")
         try:
-            fields = next(csv.reader([raw]))
+            fields = next(csv.reader([raw], strict=True))
         except csv.Error as exc:
-            raise CsvImportError(f"{path}:{lineno}: malformed CSV: {exc}") from None
+            raise CsvImportError(f"{path}:{lineno}: malformed CSV ({exc}); check the quoting") from None
         if header is None:
             header = fields
             cmap = _column_map(path, header, quantities, required, groups, lineno)
             order = list(cmap)
             continue
         if len(fields) != len(header):
-            raise CsvImportError(f"{path}:{lineno}: expected {len(header)} fields "
-                                 f"({', '.join(h.strip() for h in header)}), got {len(fields)}")
+            names = [h.strip() for h in header]
+            if len(fields) < len(header):
+                k = len(fields)
+                what = f"column {k + 1} {names[k]!r} is missing"
+            else:
+                k = len(header)
+                what = f"column {k + 1} ({fields[k].strip()!r}) is beyond the header's last column {names[-1]!r}"
+            raise CsvImportError(f"{path}:{lineno}: column {k + 1}: expected {len(header)} fields "
+                                 f"({', '.join(names)}), got {len(fields)}: {what}")
         row = []
         for q in order:
             k, factor, name = cmap[q]
@@ -183,7 +200,8 @@ def parse_csv(text: str, path: str, quantities: Mapping[str, Mapping[str, float]
     if len(rows) < 2:
         raise CsvImportError(f"{path}: needs at least 2 data rows, got {len(rows)}")
     arr = np.array(rows, dtype=float)
-    return CsvTable(path, {q: arr[:, j] for j, q in enumerate(order)}, np.array(lines), comments)
+    return CsvTable(path, {q: arr[:, j] for j, q in enumerate(order)}, np.array(lines), comments,
+                    {q: (cmap[q][2], cmap[q][0]) for q in order})
 
 
 def _read_text(path: str | os.PathLike) -> str:
@@ -211,7 +229,23 @@ def read_road_csv(path: str | os.PathLike, text: str | None = None):
     from ..model.road import RoadProfile
     text = _read_text(path) if text is None else text
     t = parse_csv(text, str(path), ROAD_QUANTITIES, ROAD_REQUIRED, increasing="s")
+    _check_range(path, t, "z_left", ROAD_QUANTITIES, -MAX_WHEEL_HEIGHT, MAX_WHEEL_HEIGHT, "m")
+    _check_range(path, t, "z_right", ROAD_QUANTITIES, -MAX_WHEEL_HEIGHT, MAX_WHEEL_HEIGHT, "m")
     return RoadProfile(t.columns["s"], t.columns["z_left"], t.columns["z_right"])
+
+
+def _check_range(path, tab: CsvTable, q: str, quantities, lo: float, hi: float, unit: str) -> None:
+    """CsvImportError naming file, line and column for the first value of quantity ``q`` outside
+    [lo, hi] (SI): values the simulation node would reject, caught at import instead of being dropped."""
+    if q not in tab.columns:
+        return
+    v = tab.columns[q]
+    bad = np.nonzero((v < lo) | (v > hi))[0]
+    if bad.size:
+        i = int(bad[0])
+        name, k = tab.names[q]
+        raise CsvImportError(f"{path}:{tab.lines[i]}: column {name!r} (column {k + 1}): {v[i]:g} {unit} is outside "
+                             f"the range the simulation accepts [{lo:g}, {hi:g}] {unit}")
 
 
 def csv_to_drive(drive_csv: str | os.PathLike, road_csv: str | os.PathLike | None = None, *,
@@ -222,6 +256,10 @@ def csv_to_drive(drive_csv: str | os.PathLike, road_csv: str | os.PathLike | Non
     from ..io.drive import ImuSeries, Series, TestDrive, parse_oil
     parse_oil(damper_oil_level, "damper_oil_level")
     tab = read_drive_csv(drive_csv, drive_text)
+    _check_range(drive_csv, tab, "speed", DRIVE_QUANTITIES, 0.0, MAX_SPEED, "m/s")
+    _check_range(drive_csv, tab, "steering", DRIVE_QUANTITIES, -MAX_STEERING, MAX_STEERING, "rad")
+    for w in ("fl", "fr", "rl", "rr"):
+        _check_range(drive_csv, tab, f"wheel_height_{w}", DRIVE_QUANTITIES, -MAX_WHEEL_HEIGHT, MAX_WHEEL_HEIGHT, "m")
     c = tab.columns
     t_ns = np.round(c["time"] * 1e9).astype(np.int64)
     dup = np.nonzero(np.diff(t_ns) <= 0)[0]

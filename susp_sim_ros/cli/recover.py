@@ -27,7 +27,7 @@ def recover(src: str | Path, dst: str | Path, *, overwrite: bool = False) -> dic
     if src.resolve() == dst.resolve():
         raise RecordingError(f"{dst}: --out must differ from the input file")
     rec = read_recording(src, allow_corrupt=True)
-    if not rec.channels and not rec.messages:
+    if not rec.profile and not rec.metadata and not rec.channels:
         raise RecordingError(f"{src}: nothing readable to recover ({rec.error or 'empty'})")
     meta = rec.metadata.get("test_drive")
     with McapRecorder(dst, metadata=meta, overwrite=overwrite) as out:

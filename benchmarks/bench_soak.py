@@ -1,0 +1,257 @@
+"""Soak benchmark: susp_sim_node in real time for a long run, inputs at 100 Hz, recording on.
+
+Starts ``susp_sim_node`` in a subprocess (wall time, defaults: 1 ms step, 100 Hz publishing, its threads
+at SCHED_FIFO when permitted) recording to an MCAP file, publishes a road profile (latched) and speed and
+steering at ``--rate`` from this process for ``--duration`` seconds, samples the node's resident memory
+(RSS) every second, then stops the node with SIGINT (a clean shutdown finalises the recording) and
+checks the recording. Reported (``--json``: one JSON object on stdout, logs on stderr):
+
+- ``rss_growth_after_warmup_mb``: highest RSS after the warm-up minus the RSS at the end of the warm-up
+  (``--warmup``, default 30 s; 5 s for runs of 60 s or less); also ``rss_*_mb`` at start/warm-up/end/max;
+- ``deadline_misses`` (ticks published more than one period late), ``ticks``, ``rtf``, ``jitter_p99_ms``
+  and ``jitter_max_ms``, from the node's last ``/diagnostics``;
+- the recording: ``published_inputs`` (what this process sent) and ``recorded_inputs`` per topic,
+  ``recorded_sim`` per ``/sim`` topic, ``sim_gaps`` (missing 10 ms ticks in the recorded
+  ``/sim/imu/data`` stamps), ``sequence_gaps`` (per topic), ``node_published_samples``, and
+  ``recording_complete``: every input sent is recorded, the three ``/sim`` topics hold the same number of
+  samples, no tick is missing and no sequence number skipped, the file is finalised;
+- ``node_exit_code`` (0 after SIGINT), ``rejected_inputs`` (0 expected).
+
+``run_soak`` is also used by the 20-second version in ``test/test_reliability_soak.py``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import random
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+MB = 1024 * 1024
+
+
+def ros_env() -> dict[str, str]:
+    """This process's environment for ROS 2 (isolated domain, localhost, writable log dir)."""
+    env = dict(os.environ)
+    env.setdefault("ROS_DOMAIN_ID", str(random.randint(1, 101)))
+    env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    env.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="susp_soak_log_"))
+    os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOG_DIR")})
+    return env
+
+
+def start_node(record_path: str | Path, params: dict | None = None, env: dict | None = None,
+               log=None) -> subprocess.Popen:
+    """``susp_sim_node`` in a subprocess recording to ``record_path`` (``params``: more -p overrides)."""
+    args = [sys.executable, "-c", "import sys; from susp_sim_ros.node import main; sys.exit(main())",
+            "--ros-args", "-p", f"record_path:={record_path}"]
+    for k, v in (params or {}).items():
+        args += ["-p", f"{k}:={v}"]
+    return subprocess.Popen(args, env=env or ros_env(), stdout=log or sys.stderr, stderr=subprocess.STDOUT)
+
+
+class Probe:
+    """This process's side: publishes the inputs (profile latched, speed and steering at ``rate_hz`` from
+    a thread), listens to ``/diagnostics``, counts what it sent."""
+
+    def __init__(self, rate_hz: float = 100.0, realtime: bool = True):
+        import rclpy
+        from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
+        self.rclpy, self.Float64 = rclpy, Float64
+        self.rate_hz = rate_hz
+        self.ctx = rclpy.Context()
+        rclpy.init(context=self.ctx)
+        self.node = rclpy.create_node("susp_soak_probe", context=self.ctx)
+        self.diag: dict[str, dict[str, str]] = {}
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
+        self.speed = self.node.create_publisher(Float64, "/vehicle/speed", 100)
+        self.steer = self.node.create_publisher(Float64, "/vehicle/steering_wheel_angle", 100)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                             reliability=ReliabilityPolicy.RELIABLE)
+        self.profile = self.node.create_publisher(Float64MultiArray, "/road/profile", latched)
+        s = np.arange(0.0, 2000.0, 0.05)  # a gently rough road with a bump every 40 m
+        z = 0.005 * np.sin(2 * np.pi * s / 3.1) + 0.04 * np.maximum(0.0, np.cos(2 * np.pi * s / 40.0)) ** 40
+        m = Float64MultiArray()
+        m.layout.dim = [MultiArrayDimension(label="channel", size=3, stride=3 * s.size),
+                        MultiArrayDimension(label="sample", size=s.size, stride=s.size)]
+        m.data = np.concatenate([s, z, 0.8 * z]).tolist()
+        self.profile.publish(m)
+        self.sent = {"/vehicle/speed": 0, "/vehicle/steering_wheel_angle": 0, "/road/profile": 1}
+        self.ex = SingleThreadedExecutor(context=self.ctx)
+        self.ex.add_node(self.node)
+        self._spin = threading.Thread(target=self.ex.spin, daemon=True)
+        self._spin.start()
+        self._stop = threading.Event()
+        self._pub: threading.Thread | None = None
+        if realtime:
+            from susp_sim_ros.node import raise_priority
+            note = raise_priority(5)
+            if note:
+                print(f"soak probe: {note}", file=sys.stderr)
+
+    def _on_diag(self, msg) -> None:
+        for st in msg.status:
+            self.diag[st.name.split(": ")[-1]] = {kv.key: kv.value for kv in st.values}
+
+    def wait_for(self, proc: subprocess.Popen, timeout: float = 60.0) -> None:
+        end = time.monotonic() + timeout
+        while self.speed.get_subscription_count() == 0 or self.steer.get_subscription_count() == 0 \
+                or self.profile.get_subscription_count() == 0:
+            if time.monotonic() > end or proc.poll() is not None:
+                raise RuntimeError("susp_sim_node did not come up (no subscriber on the input topics)")
+            time.sleep(0.02)
+
+    def start_publishing(self) -> None:
+        def loop():
+            t0 = time.monotonic()
+            k = 0
+            while not self._stop.is_set():
+                t = k / self.rate_hz
+                self.speed.publish(self.Float64(data=50.0 / 3.6 + 2.0 * math.sin(2 * math.pi * 0.05 * t)))
+                self.steer.publish(self.Float64(data=0.5 * math.sin(2 * math.pi * 0.2 * t)))
+                self.sent["/vehicle/speed"] += 1
+                self.sent["/vehicle/steering_wheel_angle"] += 1
+                k += 1
+                self._stop.wait(max(0.0, t0 + k / self.rate_hz - time.monotonic()))
+        self._pub = threading.Thread(target=loop, name="soak_inputs", daemon=True)
+        self._pub.start()
+
+    def stop_publishing(self) -> None:
+        self._stop.set()
+        if self._pub is not None:
+            self._pub.join()
+
+    def close(self) -> None:
+        self.stop_publishing()
+        self.ex.shutdown()
+        self.node.destroy_node()
+        self.rclpy.try_shutdown(context=self.ctx)
+
+
+def rss_bytes(pid: int) -> int:
+    with open(f"/proc/{pid}/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    return 0
+
+
+def check_recording(path: Path, sent: dict[str, int], period_ns: int = 10_000_000) -> dict:
+    """Message counts, missing ticks and sequence gaps of the node's recording."""
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import Imu
+    from susp_sim_ros.io.reader import read_recording
+    rec = read_recording(path)
+    counts: dict[str, int] = {}
+    seq_gaps: dict[str, int] = {}
+    for topic in sorted(rec.topics()):
+        msgs = rec.by_topic(topic)
+        counts[topic] = len(msgs)
+        seq = np.array([m.sequence for m in msgs], dtype=np.int64)
+        seq_gaps[topic] = int(np.count_nonzero(np.diff(seq) != 1)) + (int(seq[0] != 1) if seq.size else 0)
+    stamps = np.array([(lambda i: i.header.stamp.sec * 1_000_000_000 + i.header.stamp.nanosec)(
+        deserialize_message(m.data, Imu)) for m in rec.by_topic("/sim/imu/data")], dtype=np.int64)
+    d = np.diff(stamps)
+    sim_gaps = int(np.sum(np.maximum(d // period_ns - 1, 0))) + int(np.count_nonzero(d % period_ns))
+    inputs = {t: counts.get(t, 0) for t in sent}
+    sim = {t: counts.get(t, 0) for t in ("/sim/imu/data", "/sim/odom", "/sim/suspension")}
+    complete = (inputs == dict(sent) and len(set(sim.values())) == 1 and sim["/sim/imu/data"] > 0
+                and sim_gaps == 0 and not any(seq_gaps.values()) and rec.finalised and not rec.truncated)
+    return {"recorded_inputs": inputs, "recorded_sim": sim, "recorded_diagnostics": counts.get("/diagnostics", 0),
+            "sim_gaps": sim_gaps, "sequence_gaps": seq_gaps, "finalised": rec.finalised,
+            "recording_complete": bool(complete), "recording_bytes": path.stat().st_size}
+
+
+def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: float = 100.0,
+             out_dir: str | Path | None = None, realtime_probe: bool = True) -> dict:
+    warmup = (5.0 if duration <= 60 else 30.0) if warmup is None else warmup
+    env = ros_env()
+    out_dir = Path(out_dir or tempfile.mkdtemp(prefix="susp_soak_"))
+    path = out_dir / "soak.mcap"
+    if path.exists():
+        path.unlink()
+    probe = Probe(rate_hz, realtime=realtime_probe)
+    proc = start_node(path, env=env)
+    rss: list[tuple[float, int]] = []
+    try:
+        probe.wait_for(proc)
+        time.sleep(1.0)  # discovery settles; the latched profile arrives
+        probe.start_publishing()
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < duration:
+            if proc.poll() is not None:
+                raise RuntimeError(f"susp_sim_node exited during the soak (code {proc.returncode})")
+            rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
+            time.sleep(min(1.0, max(0.0, duration - (time.monotonic() - t0))))
+        rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
+        probe.stop_publishing()
+        time.sleep(1.5)  # the last inputs are taken; a final /diagnostics covers the whole run
+        diag = {k: dict(v) for k, v in probe.diag.items()}
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+        try:
+            code = proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            code = proc.wait()
+        sent = dict(probe.sent)
+        probe.close()
+    t = np.array([x for x, _ in rss])
+    r = np.array([y for _, y in rss], dtype=float) / MB
+    at_warm = float(np.interp(warmup, t, r))
+    after = r[t >= warmup]
+    timing, inputs, model = diag.get("timing", {}), diag.get("inputs", {}), diag.get("model", {})
+    res = {
+        "duration_s": duration, "warmup_s": warmup, "rate_hz": rate_hz,
+        "rss_start_mb": float(r[0]), "rss_after_warmup_mb": at_warm, "rss_end_mb": float(r[-1]),
+        "rss_max_mb": float(r.max()),
+        "rss_growth_after_warmup_mb": float(after.max() - at_warm) if after.size else 0.0,
+        "deadline_misses": int(timing.get("deadline_misses", -1)), "ticks": int(timing.get("ticks", 0)),
+        "rtf": float(timing.get("real_time_factor", "nan")), "jitter_p99_ms": float(timing.get("jitter_p99_ms", "nan")),
+        "jitter_max_ms": float(timing.get("jitter_max_ms", "nan")),
+        "rejected_inputs": int(inputs.get("rejected_total", -1)),
+        "node_published_samples": int(model.get("published_samples", 0)),
+        "node_exit_code": code, "published_inputs": sent,
+    }
+    res.update(check_recording(path, sent))
+    res["recording"] = str(path)
+    return res
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    ap.add_argument("--duration", type=float, default=300.0, help="soak length [s] (default 300)")
+    ap.add_argument("--warmup", type=float, default=None, help="warm-up before the RSS baseline [s] "
+                    "(default 30; 5 for runs of 60 s or less)")
+    ap.add_argument("--rate", type=float, default=100.0, help="input rate [Hz] (default 100)")
+    ap.add_argument("--out", default=None, help="folder for the recording (default: a temporary one)")
+    ap.add_argument("--probe-normal-priority", action="store_true",
+                    help="run the input publisher without real-time scheduling")
+    a = ap.parse_args(argv)
+    res = run_soak(a.duration, a.warmup, a.rate, a.out, realtime_probe=not a.probe_normal_priority)
+    if a.json:
+        print(json.dumps(res))
+    else:
+        for k, v in res.items():
+            print(f"{k}: {v}")
+    ok = (res["rss_growth_after_warmup_mb"] < 5.0 and res["deadline_misses"] == 0 and res["recording_complete"]
+          and res["node_exit_code"] == 0)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,36 @@
+"""Soak, short version: susp_sim_node in real time for 20 s with inputs at 100 Hz and recording on
+(``benchmarks/bench_soak.py`` runs the same for 5 minutes). Asserted: RSS growth after the 5 s warm-up
+under 5 MB, no deadline miss, no rejected input, a clean exit on SIGINT, and a complete recording (every
+input sent is recorded, no 10 ms tick missing on the /sim topics, no sequence gap, finalised)."""
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _bench():
+    spec = importlib.util.spec_from_file_location("bench_soak", ROOT / "benchmarks" / "bench_soak.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_soak_20_seconds(tmp_path):
+    res = _bench().run_soak(duration=20.0, warmup=5.0, out_dir=tmp_path)
+    print(f"\nsoak 20 s: RSS {res['rss_after_warmup_mb']:.1f} MB after warm-up, growth "
+          f"{res['rss_growth_after_warmup_mb']:.3f} MB; {res['deadline_misses']} deadline misses in "
+          f"{res['ticks']} ticks (jitter p99 {res['jitter_p99_ms']:.2f} ms, max {res['jitter_max_ms']:.2f} ms); "
+          f"sent {res['published_inputs']}, recorded {res['recorded_inputs']}, /sim {res['recorded_sim']}, "
+          f"gaps {res['sim_gaps']}, exit {res['node_exit_code']}")
+    assert res["node_exit_code"] == 0
+    assert res["rss_growth_after_warmup_mb"] < 5.0
+    assert res["deadline_misses"] == 0 and res["ticks"] >= 1900
+    assert res["rejected_inputs"] == 0
+    assert res["recorded_inputs"] == res["published_inputs"] and res["published_inputs"]["/vehicle/speed"] >= 1900
+    assert res["sim_gaps"] == 0 and not any(res["sequence_gaps"].values()) and res["finalised"]
+    assert res["recorded_sim"]["/sim/imu/data"] >= res["node_published_samples"] >= 1900
+    assert res["recording_complete"]
