@@ -187,7 +187,7 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     rss: list[tuple[float, int]] = []
     try:
         probe.wait_for(proc)
-        time.sleep(1.0)  # discovery settles; the latched profile arrives
+        time.sleep(0.5)  # discovery settles; the latched profile arrives
         probe.start_publishing()
         t0 = time.monotonic()
         while time.monotonic() - t0 < duration:
@@ -197,7 +197,7 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
             time.sleep(min(1.0, max(0.0, duration - (time.monotonic() - t0))))
         rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
         probe.stop_publishing()
-        time.sleep(1.5)  # the last inputs are taken; a final /diagnostics covers the whole run
+        time.sleep(1.2)  # the last inputs are taken; a final /diagnostics covers the whole run
         diag = {k: dict(v) for k, v in probe.diag.items()}
     finally:
         if proc.poll() is None:

@@ -169,7 +169,7 @@ def test_entry_points_at_every_64th_byte_and_every_record_boundary(small, tmp_pa
         assert t[0] > 0 and t[2] > 0, (cmd, t)  # both outcomes were exercised
 
 
-@pytest.mark.parametrize("fraction", [0.0004, 0.62])
+@pytest.mark.parametrize("fraction", [0.62])
 def test_no_traceback_from_real_processes(small, tmp_path, fraction):
     p, data, *_ = small
     cut = tmp_path / "cut.mcap"
