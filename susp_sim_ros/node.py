@@ -204,6 +204,8 @@ class TimingStats:
         self.period_ns = period_ns
         self._jit = np.zeros(keep, dtype=np.int64)
         self._late = np.zeros(keep, dtype=np.int64)
+        self._jit.fill(0)  # touch every page now: memory is flat from the start, not growing for an hour
+        self._late.fill(0)
         self._n_jit = 0
         self.deadline_misses = 0
         self.ticks = 0
