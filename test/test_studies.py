@@ -242,11 +242,14 @@ def test_interrupted_dask_study_resumes_without_repeating_or_losing_chunks(tmp_p
     assert again["chunks_computed"] == 0 and (out / "results.csv").read_text() == ref_csv
 
 
+N_KILL = 1600  # runs (= chunks) of the killed study: large enough that a loaded machine can't finish it first
+
+
 def test_killed_study_process_resumes(tmp_path, tiny_reference):
     """SIGKILL a real `susp study` process mid-run; the same command finishes the rest."""
     data = {**json.loads(json.dumps(TINY)), "chunk_size": 1,
-            "parameters": {"oil_front": {"from": 0.0, "to": 1.0, "num": 20},
-                           "oil_rear": {"from": 0.0, "to": 1.0, "num": 20}, "bump_height": [0.06]}}
+            "parameters": {"oil_front": {"from": 0.0, "to": 1.0, "num": 40},
+                           "oil_rear": {"from": 0.0, "to": 1.0, "num": 40}, "bump_height": [0.06]}}
     path = write_study(tmp_path, data, "killme.yaml")
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "susp_sim_ros.cli.main", "study", str(path), "--out", str(out),
@@ -264,14 +267,14 @@ def test_killed_study_process_resumes(tmp_path, tiny_reference):
         proc.wait(timeout=30)
     assert proc.returncode == -signal.SIGKILL, "study finished before it could be killed"
     first = {int(p.stem[1:]) for p in (out / "chunks").glob("c*.csv")}
-    assert 5 <= len(first) < 400
+    assert 5 <= len(first) < N_KILL
     r = subprocess.run(cmd + ["--json"], env=env, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
-    assert res["chunks_resumed"] == len(first) and res["chunks_computed"] == 400 - len(first)
-    _check_log_after_resume(out, 400, first)
+    assert res["chunks_resumed"] == len(first) and res["chunks_computed"] == N_KILL - len(first)
+    _check_log_after_resume(out, N_KILL, first)
     rows = read_table(out / "results.csv")
-    assert [int(x["run_id"]) for x in rows] == list(range(400)) and all(x["ok"] == "1" for x in rows)
+    assert [int(x["run_id"]) for x in rows] == list(range(N_KILL)) and all(x["ok"] == "1" for x in rows)
     # the killed-and-resumed table equals the plain run of the same runs
     spec = study_from_dict(json.loads(json.dumps(data)), str(path))
     plain = engine.chunk_task(spec.data, spec.runs[:3], [None] * 3)
