@@ -15,7 +15,10 @@ checks the recording. Reported (``--json``: one JSON object on stdout, logs on s
   ``/sim/imu/data`` stamps), ``sequence_gaps`` (per topic), ``node_published_samples``, and
   ``recording_complete``: every input sent is recorded, the three ``/sim`` topics hold the same number of
   samples, no tick is missing and no sequence number skipped, the file is finalised;
-- ``node_exit_code`` (0 after SIGINT), ``rejected_inputs`` (0 expected).
+- ``node_exit_code`` (0 after SIGINT), ``rejected_inputs`` (0 expected);
+- for attributing misses: ``misses_at`` (seconds into the run with new misses), the machine's busy share
+  of the other processes (``machine_busy_other_mean``/``_max``, per second, fraction of all CPUs),
+  ``steal_mean``/``_max`` (hypervisor steal) and ``node_cpu_fraction``.
 
 ``run_soak`` is also used by the 20-second version in ``test/test_reliability_soak.py``.
 """
@@ -75,6 +78,7 @@ class Probe:
         rclpy.init(context=self.ctx)
         self.node = rclpy.create_node("susp_soak_probe", context=self.ctx)
         self.diag: dict[str, dict[str, str]] = {}
+        self.timeline: list[tuple[float, int, float]] = []  # (monotonic, deadline misses, jitter max) per /diagnostics
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
         self.speed = self.node.create_publisher(Float64, "/vehicle/speed", 100)
         self.steer = self.node.create_publisher(Float64, "/vehicle/steering_wheel_angle", 100)
@@ -104,14 +108,19 @@ class Probe:
     def _on_diag(self, msg) -> None:
         for st in msg.status:
             self.diag[st.name.split(": ")[-1]] = {kv.key: kv.value for kv in st.values}
+        t = self.diag.get("timing", {})
+        self.timeline.append((time.monotonic(), int(t.get("deadline_misses", 0)), float(t.get("jitter_max_ms", 0))))
 
     def wait_for(self, proc: subprocess.Popen, timeout: float = 60.0) -> None:
+        """Until both sides of discovery are through: the node's subscriptions match our publishers and
+        its /diagnostics reach us (its publisher matched our subscription), then a settling second."""
         end = time.monotonic() + timeout
         while self.speed.get_subscription_count() == 0 or self.steer.get_subscription_count() == 0 \
-                or self.profile.get_subscription_count() == 0:
+                or self.profile.get_subscription_count() == 0 or not self.timeline:
             if time.monotonic() > end or proc.poll() is not None:
                 raise RuntimeError("susp_sim_node did not come up (no subscriber on the input topics)")
             time.sleep(0.02)
+        time.sleep(1.0)
 
     def start_publishing(self) -> None:
         def loop():
@@ -138,6 +147,23 @@ class Probe:
         self.ex.shutdown()
         self.node.destroy_node()
         self.rclpy.try_shutdown(context=self.ctx)
+
+
+def cpu_times() -> tuple[float, float, float]:
+    """Machine-wide (busy, idle, steal) CPU seconds since boot (/proc/stat; steal: time the hypervisor
+    gave our virtual CPUs to someone else)."""
+    with open("/proc/stat") as f:
+        v = [int(x) for x in f.readline().split()[1:]]
+    tick = os.sysconf("SC_CLK_TCK")
+    idle = v[3] + v[4]
+    steal = v[7] if len(v) > 7 else 0
+    return (sum(v[:8]) - idle - steal) / tick, idle / tick, steal / tick
+
+
+def proc_cpu_s(pid: int) -> float:
+    with open(f"/proc/{pid}/stat") as f:
+        parts = f.read().rsplit(")", 1)[1].split()
+    return (int(parts[11]) + int(parts[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def rss_bytes(pid: int) -> int:
@@ -167,11 +193,16 @@ def check_recording(path: Path, sent: dict[str, int], period_ns: int = 10_000_00
     sim_gaps = int(np.sum(np.maximum(d // period_ns - 1, 0))) + int(np.count_nonzero(d % period_ns))
     inputs = {t: counts.get(t, 0) for t in sent}
     sim = {t: counts.get(t, 0) for t in ("/sim/imu/data", "/sim/odom", "/sim/suspension")}
-    complete = (inputs == dict(sent) and len(set(sim.values())) == 1 and sim["/sim/imu/data"] > 0
-                and sim_gaps == 0 and not any(seq_gaps.values()) and rec.finalised and not rec.truncated)
+    why = [w for w, bad in (
+        (f"inputs recorded {inputs} != sent {dict(sent)}", inputs != dict(sent)),
+        (f"/sim topics differ {sim}", len(set(sim.values())) != 1 or sim["/sim/imu/data"] == 0),
+        (f"{sim_gaps} missing ticks", sim_gaps != 0), (f"sequence gaps {seq_gaps}", any(seq_gaps.values())),
+        ("not finalised", not rec.finalised or rec.truncated)) if bad]
+    complete = not why
     return {"recorded_inputs": inputs, "recorded_sim": sim, "recorded_diagnostics": counts.get("/diagnostics", 0),
             "sim_gaps": sim_gaps, "sequence_gaps": seq_gaps, "finalised": rec.finalised,
-            "recording_complete": bool(complete), "recording_bytes": path.stat().st_size}
+            "recording_complete": bool(complete), "incomplete_because": why,
+            "recording_bytes": path.stat().st_size}
 
 
 def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: float = 100.0,
@@ -185,17 +216,19 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     probe = Probe(rate_hz, realtime=realtime_probe)
     proc = start_node(path, env=env)
     rss: list[tuple[float, int]] = []
+    load: list[tuple[float, float, float, float, float]] = []  # (t, machine busy, idle, steal, node CPU) [s]
     try:
         probe.wait_for(proc)
-        time.sleep(0.5)  # discovery settles; the latched profile arrives
         probe.start_publishing()
         t0 = time.monotonic()
         while time.monotonic() - t0 < duration:
             if proc.poll() is not None:
                 raise RuntimeError(f"susp_sim_node exited during the soak (code {proc.returncode})")
             rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
+            load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid)))
             time.sleep(min(1.0, max(0.0, duration - (time.monotonic() - t0))))
         rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
+        load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid)))
         probe.stop_publishing()
         time.sleep(1.2)  # the last inputs are taken; a final /diagnostics covers the whole run
         diag = {k: dict(v) for k, v in probe.diag.items()}
@@ -214,6 +247,19 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     at_warm = float(np.interp(warmup, t, r))
     after = r[t >= warmup]
     timing, inputs, model = diag.get("timing", {}), diag.get("inputs", {}), diag.get("model", {})
+    # machine load per second, and the seconds in which deadline misses happened (for attribution)
+    L = np.array(load)
+    dt = np.diff(L[:, 0])
+    ncpu = os.cpu_count() or 1
+    busy_other = (np.diff(L[:, 1]) - np.diff(L[:, 4])) / dt / ncpu  # busy fraction of the others
+    steal = np.diff(L[:, 3]) / dt / ncpu
+    miss_at = []
+    for (ta, ma, _), (tb, mb, jb) in zip(probe.timeline, probe.timeline[1:]):
+        if mb > ma:  # misses within the second before this /diagnostics; the load around it
+            near = (L[1:, 0] >= ta - t0 - 1.5) & (L[1:, 0] <= tb - t0 + 1.5)
+            miss_at.append({"t_s": round(tb - t0, 1), "misses": mb - ma, "jitter_max_ms": jb,
+                            "busy_other_max": float(busy_other[near].max()) if near.any() else None,
+                            "steal_max": float(steal[near].max()) if near.any() else None})
     res = {
         "duration_s": duration, "warmup_s": warmup, "rate_hz": rate_hz,
         "rss_start_mb": float(r[0]), "rss_after_warmup_mb": at_warm, "rss_end_mb": float(r[-1]),
@@ -225,6 +271,10 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
         "rejected_inputs": int(inputs.get("rejected_total", -1)),
         "node_published_samples": int(model.get("published_samples", 0)),
         "node_exit_code": code, "published_inputs": sent,
+        "misses_at": miss_at,
+        "machine_busy_other_mean": float(busy_other.mean()), "machine_busy_other_max": float(busy_other.max()),
+        "steal_mean": float(steal.mean()), "steal_max": float(steal.max()),
+        "node_cpu_fraction": float((L[-1, 4] - L[0, 4]) / (L[-1, 0] - L[0, 0])),
     }
     res.update(check_recording(path, sent))
     res["recording"] = str(path)
