@@ -84,7 +84,7 @@ DEFAULTS = {
                                      "node loses at most this much [s]"),
     "input_timeout_s": (0.5, "an input not refreshed for this long is reported stale [s]"),
     "diagnostics_rate_hz": (1.0, "publish rate of /diagnostics [Hz]"),
-    "sim_reorder_window_s": (0.005, "sim time: /clock and inputs are put in publish order and processed "
+    "sim_reorder_window_s": (0.02, "sim time: /clock and inputs are put in publish order and processed "
                                     "this long after they were published (wall time) [s]"),
     "realtime_priority": (10, "SCHED_FIFO priority of the wall-time tick thread (0: normal scheduling; "
                               "falls back to normal scheduling when not permitted)"),
