@@ -211,7 +211,7 @@ def clock_event(draw):
     kind = draw(st.sampled_from(["fwd", "fwd", "fwd", "fwd", "same", "stale", "back", "jump", "invalid",
                                  "random", "speed", "steer"]))
     # source timestamp relative to now: shuffled arrival order, all older than the reorder window
-    src = draw(st.integers(-50_000_000, -30_000_000))
+    src = draw(st.integers(-80_000_000, -60_000_000))  # (the node's window: sim_reorder_window_s, 20 ms)
     if kind == "fwd":
         return kind, draw(st.integers(1, 20_000_000)), src
     if kind == "same":
@@ -285,7 +285,7 @@ def test_clock_messages_under_sim_time(simnode):
                     t = cur
                 clock(t, now + src)
         # a final clock published after everything else releases the inputs still queued
-        clock(max(node._sim_now, 1), time.time_ns() - 6_000_000)
+        clock(max(node._sim_now, 1), time.time_ns() - node._reorder_ns - 1_000_000)  # older than the window
         assert core.rejections_by_topic[(CLOCK, "clock_invalid")] - inv0 == want_invalid
         assert not node._events  # nothing stuck in the reorder queue
         f.after_burst()

@@ -254,7 +254,9 @@ def test_killed_study_process_resumes(tmp_path, tiny_reference):
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "susp_sim_ros.cli.main", "study", str(path), "--out", str(out),
            "--scheduler", "inprocess", "--no-progress", "--no-plot"]
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    # one kernel thread: the study must not starve this polling process of both cores (CI saw all
+    # chunks done before the poll got to run)
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "NUMBA_NUM_THREADS": "1"}
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         deadline = time.monotonic() + 120
