@@ -18,7 +18,9 @@ checks the recording. Reported (``--json``: one JSON object on stdout, logs on s
 - ``node_exit_code`` (0 after SIGINT), ``rejected_inputs`` (0 expected);
 - for attributing misses: ``misses_at`` (seconds into the run with new misses), the machine's busy share
   of the other processes (``machine_busy_other_mean``/``_max``, per second, fraction of all CPUs),
-  ``steal_mean``/``_max`` (hypervisor steal) and ``node_cpu_fraction``.
+  ``steal_mean``/``_max`` (hypervisor steal), ``node_cpu_fraction`` and ``other_realtime_busy`` (other
+  processes' SCHED_FIFO/RR threads busy during the run: with the kernel's RT throttling they can stall the
+  node's real-time threads for up to 50 ms; two real-time benchmarks at once on 2 cores do).
 
 ``run_soak`` is also used by the 20-second version in ``test/test_reliability_soak.py``.
 """
@@ -166,6 +168,28 @@ def proc_cpu_s(pid: int) -> float:
     return (int(parts[11]) + int(parts[12])) / os.sysconf("SC_CLK_TCK")
 
 
+def rt_threads(exclude: set[int]) -> dict[tuple[int, int], tuple[str, float]]:
+    """Real-time (SCHED_FIFO/RR) user threads of other processes: {(pid, tid): (name, CPU seconds)}.
+    Under the kernel's RT throttling (95 % of each second), other busy real-time threads can stall the
+    node's real-time threads for up to 50 ms: the usual cause of deadline misses on a shared machine."""
+    out = {}
+    tick = os.sysconf("SC_CLK_TCK")
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit() or int(pid) in exclude:
+            continue
+        try:
+            for tid in os.listdir(f"/proc/{pid}/task"):
+                with open(f"/proc/{pid}/task/{tid}/stat") as f:
+                    name, rest = f.read().rsplit(")", 1)
+                parts = rest.split()
+                # fields after the name: parts[0] = state (field 3); policy is field 41, flags field 9
+                if int(parts[38]) in (1, 2) and not int(parts[6]) & 0x00200000:  # not a kernel thread
+                    out[(int(pid), int(tid))] = (name.split("(", 1)[1], (int(parts[11]) + int(parts[12])) / tick)
+        except (OSError, IndexError, ValueError):
+            continue
+    return out
+
+
 def rss_bytes(pid: int) -> int:
     with open(f"/proc/{pid}/status") as f:
         for line in f:
@@ -217,6 +241,8 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     proc = start_node(path, env=env)
     rss: list[tuple[float, int]] = []
     load: list[tuple[float, float, float, float, float]] = []  # (t, machine busy, idle, steal, node CPU) [s]
+    rt_seen: dict = {}
+    rt_busy: list = []  # (t, other real-time threads that used > 50 ms CPU in the last second)
     try:
         probe.wait_for(proc)
         probe.start_publishing()
@@ -226,6 +252,12 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
                 raise RuntimeError(f"susp_sim_node exited during the soak (code {proc.returncode})")
             rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
             load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid)))
+            rt = rt_threads({proc.pid, os.getpid()})
+            busy_rt = sorted({f"{n}[{pid}]" for k, (n, c) in rt.items() if c - rt_seen.get(k, c) > 0.05
+                              for pid in (k[0],)})
+            rt_seen.update({k: c for k, (n, c) in rt.items()})
+            if busy_rt:
+                rt_busy.append((round(time.monotonic() - t0, 1), busy_rt))
             time.sleep(min(1.0, max(0.0, duration - (time.monotonic() - t0))))
         rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
         load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid)))
@@ -275,6 +307,7 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
         "machine_busy_other_mean": float(busy_other.mean()), "machine_busy_other_max": float(busy_other.max()),
         "steal_mean": float(steal.mean()), "steal_max": float(steal.max()),
         "node_cpu_fraction": float((L[-1, 4] - L[0, 4]) / (L[-1, 0] - L[0, 0])),
+        "other_realtime_busy": rt_busy[:20],
     }
     res.update(check_recording(path, sent))
     res["recording"] = str(path)
