@@ -283,6 +283,8 @@ class SuspSimNode(Node):
         self._events: list = []   # sim time: (source timestamp, seq, kind, payload) heap
         self._seq = 0
         self._max_clock_src = 0
+        self._pulling = False  # taking queued messages straight from DDS (see _pull_pending)
+        self._sim_clock_sub = None
         self._reorder_ns = int(round(float(p["sim_reorder_window_s"]) * 1e9))
         self._rt_priority = int(p["realtime_priority"])
         warm_up(model)
@@ -304,12 +306,13 @@ class SuspSimNode(Node):
             # Our own /clock subscription, reliable and deep (rclpy's time source keeps only the latest
             # /clock, so a busy node would see the clock skip ahead of queued inputs): every clock value
             # is seen, in order, and each one steps the core exactly that far.
-            self.create_subscription(Clock, "/clock", self._on_clock, CLOCK_QOS)
+            self._sim_clock_sub = self.create_subscription(Clock, "/clock", self._on_clock, CLOCK_QOS)
             self.create_timer(0.002, self._drain, clock=RosClock(clock_type=ClockType.STEADY_TIME))
-        self.create_subscription(Float64, "/vehicle/speed", self._on_speed, INPUT_QOS)
-        self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self._on_steering, INPUT_QOS)
-        self.create_subscription(Float64MultiArray, "/road/profile", self._on_profile, LATCHED_QOS)
-        self.create_subscription(Float64MultiArray, "/road/wheel_heights", self._on_heights, INPUT_QOS)
+        self._input_subs = [
+            self.create_subscription(Float64, "/vehicle/speed", self._on_speed, INPUT_QOS),
+            self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self._on_steering, INPUT_QOS),
+            self.create_subscription(Float64MultiArray, "/road/profile", self._on_profile, LATCHED_QOS),
+            self.create_subscription(Float64MultiArray, "/road/wheel_heights", self._on_heights, INPUT_QOS)]
         self.add_on_set_parameters_callback(self._on_params)
         self._stale: set[str] = set()
         self._wall0 = time.monotonic()
@@ -376,6 +379,11 @@ class SuspSimNode(Node):
     # by then); a /clock once it is ``sim_reorder_window_s`` old (wall time), so that inputs published
     # before it can still be sorted in. An input published after /clock t and before the next /clock
     # thus takes effect exactly at t, as in lockstep, at any replay rate.
+    # The window alone is not enough when the executor falls behind (a fast replay): an input published
+    # before the due /clock may still wait in its subscription's DDS queue, because the executor takes
+    # one message per subscription per round. So before a due /clock is processed, every message DDS
+    # already holds for the input and /clock subscriptions is taken into the queue (_pull_pending): the
+    # window then only has to cover DDS delivery, not the executor's backlog.
     INPUT_WAIT_MAX_NS = 500_000_000  # an input with no later /clock is processed after this anyway
 
     def _push(self, info, kind: int, payload) -> None:
@@ -385,20 +393,42 @@ class SuspSimNode(Node):
             heapq.heappush(self._events, (src, self._seq, kind, payload))
             if kind == 0:
                 self._max_clock_src = max(self._max_clock_src, src)
-        self._drain()
+        if not self._pulling:
+            self._drain()
+
+    def _pull_pending(self) -> None:
+        """Take every message already delivered to the input and ``/clock`` subscriptions into the
+        queue, through their callbacks (as the executor would, which then finds them empty)."""
+        self._pulling = True
+        try:
+            for sub in (*self._input_subs, self._sim_clock_sub):
+                while True:
+                    with sub.handle:
+                        got = sub.handle.take_message(sub.msg_type, sub.raw)
+                    if got is None:
+                        break
+                    sub.callback(*got)
+        finally:
+            self._pulling = False
 
     def _drain(self) -> None:
         now = time.time_ns()
         with self.lock:
+            pulled = False
             while self._events:
                 src, _, kind, payload = self._events[0]
                 if kind == 0:
                     if src > now - self._reorder_ns:
                         break
+                    if not pulled:  # inputs published before this /clock may still wait in DDS
+                        pulled = True
+                        self._pull_pending()
+                        continue
                 elif not (src < self._max_clock_src or src <= now - self.INPUT_WAIT_MAX_NS):
                     break
                 heapq.heappop(self._events)
                 if kind == 0:
+                    pulled = False
                     self._sim_now = payload
                     if self.core.started:  # sim time starts with the first input (as lockstep)
                         self.tick()
