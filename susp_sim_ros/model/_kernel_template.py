@@ -16,7 +16,9 @@ a whole drive) and :func:`run_batch` runs many vehicles in parallel with ``prang
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import carray, njit, prange, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from susp_sim_ros.model.layout import (C_INDEX, N_CTX, N_GRID, N_Y, P_GRID, P_H_EMPTY, P_H_INTACT,
                                        P_INDEX, S_INDEX, U_INDEX, Y_INDEX)
@@ -96,6 +98,29 @@ def derive(p, dv):
         dv[_D_INV_CELL + k] = 1.0 / (p[P_GRID + k + 1] - p[P_GRID + k])
 
 
+def _stack_array(shape):
+    """An intrinsic returning a C-contiguous float64 array of ``shape`` on the stack of the calling
+    function (no allocation, no reference counting; valid while that function runs)."""
+    arrty = types.Array(types.float64, len(shape), "C")
+    n = int(np.prod(shape))
+    strides = [8 * int(np.prod(shape[k + 1:])) for k in range(len(shape))]
+
+    @intrinsic
+    def stack(typingctx):
+        def codegen(context, builder, sig, args):
+            intp = lambda v: context.get_constant(types.intp, v)  # noqa: E731
+            ptr = cgutils.alloca_once(builder, context.get_value_type(types.float64), size=intp(n))
+            ary = context.make_array(arrty)(context, builder)
+            context.populate_array(ary, data=ptr, shape=[intp(d) for d in shape],
+                                   strides=[intp(st) for st in strides], itemsize=intp(8), meminfo=None)
+            return ary._getvalue()
+        return arrty(), codegen
+    return stack
+
+
+_stack_c, _stack_w, _stack_y = _stack_array((4, N_CTX)), _stack_array((N_SCRATCH,)), _stack_array((N_Y,))
+
+
 # @@BEGIN TERMS@@
 @njit(cache=True)
 def terms_force(p, s, i, c, mask):
@@ -171,27 +196,34 @@ def hydraulic_force(p, dv, i, dd, k):
 
 
 @njit(cache=True, inline="always")
-def fill_context(p, dv, i, c, d, dd, fx, fy, fz, v, dt):
-    """Corner context for the physics terms, including the paper's friction scalings (model-spec 1)."""
+def fill_context_const(p, i, c, dt):
+    """The parts of corner ``i``'s context that stay constant over a run (set once per run): oil
+    level, axle, side, step ``dt`` [s] and the oil scaling ``s_oil`` of the damper friction."""
+    oil = p[_OIL + i]
+    c[i, _C_OIL] = oil
+    c[i, _C_AXLE] = 0.0 if i < 2 else 1.0
+    c[i, _C_SIDE] = float(i % 2)
+    c[i, _C_DT] = dt
+    soil = 1.0
+    if p[_USE_OIL] > 0.5:
+        soil = 1.0 + (p[_SOIL_EMPTY + i] - 1.0) * (1.0 - oil)
+    c[i, _C_SOIL] = soil
+
+
+@njit(cache=True, inline="always")
+def fill_context(p, dv, i, c, d, dd, fx, fy, fz, v):
+    """Corner context for the physics terms, including the paper's friction scalings (model-spec 1);
+    the constant part is set by :func:`fill_context_const`."""
     c[i, _C_D] = d
     c[i, _C_DD] = dd
     c[i, _C_FX] = fx
     c[i, _C_FY] = fy
     c[i, _C_FZ] = fz
-    oil = p[_OIL + i]
-    c[i, _C_OIL] = oil
-    c[i, _C_AXLE] = 0.0 if i < 2 else 1.0
-    c[i, _C_SIDE] = float(i % 2)
     c[i, _C_V] = v
-    c[i, _C_DT] = dt
     sv = 1.0
     if p[_USE_V] > 0.5 and abs(dd) > p[_SV_REF]:
         sv = 1.0 + (p[_SV_INF] - 1.0) * (1.0 - math.exp(-(abs(dd) - p[_SV_REF]) * dv[_D_INV_VS]))
     c[i, _C_SV] = sv
-    soil = 1.0
-    if p[_USE_OIL] > 0.5:
-        soil = 1.0 + (p[_SOIL_EMPTY + i] - 1.0) * (1.0 - oil)
-    c[i, _C_SOIL] = soil
     sh = 1.0
     if p[_USE_H] > 0.5:
         sh = 1.0 + p[_SH_X + i] * abs(fx) + p[_SH_Y + i] * abs(fy)
@@ -199,14 +231,15 @@ def fill_context(p, dv, i, c, d, dd, fx, fy, fz, v, dt):
 
 
 @njit(cache=True, inline="always")
-def step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
+def step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y, out):
     """Advance one vehicle by one step ``dt`` [s] with the inputs of row ``k`` of ``U``
-    (layout.U_INDEX); writes outputs ``y``.
+    (layout.U_INDEX); writes outputs ``y`` when ``out`` (skipped on steps whose outputs nobody reads).
 
     ``p`` parameters (``dv`` their reciprocals, :func:`derive`), ``s`` state (updated in place), road tracks ``rs``/``rzl``/``rzr`` with ``rn``
     valid samples (``mode`` 0), or per-wheel road heights from ``U`` (``mode`` 1). Rows of 2-D
-    arrays are indexed, never sliced: a slice is a new array object with reference counting. ``c`` (4 x N_CTX)
-    and ``w`` are scratch. Returns False when the state stopped being finite.
+    arrays are indexed, never sliced: a slice is a new array object with reference counting. ``c`` (4 x N_CTX,
+    constant part set by :func:`fill_context_const`) and ``w`` are scratch. Returns False when the state
+    stopped being finite.
     """
     g = p[_G]
     ms = p[_M_S]
@@ -268,7 +301,7 @@ def step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
 
     # -- suspension forces ---------------------------------------------------------------------------
     for i in range(4):
-        fill_context(p, dv, i, c, w[_W_D + i], w[_W_DD + i], w[_W_FX + i], s[_FYT + i], w[_W_FZ + i], v, dt)
+        fill_context(p, dv, i, c, w[_W_D + i], w[_W_DD + i], w[_W_FX + i], s[_FYT + i], w[_W_FZ + i], v)
         f_spring = spring_force(p, dv, i, w[_W_D + i])
         cell = _grid_cell(p, w[_W_DD + i], int(w[_W_CELL + i]))
         w[_W_CELL + i] = cell
@@ -277,10 +310,11 @@ def step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
         j = i + 1 if i % 2 == 0 else i - 1
         f_arb = p[_K_ARB + i] * (w[_W_D + i] - w[_W_D + j])
         w[_W_FS + i] = f_spring + f_damper + f_terms + f_arb
-        y[_Y_F_SPRING + i] = f_spring
-        y[_Y_F_DAMPER + i] = f_damper
-        y[_Y_F_FRICTION + i] = f_terms
-        y[_Y_F_ARB + i] = f_arb
+        if out:
+            y[_Y_F_SPRING + i] = f_spring
+            y[_Y_F_DAMPER + i] = f_damper
+            y[_Y_F_FRICTION + i] = f_terms
+            y[_Y_F_ARB + i] = f_arb
 
     # -- equations of motion ------------------------------------------------------------------------
     fs0 = w[_W_FS]
@@ -357,15 +391,19 @@ def step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
         d_new = zw_i - (z - p[_X_I + i] * th + p[_Y_I + i] * phi)
         terms_update(p, s, i, c, d_new - w[_W_D + i], MASK_ALL)
         s[_ZR_PREV + i] = w[_W_ZR + i]
-        y[_Y_DEFL + i] = d_new
-        y[_Y_DEFL_VEL + i] = zwd_i - (zd - p[_X_I + i] * thd + p[_Y_I + i] * phid)
-        y[_Y_F_Z + i] = w[_W_FZ + i]
-        y[_Y_F_X + i] = w[_W_FX + i]
-        y[_Y_F_Y + i] = fy0 if i == 0 else (fy1 if i == 1 else (fy2 if i == 2 else fy3))
-        y[_Y_Z_ROAD + i] = w[_W_ZR + i]
+        if out:
+            y[_Y_DEFL + i] = d_new
+            y[_Y_DEFL_VEL + i] = zwd_i - (zd - p[_X_I + i] * thd + p[_Y_I + i] * phid)
+            y[_Y_F_Z + i] = w[_W_FZ + i]
+            y[_Y_F_X + i] = w[_W_FX + i]
+            y[_Y_F_Y + i] = fy0 if i == 0 else (fy1 if i == 1 else (fy2 if i == 2 else fy3))
+            y[_Y_Z_ROAD + i] = w[_W_ZR + i]
         if not math.isfinite(zw_i):
             ok = False
 
+    ok = ok and math.isfinite(z + phi + th + vy + r + zd + phid + thd)
+    if not out:
+        return ok
     # -- outputs: IMU at the centre of gravity (specific force incl. gravity, REP-145), pose --------
     y[_Y_ROLL_RATE] = phid
     y[_Y_PITCH_RATE] = thd
@@ -382,19 +420,34 @@ def step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y):
     y[_Y_VY] = vy
     y[_Y_HEAVE] = z
     y[_Y_PATH] = s[_SPATH]
-    return ok and math.isfinite(z + phi + th + vy + r + zd + phid + thd)
+    return ok
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", fastmath={"contract", "arcp", "nsz"})
-def _run_steps(p, dv, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y, c, w, y):
+def _run_steps(p, dv, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y):
     # compiled without the reference-counting runtime: with it, every array argument of the inlined
-    # helpers costs an atomic incref/decref pair per step, which made up half of the step time
+    # helpers costs an atomic incref/decref pair per step, which made up half of the step time.
+    # Scratch, context and outputs live on this function's stack: the compiler then knows that they
+    # overlap neither the parameters nor the state and keeps more of them in registers.
+    c = _stack_c()
+    w = _stack_w()
+    y = _stack_y()
+    for i in range(4):
+        for j in range(N_CTX):
+            c[i, j] = 0.0
+    for j in range(N_SCRATCH):
+        w[j] = 0.0
+    w[_W_VLAST] = -1.0
+    for j in range(N_Y):
+        y[j] = 0.0
     n_sel = sel.shape[0]
     row = 0
     count = 0
+    for i in range(4):
+        fill_context_const(p, i, c, dt)
     for k in range(U.shape[0]):
-        ok = step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y)
         count += 1
+        ok = step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y, count == decim)
         if count == decim:
             count = 0
             if row < Y.shape[0]:
@@ -411,16 +464,12 @@ def run_one(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y):
     """Step one vehicle over every row of ``U`` (n_steps x N_U); every ``decim``-th step's outputs
     ``y[sel]`` go to the next row of ``Y``. Returns the number of steps done (< n_steps when the state
     became non-finite: the run stops there and the state is left as it was after the bad step)."""
-    c = np.zeros((4, N_CTX))
-    w = np.zeros(N_SCRATCH)
-    w[_W_VLAST] = -1.0
-    y = np.zeros(N_Y)
     dv = np.zeros(N_DERIVED)
     derive(p, dv)
-    return _run_steps(p, dv, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y, c, w, y)
+    return _run_steps(p, dv, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done):
     """Run vehicles ``b`` in parallel: parameters ``P[b]``, state ``S[b]`` (in place), inputs
     ``U[u_row[b]]``, road ``road_row[b]``, outputs to ``Y[b]``, steps done to ``done[b]``."""
@@ -439,8 +488,9 @@ def rig_run(p, s, i, d, dd, fx, fy, fz, mask, with_spring, out):
     dv = np.zeros(N_DERIVED)
     derive(p, dv)
     cell = -1
+    fill_context_const(p, i, c, 0.0)
     for k in range(d.shape[0]):
-        fill_context(p, dv, i, c, d[k], dd[k], fx, fy, fz, 0.0, 0.0)
+        fill_context(p, dv, i, c, d[k], dd[k], fx, fy, fz, 0.0)
         cell = _grid_cell(p, dd[k], cell)
         f = hydraulic_force(p, dv, i, dd[k], cell) + terms_force(p, s, i, c, mask)
         if with_spring:
