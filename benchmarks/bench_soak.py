@@ -16,8 +16,9 @@ checks the recording. Reported (``--json``: one JSON object on stdout, logs on s
   ``recording_complete``: every input sent is recorded, the three ``/sim`` topics hold the same number of
   samples, no tick is missing and no sequence number skipped, the file is finalised;
 - ``node_exit_code`` (0 after SIGINT), ``rejected_inputs`` (0 expected);
-- for attributing misses: ``misses_at`` (seconds into the run with new misses), the machine's busy share
-  of the other processes (``machine_busy_other_mean``/``_max``, per second, fraction of all CPUs),
+- for attributing misses: ``misses_at`` (seconds into the run with new misses), the CPU share of the
+  other processes, this one included (``machine_busy_other_mean``/``_max``, per second, fraction of all
+  CPUs, from per-process accounting),
   ``steal_mean``/``_max`` (hypervisor steal), ``node_cpu_fraction`` and ``other_realtime_busy`` (other
   processes' SCHED_FIFO/RR threads busy during the run: with the kernel's RT throttling they can stall the
   node's real-time threads for up to 50 ms; two real-time benchmarks at once on 2 cores do).
@@ -162,6 +163,32 @@ def cpu_times() -> tuple[float, float, float]:
     return (sum(v[:8]) - idle - steal) / tick, idle / tick, steal / tick
 
 
+class OtherProcessesCpu:
+    """CPU seconds used by all other processes since the last call (per-process accounting from
+    /proc/PID/stat; the machine-wide busy time of /proc/stat is sampled at the scheduler tick and misses
+    most of a process that wakes 1000 times a second for a few microseconds, like the node)."""
+
+    def __init__(self, exclude: set[int]):
+        self.exclude = exclude
+        self.seen = self._sample()
+
+    def _sample(self) -> dict[int, float]:
+        out = {}
+        for pid in os.listdir("/proc"):
+            if pid.isdigit() and int(pid) not in self.exclude:
+                try:
+                    out[int(pid)] = proc_cpu_s(int(pid))
+                except (OSError, IndexError, ValueError):
+                    continue
+        return out
+
+    def delta(self) -> float:
+        now = self._sample()
+        d = sum(c - self.seen.get(pid, 0.0) for pid, c in now.items())  # a new process: all of its CPU
+        self.seen = now
+        return max(d, 0.0)
+
+
 def proc_cpu_s(pid: int) -> float:
     with open(f"/proc/{pid}/stat") as f:
         parts = f.read().rsplit(")", 1)[1].split()
@@ -240,18 +267,20 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     probe = Probe(rate_hz, realtime=realtime_probe)
     proc = start_node(path, env=env)
     rss: list[tuple[float, int]] = []
-    load: list[tuple[float, float, float, float, float]] = []  # (t, machine busy, idle, steal, node CPU) [s]
+    # (t, machine busy, idle, steal, node CPU, other processes' CPU in the last interval) [s]
+    load: list[tuple[float, float, float, float, float, float]] = []
     rt_seen: dict = {}
     rt_busy: list = []  # (t, other real-time threads that used > 50 ms CPU in the last second)
     try:
         probe.wait_for(proc)
+        others = OtherProcessesCpu({proc.pid})
         probe.start_publishing()
         t0 = time.monotonic()
         while time.monotonic() - t0 < duration:
             if proc.poll() is not None:
                 raise RuntimeError(f"susp_sim_node exited during the soak (code {proc.returncode})")
             rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
-            load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid)))
+            load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid), others.delta()))
             rt = rt_threads({proc.pid, os.getpid()})
             busy_rt = sorted({f"{n}[{pid}]" for k, (n, c) in rt.items() if c - rt_seen.get(k, c) > 0.05
                               for pid in (k[0],)})
@@ -260,7 +289,7 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
                 rt_busy.append((round(time.monotonic() - t0, 1), busy_rt))
             time.sleep(min(1.0, max(0.0, duration - (time.monotonic() - t0))))
         rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
-        load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid)))
+        load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid), others.delta()))
         probe.stop_publishing()
         time.sleep(1.2)  # the last inputs are taken; a final /diagnostics covers the whole run
         diag = {k: dict(v) for k, v in probe.diag.items()}
@@ -283,7 +312,7 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     L = np.array(load)
     dt = np.diff(L[:, 0])
     ncpu = os.cpu_count() or 1
-    busy_other = (np.diff(L[:, 1]) - np.diff(L[:, 4])) / dt / ncpu  # busy fraction of the others
+    busy_other = L[1:, 5] / dt / ncpu  # busy fraction of the other processes (this one included)
     steal = np.diff(L[:, 3]) / dt / ncpu
     miss_at = []
     for (ta, ma, _), (tb, mb, jb) in zip(probe.timeline, probe.timeline[1:]):

@@ -204,8 +204,9 @@ class _Refs:
 
 
 def _references(spec: StudySpec, store: ResultStore, executor) -> _Refs | None:
-    """The distinct reference runs of the study: from the store (a resumed study), or computed as tasks
-    of ``chunk_size`` runs before the chunks are submitted and stored; ``None`` without a reference.
+    """The distinct reference runs of the study: from the store (a resumed study), or computed before the
+    chunks are submitted (here when they fit in one chunk, else as tasks of ``chunk_size`` runs) and
+    stored; ``None`` without a reference.
 
     The chunk tasks get the traces as data, not as futures of the reference tasks: Dask places a task
     next to the data it depends on, so with futures every chunk went to the worker that had computed
@@ -224,6 +225,9 @@ def _references(spec: StudySpec, store: ResultStore, executor) -> _Refs | None:
     stored = store.load_references(names)
     if stored is not None:
         traces = [stored[n] for n in names]
+    elif len(refs) <= size:  # one small batch: computed here, faster than a round trip to a worker
+        traces = engine.reference_task(spec.data, refs)
+        store.save_references(dict(zip(names, traces)))
     else:
         tasks = [executor.submit(engine.reference_task, spec.data, refs[j:j + size])
                  for j in range(0, len(refs), size)]
