@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from susp_sim_ros.errors import SuspInputError
 from susp_sim_ros.model import make_inputs, simulate
@@ -115,3 +117,21 @@ def test_wall_time_never_restarts_on_a_late_reading(core):
     assert core.total_sim_time_s == pytest.approx(0.03)
     core.advance_to(T0, allow_restart=True)
     assert core.restarts == 1 and core.total_sim_time_s == pytest.approx(0.03)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(st.tuples(st.integers(0, 3), st.floats(0.0, 60.0)), min_size=1, max_size=40))
+def test_offline_accelerations_follow_the_node_rule(model_full, msgs):
+    """The finder's inputs (discrepancy.data.speed_accelerations) derive the acceleration from speed
+    messages as the node does, repeated timestamps and absurd jumps included (never inf or NaN)."""
+    from susp_sim_ros.analysis.discrepancy.data import speed_accelerations
+    core = SimCore(model_full, step_s=0.001, publish_rate_hz=100.0)
+    t = np.cumsum([dt * 5_000_000 for dt, _ in msgs]) + T0  # steps of 0..15 ms, 0 = same time
+    v = [x for _, x in msgs]
+    expected = []
+    for tk, vk in zip(t, v):
+        assert core.set_speed(int(tk), vk) is None
+        expected.append(core.accel)
+    got = speed_accelerations(t, v)
+    assert np.all(np.isfinite(got))
+    np.testing.assert_array_equal(got, expected)

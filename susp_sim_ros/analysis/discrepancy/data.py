@@ -91,6 +91,25 @@ def _linear(t_msg_ns: np.ndarray, values: np.ndarray, t0_ns: int, n_steps: int, 
     return np.column_stack([np.interp(k, t, v[:, j]) for j in range(v.shape[1])])
 
 
+def speed_accelerations(t_ns, v) -> np.ndarray:
+    """Longitudinal acceleration [m/s^2] in effect after each speed message, by the node's rule
+    (:meth:`~susp_sim_ros.sim_core.SimCore.set_speed`): the difference quotient to the previous message,
+    limited to +-``MAX_ACCEL``; a message at the same time as the previous one (or earlier) changes the
+    speed but keeps the acceleration; 0 before the second message."""
+    from ...sim_core import MAX_ACCEL
+    t = np.asarray(t_ns, np.int64)
+    v = np.asarray(v, float)
+    acc = np.zeros(len(v))
+    a, t_last, v_last = 0.0, None, None
+    for k in range(len(v)):
+        if t_last is not None and t[k] > t_last:
+            a = (v[k] - v_last) / ((t[k] - t_last) * 1e-9)
+            a = min(max(a, -MAX_ACCEL), MAX_ACCEL)
+        acc[k] = a
+        t_last, v_last = int(t[k]), v[k]
+    return acc
+
+
 def make_inputs_from_drive(drive, dt: float = 0.001, hold: bool = False) -> tuple[np.ndarray, int]:
     """Per-step inputs (n_steps, N_U) and the time origin [ns] of a recorded drive.
 
@@ -109,10 +128,7 @@ def make_inputs_from_drive(drive, dt: float = 0.001, hold: bool = False) -> tupl
     fill = (lambda tm, v: _held(tm, np.asarray(v, float), t0, n_steps, step_ns)) if hold else \
         (lambda tm, v: _linear(tm, v, t0, n_steps, dt))
     U[:, U_INDEX["V"]] = fill(sp.t_ns, sp.values)
-    acc = np.zeros(len(sp))
-    if len(sp) > 1:
-        acc[1:] = np.diff(sp.values) / (np.diff(sp.t_ns) * 1e-9)
-    U[:, U_INDEX["AX"]] = _held(sp.t_ns, acc, t0, n_steps, step_ns)
+    U[:, U_INDEX["AX"]] = _held(sp.t_ns, speed_accelerations(sp.t_ns, sp.values), t0, n_steps, step_ns)
     st = drive.steering
     U[:, U_INDEX["SWA"]] = fill(st.t_ns, st.values)
     if drive.wheel_heights is not None and len(drive.wheel_heights):
