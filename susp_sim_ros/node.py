@@ -47,6 +47,7 @@ import numpy as np
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock as RosClock, ClockType
+from rclpy.exceptions import InvalidHandle
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -408,6 +409,8 @@ class SuspSimNode(Node):
                     if got is None:
                         break
                     sub.callback(*got)
+        except InvalidHandle:  # shutting down: a subscription is already destroyed
+            pass
         finally:
             self._pulling = False
 
