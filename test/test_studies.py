@@ -201,6 +201,18 @@ def test_dask_cluster_gives_the_same_table_as_a_plain_run(tmp_path, dask_executo
     assert Path(res["plots"][0]).stat().st_size > 10_000
 
 
+def test_dask_chunks_spread_over_the_workers(tmp_path, dask_executor):
+    """Chunk tasks carry the reference traces as data: had they depended on a reference future, Dask
+    would have placed every chunk next to it, on one worker."""
+    from distributed import get_task_stream
+    spec = study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml")
+    with get_task_stream(client=dask_executor.client) as ts:
+        run_study(spec, tmp_path / "spread", dask_executor, progress=False, plot=False)
+    chunk_workers = [t["worker"] for t in ts.data if t["key"].startswith("_timed")]
+    assert len(chunk_workers) == 3                  # the three chunks
+    assert len(set(chunk_workers)) == 2, chunk_workers
+
+
 class Interrupt(Exception):
     pass
 
