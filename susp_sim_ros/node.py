@@ -172,29 +172,29 @@ class RecordingQueue:
         while True:
             item = self._q.get()
             if item is StopIteration:
-                self._write_held(held, None)
+                if not self.error:
+                    self._write_held(held, None)
                 return
             if self.error:
                 continue
             if item is None:
-                self._guarded(self.recorder.flush_if_due)
+                self._write_held([], None, flush=True)
                 continue
             arrived += 1
             heapq.heappush(held, (item[2], arrived, item))
             newest = item[2] if newest is None else max(newest, item[2])
             self._write_held(held, newest - RECORD_REORDER_NS)
 
-    def _write_held(self, held: list, upto: int | None) -> None:
-        """Write the held messages with log time <= ``upto`` (all: ``None``), oldest first."""
-        while held and not self.error and (upto is None or held[0][0] <= upto):
-            topic, msgtype, t_ns, data, latched = heapq.heappop(held)[2]
-            self._guarded(lambda: self.recorder.write(topic, msgtype, t_ns, data() if callable(data) else data,
-                                                      latched=latched))
-
-    def _guarded(self, fn) -> None:
+    def _write_held(self, held: list, upto: int | None, flush: bool = False) -> None:
+        """Write the held messages with log time <= ``upto`` (all: ``None``), oldest first; then flush
+        if due (``flush``). A write error stops the recording (disk full, file removed), not the node."""
         try:
-            fn()
-        except Exception as exc:  # disk full, file removed, ...: stop recording, keep simulating
+            while held and (upto is None or held[0][0] <= upto):
+                topic, msgtype, t_ns, data, latched = heapq.heappop(held)[2]
+                self.recorder.write(topic, msgtype, t_ns, data() if callable(data) else data, latched=latched)
+            if flush:
+                self.recorder.flush_if_due()
+        except Exception as exc:
             self.error = f"{type(exc).__name__}: {exc}"
             self._log_error(f"recording stopped: {self.error}")
 

@@ -77,6 +77,18 @@ class DivergenceError(RuntimeError):
     """The simulation left the physical envelope (non-finite or absurd state) and was stopped."""
 
 
+def accel_between(t_prev_ns: int | None, v_prev: float, t_ns: int, v: float) -> tuple[float, bool] | None:
+    """Acceleration [m/s^2] from two successive speed messages and whether it was limited to
+    +-``MAX_ACCEL`` (a glitch, or a jump after a restart, not a car); ``None`` when there is no earlier
+    message or ``t_ns`` is not after it (the acceleration in effect stays)."""
+    if t_prev_ns is None or t_ns <= t_prev_ns:
+        return None
+    a = (v - v_prev) / ((t_ns - t_prev_ns) * 1e-9)
+    if abs(a) > MAX_ACCEL:
+        return math.copysign(MAX_ACCEL, a), True
+    return a, False
+
+
 class RateLimitedLog:
     """Log each cause (any hashable key) the first time at once, then at most once per ``interval_s``
     with the number of occurrences not logged in between: a flood of bad messages gives one line per
@@ -248,12 +260,10 @@ class SimCore:
         if v > MAX_SPEED:
             return self._reject("speed_range", f"/vehicle/speed: rejected absurd speed {v} m/s (> {MAX_SPEED})")
         t_ns = int(t_ns)
-        if self._last_speed_t is not None and t_ns > self._last_speed_t:
-            a = (v - self.speed) / ((t_ns - self._last_speed_t) * 1e-9)
-            if abs(a) > MAX_ACCEL:  # a glitch (or a jump after a restart), not a car
-                self.accel_clamped += 1
-                a = math.copysign(MAX_ACCEL, a)
-            self.accel = a
+        step = accel_between(self._last_speed_t, self.speed, t_ns, v)
+        if step is not None:
+            self.accel, clamped = step
+            self.accel_clamped += clamped
         self._last_speed_t = t_ns
         self.speed = v
         self.last_input_ns["/vehicle/speed"] = t_ns

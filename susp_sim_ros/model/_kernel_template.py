@@ -16,7 +16,7 @@ a whole drive) and :func:`run_batch` runs many vehicles in parallel with ``prang
 import math
 
 import numpy as np
-from numba import carray, njit, prange, types
+from numba import njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 

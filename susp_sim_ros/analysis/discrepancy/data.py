@@ -93,20 +93,20 @@ def _linear(t_msg_ns: np.ndarray, values: np.ndarray, t0_ns: int, n_steps: int, 
 
 def speed_accelerations(t_ns, v) -> np.ndarray:
     """Longitudinal acceleration [m/s^2] in effect after each speed message, by the node's rule
-    (:meth:`~susp_sim_ros.sim_core.SimCore.set_speed`): the difference quotient to the previous message,
-    limited to +-``MAX_ACCEL``; a message at the same time as the previous one (or earlier) changes the
-    speed but keeps the acceleration; 0 before the second message."""
-    from ...sim_core import MAX_ACCEL
+    (:func:`~susp_sim_ros.sim_core.accel_between`, as :meth:`~susp_sim_ros.sim_core.SimCore.set_speed`):
+    a message at the same time as the previous one (or earlier) changes the speed but keeps the
+    acceleration; 0 before the second message."""
+    from ...sim_core import accel_between
     t = np.asarray(t_ns, np.int64)
     v = np.asarray(v, float)
     acc = np.zeros(len(v))
-    a, t_last, v_last = 0.0, None, None
+    a, t_last, v_last = 0.0, None, 0.0
     for k in range(len(v)):
-        if t_last is not None and t[k] > t_last:
-            a = (v[k] - v_last) / ((t[k] - t_last) * 1e-9)
-            a = min(max(a, -MAX_ACCEL), MAX_ACCEL)
+        step = accel_between(t_last, v_last, int(t[k]), float(v[k]))
+        if step is not None:
+            a = step[0]
         acc[k] = a
-        t_last, v_last = int(t[k]), v[k]
+        t_last, v_last = int(t[k]), float(v[k])
     return acc
 
 

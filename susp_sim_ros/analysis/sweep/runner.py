@@ -199,8 +199,8 @@ class _Refs:
     """The study's distinct reference runs: ``tasks[t]`` is the output of reference task ``t`` (a list of
     traces) and ``where[r] = (t, k)`` the trace of run ``r``."""
 
-    def __init__(self, tasks, where, names, size):
-        self.tasks, self.where, self.names, self.size = tasks, where, names, size
+    def __init__(self, tasks, where):
+        self.tasks, self.where = tasks, where
 
 
 def _references(spec: StudySpec, store: ResultStore, executor) -> _Refs | None:
@@ -225,15 +225,15 @@ def _references(spec: StudySpec, store: ResultStore, executor) -> _Refs | None:
     stored = store.load_references(names)
     if stored is not None:
         traces = [stored[n] for n in names]
-    elif len(refs) <= size:  # one small batch: computed here, faster than a round trip to a worker
-        traces = engine.reference_task(spec.data, refs)
-        store.save_references(dict(zip(names, traces)))
     else:
-        tasks = [executor.submit(engine.reference_task, spec.data, refs[j:j + size])
-                 for j in range(0, len(refs), size)]
-        traces = [tr for t in tasks for tr in executor.result(t)]
+        if len(refs) <= size:  # one small batch: computed here, faster than a round trip to a worker
+            traces = engine.reference_task(spec.data, refs)
+        else:
+            tasks = [executor.submit(engine.reference_task, spec.data, refs[j:j + size])
+                     for j in range(0, len(refs), size)]
+            traces = [tr for t in tasks for tr in executor.result(t)]
         store.save_references(dict(zip(names, traces)))
-    return _Refs([traces[j:j + size] for j in range(0, len(traces), size)], where, names, size)
+    return _Refs([traces[j:j + size] for j in range(0, len(traces), size)], where)
 
 
 def _chunk_refs(refs: _Refs | None, run_ids) -> tuple:
