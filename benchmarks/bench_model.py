@@ -68,6 +68,8 @@ def bench_peer(man) -> float | None:
         from vehiclemodels.parameters_vehicle2 import parameters_vehicle2
         from vehiclemodels.vehicle_dynamics_mb import vehicle_dynamics_mb
     except ImportError:
+        print("peer: commonroad-vehicle-models is not installed (pip install -e '.[bench]'); peer_rtf is null",
+              file=sys.stderr)
         return None
     p = parameters_vehicle2()
     ratio = 15.5
