@@ -42,6 +42,29 @@ def test_batch_equals_single_runs(model_full):
         np.testing.assert_allclose(t, single.t)
 
 
+def test_batch_blocks_equal_single_runs_and_a_diverging_vehicle_stops_alone(model_full):
+    """The batch steps vehicles in blocks of ``kernel.LANES`` (SIMD lanes): 37 vehicles are two full
+    blocks and a partial one. Each equals its own single run bit for bit, also when its neighbour in
+    the block diverges and stops there."""
+    man = bump_crossing()
+    U = man.to_inputs(DT)[:3000]
+    rng = np.random.default_rng(3)
+    n = 2 * model_full.kernel.LANES + 5
+    P = np.stack([model_full.params(tuple(rng.uniform(0.0, 1.0, 4))) for _ in range(n)])
+    bad = model_full.kernel.LANES + 4
+    P[bad, P_INDEX["M_S"]] = 1e-300  # absurd: this body explodes
+    S = np.tile(model_full.initial_state(), (n, 1))
+    _, Y, done = simulate_batch(model_full, P, U, dt=DT, roads=[man.road], decim=10,
+                                outputs=["PITCH_RATE", "DEFL_RL"], S=S)
+    assert done[bad] < U.shape[0] and np.all(np.delete(done, bad) == U.shape[0])
+    for b in range(n):
+        single = simulate(model_full, U, dt=DT, road=man.road, P=P[b].copy(), decim=10,
+                          outputs=["PITCH_RATE", "DEFL_RL"])
+        assert single.steps_done == done[b]
+        np.testing.assert_array_equal(Y[b], single.y)
+        np.testing.assert_array_equal(S[b], single.state)
+
+
 def test_batch_mixes_drives_and_roads(model_full):
     bump, sine = bump_crossing(), sine_steer(duration=bump_crossing().duration)
     n = min(bump.n_steps(DT), sine.n_steps(DT))

@@ -9,9 +9,11 @@ measured from static equilibrium, small angles, SI units, REP-103 axes. Integrat
 (symplectic) Euler at a fixed step; Dahl elements and tyre relaxation use their exact solutions over the
 step, which keeps them stable at any step (model-spec 1).
 
-One stepping function, :func:`step`, serves everything: :func:`run_one` loops it over time for one
-vehicle (the node calls this every publish period with the few steps due; offline runs call it once for
-a whole drive) and :func:`run_batch` runs many vehicles in parallel with ``prange``.
+One stepping function, :func:`step`, serves everything. It advances a block of up to :data:`LANES`
+vehicles held as columns (structure of arrays), so every loop over the vehicles of a block compiles to
+SIMD instructions: :func:`run_one` runs one vehicle as a block of one (the node calls it every publish
+period with the few steps due; offline runs call it once for a whole drive) and :func:`run_batch` runs
+blocks in parallel with ``prange``. A vehicle's numbers do not depend on its block or lane.
 """
 import math
 
@@ -20,8 +22,9 @@ from numba import njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from susp_sim_ros.model.layout import (C_INDEX, N_CTX, N_GRID, N_Y, P_GRID, P_H_EMPTY, P_H_INTACT,
-                                       P_INDEX, S_INDEX, U_INDEX, Y_INDEX)
+from susp_sim_ros.model.inline_math import expm1_nonpos, tanh
+from susp_sim_ros.model.layout import (C_INDEX, N_CTX, N_GRID, N_P_FIXED, N_S_FIXED, N_Y, P_GRID,
+                                       P_H_EMPTY, P_H_INTACT, P_INDEX, S_INDEX, U_INDEX, Y_INDEX)
 
 # ---- named indices, frozen into the compiled code as constants ---------------------------------------
 _G, _M_S, _M_TOT = P_INDEX["G"], P_INDEX["M_S"], P_INDEX["M_TOT"]
@@ -65,10 +68,13 @@ MASK_AXLE = 1
 MASK_DAMPER = 2
 MASK_ALL = 3
 
-# scratch slots per corner (w[k*4 + i])
-_W_ZR, _W_ZRD, _W_SLOPE, _W_D, _W_DD, _W_FZ, _W_WF, _W_FX, _W_FS, _W_CELL = 0, 4, 8, 12, 16, 20, 24, 28, 32, 36
-_W_VLAST, _W_RELAX = 40, 41
+# vehicles per block: AVX-512 holds 8 doubles, AVX2 4; 16 lets the compiler unroll the vector loops
+LANES = 16
+# scratch rows per block: per corner (W[_W_x + i]), then per vehicle
+_W_ZR, _W_ZRD, _W_SLOPE, _W_D, _W_DD, _W_FZ, _W_WF, _W_FX, _W_FS = 0, 4, 8, 12, 16, 20, 24, 28, 32
+_W_V, _W_AX, _W_DELTA, _W_ZDD, _W_AY, _W_OK = 36, 37, 38, 39, 40, 41
 N_SCRATCH = 42
+_TINY = 1e-300  # guards a division whose result is discarded (tyre force without load)
 
 # reciprocals of constant parameters, computed once per run (:func:`derive`): the step then
 # multiplies instead of dividing, and a parameter changed between runs is always seen
@@ -98,10 +104,10 @@ def derive(p, dv):
         dv[_D_INV_CELL + k] = 1.0 / (p[P_GRID + k + 1] - p[P_GRID + k])
 
 
-def _stack_array(shape):
-    """An intrinsic returning a C-contiguous float64 array of ``shape`` on the stack of the calling
-    function (no allocation, no reference counting; valid while that function runs)."""
-    arrty = types.Array(types.float64, len(shape), "C")
+def _stack_array(shape, dtype=types.float64):
+    """An intrinsic returning a C-contiguous array of ``shape`` on the stack of the calling function
+    (no allocation, no reference counting; valid while that function runs)."""
+    arrty = types.Array(dtype, len(shape), "C")
     n = int(np.prod(shape))
     strides = [8 * int(np.prod(shape[k + 1:])) for k in range(len(shape))]
 
@@ -109,7 +115,7 @@ def _stack_array(shape):
     def stack(typingctx):
         def codegen(context, builder, sig, args):
             intp = lambda v: context.get_constant(types.intp, v)  # noqa: E731
-            ptr = cgutils.alloca_once(builder, context.get_value_type(types.float64), size=intp(n))
+            ptr = cgutils.alloca_once(builder, context.get_value_type(dtype), size=intp(n))
             ary = context.make_array(arrty)(context, builder)
             context.populate_array(ary, data=ptr, shape=[intp(d) for d in shape],
                                    strides=[intp(st) for st in strides], itemsize=intp(8), meminfo=None)
@@ -118,10 +124,11 @@ def _stack_array(shape):
     return stack
 
 
-_stack_c, _stack_w, _stack_y = _stack_array((4, N_CTX)), _stack_array((N_SCRATCH,)), _stack_array((N_Y,))
-
-
 # @@BEGIN TERMS@@
+N_P = N_P_FIXED
+N_S = N_S_FIXED
+
+
 @njit(cache=True)
 def terms_force(p, s, i, c, mask):
     return 0.0
@@ -133,17 +140,21 @@ def terms_update(p, s, i, c, dx, mask):
 # @@END TERMS@@
 
 
+_stack_p, _stack_dv, _stack_s = (_stack_array((N_P, LANES)), _stack_array((N_DERIVED, LANES)),
+                                 _stack_array((N_S, LANES)))
+_stack_c, _stack_w, _stack_y = (_stack_array((4, N_CTX, LANES)), _stack_array((N_SCRATCH, LANES)),
+                                _stack_array((N_Y, LANES)))
+_stack_i = _stack_array((LANES,), types.int64)
+
+
 @njit(cache=True, inline="always")
-def _grid_cell(p, x, k):
-    """Cell k of the velocity grid holding x (linear extrapolation cells at the ends), found by
-    walking from the previous cell ``k``: velocities change little per step, so this is O(1)."""
-    if k < 0 or k > N_GRID - 2:
-        k = N_GRID // 2
-    while k > 0 and x < p[P_GRID + k]:
-        k -= 1
-    while k < N_GRID - 2 and x >= p[P_GRID + k + 1]:
-        k += 1
-    return k
+def grid_cell(p, x):
+    """Cell ``k`` of the velocity grid holding ``x``: ``grid[k] <= x < grid[k+1]``, the end cells
+    extended (linear extrapolation). Counted without branches, so it vectorises across vehicles."""
+    k = 0.0
+    for g in range(1, N_GRID - 1):
+        k += 1.0 if p[P_GRID + g] <= x else 0.0
+    return int(k)
 
 
 @njit(cache=True, inline="always")
@@ -172,27 +183,19 @@ def road_at(rs, rz, n, x):
 @njit(cache=True, inline="always")
 def spring_force(p, dv, i, d):
     """Wheel-rate spring plus progressive bump/rebound stops [N], deflection d [m] from static."""
-    f = p[_K_S + i] * d
-    e = d - p[_STOP_BUMP + i]
-    if e > 0.0:
-        f += p[_K_STOP] * e * (1.0 + e * dv[_D_INV_EP])
-    e = -d - p[_STOP_REB + i]
-    if e > 0.0:
-        f -= p[_K_STOP] * e * (1.0 + e * dv[_D_INV_EP])
-    return f
+    e_b = max(d - p[_STOP_BUMP + i], 0.0)
+    e_r = max(-d - p[_STOP_REB + i], 0.0)
+    return (p[_K_S + i] * d + p[_K_STOP] * e_b * (1.0 + e_b * dv[_D_INV_EP])
+            - p[_K_STOP] * e_r * (1.0 + e_r * dv[_D_INV_EP]))
 
 
 @njit(cache=True, inline="always")
 def hydraulic_force(p, dv, i, dd, k):
     """Hydraulic damper force [N] at deflection velocity dd [m/s], blended by the corner's oil level;
-    ``k`` is the grid cell of dd (:func:`_grid_cell`)."""
+    ``k`` is the grid cell of dd (:func:`grid_cell`)."""
     oil = p[_OIL + i]
-    f = 0.0
-    if oil > 0.0:
-        f += oil * _interp_cell(p, dv, P_H_INTACT + i * N_GRID, dd, k)
-    if oil < 1.0:
-        f += (1.0 - oil) * _interp_cell(p, dv, P_H_EMPTY + i * N_GRID, dd, k)
-    return f
+    return (oil * _interp_cell(p, dv, P_H_INTACT + i * N_GRID, dd, k)
+            + (1.0 - oil) * _interp_cell(p, dv, P_H_EMPTY + i * N_GRID, dd, k))
 
 
 @njit(cache=True, inline="always")
@@ -220,263 +223,307 @@ def fill_context(p, dv, i, c, d, dd, fx, fy, fz, v):
     c[i, _C_FY] = fy
     c[i, _C_FZ] = fz
     c[i, _C_V] = v
-    sv = 1.0
-    if p[_USE_V] > 0.5 and abs(dd) > p[_SV_REF]:
-        sv = 1.0 + (p[_SV_INF] - 1.0) * (1.0 - math.exp(-(abs(dd) - p[_SV_REF]) * dv[_D_INV_VS]))
-    c[i, _C_SV] = sv
-    sh = 1.0
-    if p[_USE_H] > 0.5:
-        sh = 1.0 + p[_SH_X + i] * abs(fx) + p[_SH_Y + i] * abs(fy)
-    c[i, _C_SH] = sh
+    excess = abs(dd) - p[_SV_REF]
+    sv = 1.0 - (p[_SV_INF] - 1.0) * expm1_nonpos(-max(excess, 0.0) * dv[_D_INV_VS])
+    c[i, _C_SV] = sv if p[_USE_V] > 0.5 else 1.0
+    sh = 1.0 + p[_SH_X + i] * abs(fx) + p[_SH_Y + i] * abs(fy)
+    c[i, _C_SH] = sh if p[_USE_H] > 0.5 else 1.0
 
 
 @njit(cache=True, inline="always")
-def step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y, out):
-    """Advance one vehicle by one step ``dt`` [s] with the inputs of row ``k`` of ``U``
-    (layout.U_INDEX); writes outputs ``y`` when ``out`` (skipped on steps whose outputs nobody reads).
+def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, out):
+    """Advance the ``nl`` vehicles of a block by one step ``dt`` [s] with the inputs of row ``k`` of
+    ``U[urow[l]]`` (layout.U_INDEX); writes outputs ``Y`` when ``out`` (skipped on steps whose outputs
+    nobody reads).
 
-    ``p`` parameters (``dv`` their reciprocals, :func:`derive`), ``s`` state (updated in place), road tracks ``rs``/``rzl``/``rzr`` with ``rn``
-    valid samples (``mode`` 0), or per-wheel road heights from ``U`` (``mode`` 1). Rows of 2-D
-    arrays are indexed, never sliced: a slice is a new array object with reference counting. ``c`` (4 x N_CTX,
-    constant part set by :func:`fill_context_const`) and ``w`` are scratch. Returns False when the state
-    stopped being finite.
+    Vehicles are lanes: column ``l`` of ``P`` (parameters), ``DV`` (their reciprocals, :func:`derive`),
+    ``S`` (state, updated in place), ``C`` (corner context, 4 x N_CTX per lane, constant part set by
+    :func:`fill_context_const`), ``W`` (scratch) and ``Y`` (outputs). Every loop over lanes does the same
+    arithmetic for each vehicle, so the compiler runs it on several vehicles per SIMD instruction; a
+    single vehicle is a block of one. Road: tracks ``RS``/``RZL``/``RZR`` row ``rrow[l]`` with ``RN``
+    valid samples (``mode`` 0), or per-wheel road heights from the inputs (``mode`` 1). ``W[_W_OK, l]``
+    becomes 0 when lane ``l``'s state stopped being finite.
     """
-    g = p[_G]
-    ms = p[_M_S]
-    m = p[_M_TOT]
-    a = p[_A]
-    b = p[_B]
-    v = U[k, _U_V]
-    ax = U[k, _U_AX]
-    delta = U[k, _U_SWA] * dv[_D_INV_RATIO]
-    z = s[_Z]
-    phi = s[_PHI]
-    th = s[_THETA]
-    zd = s[_ZD]
-    phid = s[_PHID]
-    thd = s[_THETAD]
-    vy = s[_VY]
-    r = s[_R]
-    kt = p[_KT]
-    ct = p[_CT]
-
-    # -- road under each wheel --------------------------------------------------------------------
-    for i in range(4):
-        if mode == 1:
-            zr = U[k, _U_ZR + i]
-            zrd = (zr - s[_ZR_PREV + i]) / dt
-            slope = zrd / v if v > p[_V_FADE] else 0.0
-        else:
-            si = s[_SPATH] if i < 2 else s[_SPATH] - (a + b)
-            if i % 2 == 0:
-                zr, slope = road_at(rs, rzl, rn, si)
+    # -- inputs and the road under each wheel (binary search: per vehicle) --------------------------
+    for l in range(nl):
+        u = urow[l]
+        v = U[u, k, _U_V]
+        W[_W_V, l] = v
+        W[_W_AX, l] = U[u, k, _U_AX]
+        W[_W_DELTA, l] = U[u, k, _U_SWA] * DV[_D_INV_RATIO, l]
+        rr = rrow[l]
+        for i in range(4):
+            if mode[l] == 1:
+                zr = U[u, k, _U_ZR + i]
+                zrd = (zr - S[_ZR_PREV + i, l]) / dt
+                slope = zrd / v if v > P[_V_FADE, l] else 0.0
             else:
-                zr, slope = road_at(rs, rzr, rn, si)
-            zrd = v * slope
-        w[_W_ZR + i] = zr
-        w[_W_ZRD + i] = zrd
-        w[_W_SLOPE + i] = slope
+                si = S[_SPATH, l] if i < 2 else S[_SPATH, l] - (P[_A, l] + P[_B, l])
+                if i % 2 == 0:
+                    zr, slope = road_at(RS[rr], RZL[rr], RN[rr], si)
+                else:
+                    zr, slope = road_at(RS[rr], RZR[rr], RN[rr], si)
+                zrd = v * slope
+            W[_W_ZR + i, l] = zr
+            W[_W_ZRD + i, l] = zrd
+            W[_W_SLOPE + i, l] = slope
 
     # -- corner kinematics, tyre loads and horizontal wheel forces ----------------------------------
-    fyf = s[_FYT] + s[_FYT + 1]
-    fyr = s[_FYT + 2] + s[_FYT + 3]
-    share_f = p[_DRIVE_FRONT] if ax >= 0.0 else p[_BRAKE_FRONT]
     for i in range(4):
-        xi = p[_X_I + i]
-        yi = p[_Y_I + i]
-        w[_W_D + i] = s[_ZW + i] - (z - xi * th + yi * phi)
-        w[_W_DD + i] = s[_ZWD + i] - (zd - xi * thd + yi * phid)
-        ft = kt * (w[_W_ZR + i] - s[_ZW + i]) + ct * (w[_W_ZRD + i] - s[_ZWD + i])
-        # geometric load transfer of the axle's lateral force through its roll centre: wheels only
-        dfz = (fyf if i < 2 else fyr) * dv[_D_DFZ + i]
-        if i % 2 == 0:
-            dfz = -dfz
-        fz = p[_FZ0 + i] + ft + dfz
-        if fz < 0.0:
-            fz = 0.0  # lift-off: the tyre cannot pull
-        w[_W_FZ + i] = fz
-        w[_W_WF + i] = fz - p[_FZ0 + i] - dfz
-        fx_drive = m * ax * (share_f if i < 2 else 1.0 - share_f) * 0.5
-        w[_W_FX + i] = fx_drive - fz * w[_W_SLOPE + i]  # bump reaction while climbing/leaving
+        for l in range(nl):
+            z = S[_Z, l]
+            phi = S[_PHI, l]
+            th = S[_THETA, l]
+            xi = P[_X_I + i, l]
+            yi = P[_Y_I + i, l]
+            W[_W_D + i, l] = S[_ZW + i, l] - (z - xi * th + yi * phi)
+            W[_W_DD + i, l] = S[_ZWD + i, l] - (S[_ZD, l] - xi * S[_THETAD, l] + yi * S[_PHID, l])
+            ft = P[_KT, l] * (W[_W_ZR + i, l] - S[_ZW + i, l]) + P[_CT, l] * (W[_W_ZRD + i, l] - S[_ZWD + i, l])
+            # geometric load transfer of the axle's lateral force through its roll centre: wheels only
+            fy_axle = S[_FYT, l] + S[_FYT + 1, l] if i < 2 else S[_FYT + 2, l] + S[_FYT + 3, l]
+            dfz = fy_axle * DV[_D_DFZ + i, l]
+            if i % 2 == 0:
+                dfz = -dfz
+            fz = max(P[_FZ0 + i, l] + ft + dfz, 0.0)  # lift-off: the tyre cannot pull
+            W[_W_FZ + i, l] = fz
+            W[_W_WF + i, l] = fz - P[_FZ0 + i, l] - dfz
+            ax = W[_W_AX, l]
+            share_f = P[_DRIVE_FRONT, l] if ax >= 0.0 else P[_BRAKE_FRONT, l]
+            fx_drive = P[_M_TOT, l] * ax * (share_f if i < 2 else 1.0 - share_f) * 0.5
+            W[_W_FX + i, l] = fx_drive - fz * W[_W_SLOPE + i, l]  # bump reaction while climbing/leaving
 
     # -- suspension forces ---------------------------------------------------------------------------
     for i in range(4):
-        fill_context(p, dv, i, c, w[_W_D + i], w[_W_DD + i], w[_W_FX + i], s[_FYT + i], w[_W_FZ + i], v)
-        f_spring = spring_force(p, dv, i, w[_W_D + i])
-        cell = _grid_cell(p, w[_W_DD + i], int(w[_W_CELL + i]))
-        w[_W_CELL + i] = cell
-        f_damper = hydraulic_force(p, dv, i, w[_W_DD + i], cell)
-        f_terms = terms_force(p, s, i, c, MASK_ALL)
         j = i + 1 if i % 2 == 0 else i - 1
-        f_arb = p[_K_ARB + i] * (w[_W_D + i] - w[_W_D + j])
-        w[_W_FS + i] = f_spring + f_damper + f_terms + f_arb
-        if out:
-            y[_Y_F_SPRING + i] = f_spring
-            y[_Y_F_DAMPER + i] = f_damper
-            y[_Y_F_FRICTION + i] = f_terms
-            y[_Y_F_ARB + i] = f_arb
+        for l in range(nl):
+            p = P[:, l]
+            dv = DV[:, l]
+            c = C[:, :, l]
+            d = W[_W_D + i, l]
+            dd = W[_W_DD + i, l]
+            fill_context(p, dv, i, c, d, dd, W[_W_FX + i, l], S[_FYT + i, l], W[_W_FZ + i, l], W[_W_V, l])
+            f_spring = spring_force(p, dv, i, d)
+            f_damper = hydraulic_force(p, dv, i, dd, grid_cell(p, dd))
+            f_terms = terms_force(p, S[:, l], i, c, MASK_ALL)
+            f_arb = P[_K_ARB + i, l] * (d - W[_W_D + j, l])
+            W[_W_FS + i, l] = f_spring + f_damper + f_terms + f_arb
+            if out:
+                Y[_Y_F_SPRING + i, l] = f_spring
+                Y[_Y_F_DAMPER + i, l] = f_damper
+                Y[_Y_F_FRICTION + i, l] = f_terms
+                Y[_Y_F_ARB + i, l] = f_arb
 
-    # -- equations of motion ------------------------------------------------------------------------
-    fs0 = w[_W_FS]
-    fs1 = w[_W_FS + 1]
-    fs2 = w[_W_FS + 2]
-    fs3 = w[_W_FS + 3]
-    fy0 = s[_FYT]
-    fy1 = s[_FYT + 1]
-    fy2 = s[_FYT + 2]
-    fy3 = s[_FYT + 3]
-    # body: heave, roll, pitch
-    zdd = ((fs0 + fs1) + (fs2 + fs3)) * dv[_D_INV_MS]
-    ay = ((fy0 + fy1) + (fy2 + fy3)) * dv[_D_INV_M]
-    roll_moment = (p[_Y_I] * fs0 + p[_Y_I + 1] * fs1) + (p[_Y_I + 2] * fs2 + p[_Y_I + 3] * fs3)
-    pitch_moment = -((p[_X_I] * fs0 + p[_X_I + 1] * fs1) + (p[_X_I + 2] * fs2 + p[_X_I + 3] * fs3))
-    phidd = (roll_moment + ms * (p[_H_CG] - p[_H_RC]) * (ay + g * phi)) * dv[_D_INV_IXX]
-    thdd = (pitch_moment + ms * (p[_H_CG] - p[_H_PC]) * (g * th - ax)) * dv[_D_INV_IYY]
-    # planar: lateral and yaw
-    vyd = ay - v * r
-    rd = (a * (fy0 + fy1) - b * (fy2 + fy3)) * dv[_D_INV_IZZ]
-
-    # -- semi-implicit Euler ------------------------------------------------------------------------
-    zd += zdd * dt
-    phid += phidd * dt
-    thd += thdd * dt
-    z += zd * dt
-    phi += phid * dt
-    th += thd * dt
-    vy += vyd * dt
-    r += rd * dt
-    psi = s[_PSI] + r * dt
-    cpsi = math.cos(psi)
-    spsi = math.sin(psi)
-    s[_X] += (v * cpsi - vy * spsi) * dt
-    s[_Y] += (v * spsi + vy * cpsi) * dt
-    s[_PSI] = psi
-    s[_SPATH] += v * dt
-    s[_Z] = z
-    s[_PHI] = phi
-    s[_THETA] = th
-    s[_ZD] = zd
-    s[_PHID] = phid
-    s[_THETAD] = thd
-    s[_VY] = vy
-    s[_R] = r
+    # -- equations of motion and semi-implicit Euler ---------------------------------------------------
+    for l in range(nl):
+        v = W[_W_V, l]
+        ax = W[_W_AX, l]
+        g = P[_G, l]
+        ms = P[_M_S, l]
+        fs0 = W[_W_FS, l]
+        fs1 = W[_W_FS + 1, l]
+        fs2 = W[_W_FS + 2, l]
+        fs3 = W[_W_FS + 3, l]
+        fy0 = S[_FYT, l]
+        fy1 = S[_FYT + 1, l]
+        fy2 = S[_FYT + 2, l]
+        fy3 = S[_FYT + 3, l]
+        phi = S[_PHI, l]
+        th = S[_THETA, l]
+        r = S[_R, l]
+        # body: heave, roll, pitch
+        zdd = ((fs0 + fs1) + (fs2 + fs3)) * DV[_D_INV_MS, l]
+        ay = ((fy0 + fy1) + (fy2 + fy3)) * DV[_D_INV_M, l]
+        roll_moment = (P[_Y_I, l] * fs0 + P[_Y_I + 1, l] * fs1) + (P[_Y_I + 2, l] * fs2 + P[_Y_I + 3, l] * fs3)
+        pitch_moment = -((P[_X_I, l] * fs0 + P[_X_I + 1, l] * fs1) + (P[_X_I + 2, l] * fs2 + P[_X_I + 3, l] * fs3))
+        phidd = (roll_moment + ms * (P[_H_CG, l] - P[_H_RC, l]) * (ay + g * phi)) * DV[_D_INV_IXX, l]
+        thdd = (pitch_moment + ms * (P[_H_CG, l] - P[_H_PC, l]) * (g * th - ax)) * DV[_D_INV_IYY, l]
+        # planar: lateral and yaw
+        vyd = ay - v * r
+        rd = (P[_A, l] * (fy0 + fy1) - P[_B, l] * (fy2 + fy3)) * DV[_D_INV_IZZ, l]
+        zd = S[_ZD, l] + zdd * dt
+        phid = S[_PHID, l] + phidd * dt
+        thd = S[_THETAD, l] + thdd * dt
+        r += rd * dt
+        S[_ZD, l] = zd
+        S[_PHID, l] = phid
+        S[_THETAD, l] = thd
+        S[_Z, l] += zd * dt
+        S[_PHI, l] = phi + phid * dt
+        S[_THETA, l] = th + thd * dt
+        S[_VY, l] += vyd * dt
+        S[_R, l] = r
+        S[_PSI, l] += r * dt
+        S[_SPATH, l] += v * dt
+        W[_W_ZDD, l] = zdd
+        W[_W_AY, l] = ay
+    for l in range(nl):  # planar position (libm sin/cos: per vehicle)
+        psi = S[_PSI, l]
+        v = W[_W_V, l]
+        vy = S[_VY, l]
+        cpsi = math.cos(psi)
+        spsi = math.sin(psi)
+        S[_X, l] += (v * cpsi - vy * spsi) * dt
+        S[_Y, l] += (v * spsi + vy * cpsi) * dt
 
     # -- tyre lateral forces: steady tanh characteristic, first-order relaxation (exact) -------------
-    vfade = p[_V_FADE]
-    av = abs(v)
-    fade = av * dv[_D_INV_FADE] if av < vfade else 1.0
-    vden = av if av > vfade else vfade
-    if av != w[_W_VLAST]:  # constant speed is common: keep the relaxation factor
-        w[_W_VLAST] = av
-        w[_W_RELAX] = -math.expm1(-av * dt * dv[_D_INV_RELAX])
-    relax = w[_W_RELAX]
-    alpha_f = (delta - (s[_VY] + a * s[_R]) / vden) * fade
-    alpha_r = (-(s[_VY] - b * s[_R]) / vden) * fade
-    mu = p[_MU]
-    for i in range(4):
-        alpha = alpha_f if i < 2 else alpha_r
-        fz = w[_W_FZ + i]
-        fss = 0.0
-        if fz > 0.0:
-            fss = mu * fz * math.tanh(p[_C_ALPHA + i] * alpha / (mu * fz))
-        s[_FYT + i] += relax * (fss - s[_FYT + i])
+    for l in range(nl):
+        vfade = P[_V_FADE, l]
+        av = abs(W[_W_V, l])
+        fade = av * DV[_D_INV_FADE, l] if av < vfade else 1.0
+        vden = av if av > vfade else vfade
+        relax = -expm1_nonpos(-av * dt * DV[_D_INV_RELAX, l])
+        vy = S[_VY, l]
+        r = S[_R, l]
+        alpha_f = (W[_W_DELTA, l] - (vy + P[_A, l] * r) / vden) * fade
+        alpha_r = (-(vy - P[_B, l] * r) / vden) * fade
+        mu = P[_MU, l]
+        for i in range(4):
+            alpha = alpha_f if i < 2 else alpha_r
+            fz = W[_W_FZ + i, l]
+            mfz = mu * fz
+            fss = mfz * tanh(P[_C_ALPHA + i, l] * alpha / max(mfz, _TINY))
+            fss = fss if fz > 0.0 else 0.0
+            S[_FYT + i, l] += relax * (fss - S[_FYT + i, l])
 
     # -- wheels, then the terms' state over the deflection increment of the step --------------------
-    ok = True
     for i in range(4):
-        zwd_i = s[_ZWD + i] + (w[_W_WF + i] - w[_W_FS + i]) * dv[_D_INV_MU + i] * dt
-        zw_i = s[_ZW + i] + zwd_i * dt
-        s[_ZWD + i] = zwd_i
-        s[_ZW + i] = zw_i
-        d_new = zw_i - (z - p[_X_I + i] * th + p[_Y_I + i] * phi)
-        terms_update(p, s, i, c, d_new - w[_W_D + i], MASK_ALL)
-        s[_ZR_PREV + i] = w[_W_ZR + i]
-        if out:
-            y[_Y_DEFL + i] = d_new
-            y[_Y_DEFL_VEL + i] = zwd_i - (zd - p[_X_I + i] * thd + p[_Y_I + i] * phid)
-            y[_Y_F_Z + i] = w[_W_FZ + i]
-            y[_Y_F_X + i] = w[_W_FX + i]
-            y[_Y_F_Y + i] = fy0 if i == 0 else (fy1 if i == 1 else (fy2 if i == 2 else fy3))
-            y[_Y_Z_ROAD + i] = w[_W_ZR + i]
-        if not math.isfinite(zw_i):
-            ok = False
+        for l in range(nl):
+            zwd_i = S[_ZWD + i, l] + (W[_W_WF + i, l] - W[_W_FS + i, l]) * DV[_D_INV_MU + i, l] * dt
+            zw_i = S[_ZW + i, l] + zwd_i * dt
+            S[_ZWD + i, l] = zwd_i
+            S[_ZW + i, l] = zw_i
+            d_new = zw_i - (S[_Z, l] - P[_X_I + i, l] * S[_THETA, l] + P[_Y_I + i, l] * S[_PHI, l])
+            terms_update(P[:, l], S[:, l], i, C[:, :, l], d_new - W[_W_D + i, l], MASK_ALL)
+            S[_ZR_PREV + i, l] = W[_W_ZR + i, l]
+            if out:
+                Y[_Y_DEFL + i, l] = d_new
+                Y[_Y_DEFL_VEL + i, l] = zwd_i - (S[_ZD, l] - P[_X_I + i, l] * S[_THETAD, l]
+                                                 + P[_Y_I + i, l] * S[_PHID, l])
+                Y[_Y_F_Z + i, l] = W[_W_FZ + i, l]
+                Y[_Y_F_X + i, l] = W[_W_FX + i, l]
+                Y[_Y_F_Y + i, l] = C[i, _C_FY, l]
+                Y[_Y_Z_ROAD + i, l] = W[_W_ZR + i, l]
 
-    ok = ok and math.isfinite(z + phi + th + vy + r + zd + phid + thd)
+    for l in range(nl):
+        ok = math.isfinite(S[_ZW, l] + S[_ZW + 1, l] + S[_ZW + 2, l] + S[_ZW + 3, l]
+                           + S[_Z, l] + S[_PHI, l] + S[_THETA, l] + S[_VY, l] + S[_R, l]
+                           + S[_ZD, l] + S[_PHID, l] + S[_THETAD, l])
+        W[_W_OK, l] = 1.0 if ok else 0.0
     if not out:
-        return ok
+        return
     # -- outputs: IMU at the centre of gravity (specific force incl. gravity, REP-145), pose --------
-    y[_Y_ROLL_RATE] = phid
-    y[_Y_PITCH_RATE] = thd
-    y[_Y_YAW_RATE] = r
-    y[_Y_AX] = ax - vy * r - g * th
-    y[_Y_AY] = ay + g * phi
-    y[_Y_AZ] = g + zdd
-    y[_Y_ROLL] = phi
-    y[_Y_PITCH] = th
-    y[_Y_YAW] = psi
-    y[_Y_PX] = s[_X]
-    y[_Y_PY] = s[_Y]
-    y[_Y_VX] = v
-    y[_Y_VY] = vy
-    y[_Y_HEAVE] = z
-    y[_Y_PATH] = s[_SPATH]
-    return ok
+    for l in range(nl):
+        g = P[_G, l]
+        vy = S[_VY, l]
+        r = S[_R, l]
+        Y[_Y_ROLL_RATE, l] = S[_PHID, l]
+        Y[_Y_PITCH_RATE, l] = S[_THETAD, l]
+        Y[_Y_YAW_RATE, l] = r
+        Y[_Y_AX, l] = W[_W_AX, l] - vy * r - g * S[_THETA, l]
+        Y[_Y_AY, l] = W[_W_AY, l] + g * S[_PHI, l]
+        Y[_Y_AZ, l] = g + W[_W_ZDD, l]
+        Y[_Y_ROLL, l] = S[_PHI, l]
+        Y[_Y_PITCH, l] = S[_THETA, l]
+        Y[_Y_YAW, l] = S[_PSI, l]
+        Y[_Y_PX, l] = S[_X, l]
+        Y[_Y_PY, l] = S[_Y, l]
+        Y[_Y_VX, l] = W[_W_V, l]
+        Y[_Y_VY, l] = vy
+        Y[_Y_HEAVE, l] = S[_Z, l]
+        Y[_Y_PATH, l] = S[_SPATH, l]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", fastmath={"contract", "arcp", "nsz"})
-def _run_steps(p, dv, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y):
+@njit(cache=True, _nrt=False, error_model="numpy", fastmath={"arcp", "nsz"})
+def _run_block(Pv, Sv, b0, nl, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Yv, done):
     # compiled without the reference-counting runtime: with it, every array argument of the inlined
-    # helpers costs an atomic incref/decref pair per step, which made up half of the step time.
-    # Scratch, context and outputs live on this function's stack: the compiler then knows that they
-    # overlap neither the parameters nor the state and keeps more of them in registers.
-    c = _stack_c()
-    w = _stack_w()
-    y = _stack_y()
-    for i in range(4):
-        for j in range(N_CTX):
-            c[i, j] = 0.0
-    for j in range(N_SCRATCH):
-        w[j] = 0.0
-    w[_W_VLAST] = -1.0
-    for j in range(N_Y):
-        y[j] = 0.0
+    # helpers costs an atomic incref/decref pair per step. The block's parameters, state, context,
+    # scratch and outputs are copied into arrays on this function's stack (vehicle = column): the
+    # compiler then knows that they overlap nothing else, keeps values in registers and vectorises
+    # the loops over vehicles.
+    P = _stack_p()
+    DV = _stack_dv()
+    S = _stack_s()
+    C = _stack_c()
+    W = _stack_w()
+    Y = _stack_y()
+    urow = _stack_i()
+    rrow = _stack_i()
+    mrow = _stack_i()
+    for l in range(nl):
+        b = b0 + l
+        for q in range(N_P):
+            P[q, l] = Pv[b, q]
+        for q in range(N_S):
+            S[q, l] = Sv[b, q]
+        for q in range(N_SCRATCH):
+            W[q, l] = 0.0
+        for q in range(N_Y):
+            Y[q, l] = 0.0
+        for i in range(4):
+            for q in range(N_CTX):
+                C[i, q, l] = 0.0
+            fill_context_const(P[:, l], i, C[:, :, l], dt)
+        derive(P[:, l], DV[:, l])
+        urow[l] = u_row[b]
+        rrow[l] = road_row[b]
+        mrow[l] = mode[b]
+        done[b] = U.shape[1]
     n_sel = sel.shape[0]
     row = 0
     count = 0
-    for i in range(4):
-        fill_context_const(p, i, c, dt)
-    for k in range(U.shape[0]):
+    alive = nl
+    for k in range(U.shape[1]):
         count += 1
-        ok = step(p, dv, s, U, k, rs, rzl, rzr, rn, mode, dt, c, w, y, count == decim)
-        if count == decim:
+        out = count == decim
+        step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mrow, dt, C, W, Y, nl, out)
+        if out:
             count = 0
-            if row < Y.shape[0]:
-                for j in range(n_sel):
-                    Y[row, j] = y[sel[j]]
+            if row < Yv.shape[1]:
+                for l in range(nl):
+                    if done[b0 + l] > k:
+                        for j in range(n_sel):
+                            Yv[b0 + l, row, j] = Y[sel[j], l]
                 row += 1
-        if not ok:
-            return k + 1
-    return U.shape[0]
+        for l in range(nl):
+            if W[_W_OK, l] == 0.0 and done[b0 + l] > k + 1:
+                # this vehicle's state stopped being finite: it stops here, its state as after the step
+                done[b0 + l] = k + 1
+                for q in range(N_S):
+                    Sv[b0 + l, q] = S[q, l]
+                alive -= 1
+        if alive == 0:
+            break
+    for l in range(nl):
+        if done[b0 + l] == U.shape[1]:
+            for q in range(N_S):
+                Sv[b0 + l, q] = S[q, l]
 
 
 @njit(cache=True)
 def run_one(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y):
     """Step one vehicle over every row of ``U`` (n_steps x N_U); every ``decim``-th step's outputs
     ``y[sel]`` go to the next row of ``Y``. Returns the number of steps done (< n_steps when the state
-    became non-finite: the run stops there and the state is left as it was after the bad step)."""
-    dv = np.zeros(N_DERIVED)
-    derive(p, dv)
-    return _run_steps(p, dv, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y)
+    became non-finite: the run stops there and the state is left as it was after the bad step).
+    The vehicle runs as a block of one through the same :func:`step` as a batch."""
+    zero = np.zeros(1, np.int64)
+    done = np.zeros(1, np.int64)
+    _run_block(p.reshape((1, p.shape[0])), s.reshape((1, s.shape[0])), 0, 1, U.reshape((1,) + U.shape),
+               zero, rs.reshape((1, rs.shape[0])), rzl.reshape((1, rzl.shape[0])),
+               rzr.reshape((1, rzr.shape[0])), np.full(1, rn, np.int64), zero, np.full(1, mode, np.int64),
+               dt, decim, sel, Y.reshape((1,) + Y.shape), done)
+    return done[0]
 
 
 @njit(cache=True, parallel=True, nogil=True)
 def run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done):
-    """Run vehicles ``b`` in parallel: parameters ``P[b]``, state ``S[b]`` (in place), inputs
-    ``U[u_row[b]]``, road ``road_row[b]``, outputs to ``Y[b]``, steps done to ``done[b]``."""
-    for b in prange(P.shape[0]):
-        rr = road_row[b]
-        done[b] = run_one(P[b], S[b], U[u_row[b]], RS[rr], RZL[rr], RZR[rr], RN[rr], mode[b], dt,
-                          decim, sel, Y[b])
+    """Run vehicles ``b`` in parallel, in blocks of :data:`LANES`: parameters ``P[b]``, state ``S[b]``
+    (in place), inputs ``U[u_row[b]]``, road ``road_row[b]``, outputs to ``Y[b]``, steps done to
+    ``done[b]``."""
+    n_blocks = (P.shape[0] + LANES - 1) // LANES
+    for blk in prange(n_blocks):
+        b0 = blk * LANES
+        _run_block(P, S, b0, min(LANES, P.shape[0] - b0), U, u_row, RS, RZL, RZR, RN, road_row, mode, dt,
+                   decim, sel, Y, done)
 
 
 @njit(cache=True)
@@ -487,12 +534,10 @@ def rig_run(p, s, i, d, dd, fx, fy, fz, mask, with_spring, out):
     c = np.zeros((4, N_CTX))
     dv = np.zeros(N_DERIVED)
     derive(p, dv)
-    cell = -1
     fill_context_const(p, i, c, 0.0)
     for k in range(d.shape[0]):
         fill_context(p, dv, i, c, d[k], dd[k], fx, fy, fz, 0.0)
-        cell = _grid_cell(p, dd[k], cell)
-        f = hydraulic_force(p, dv, i, dd[k], cell) + terms_force(p, s, i, c, mask)
+        f = hydraulic_force(p, dv, i, dd[k], grid_cell(p, dd[k])) + terms_force(p, s, i, c, mask)
         if with_spring:
             f += spring_force(p, dv, i, d[k])
         out[k] = f

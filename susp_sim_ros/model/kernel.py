@@ -57,6 +57,7 @@ def _terms_block(terms: tuple[PhysicsTerm, ...], layout: KernelLayout) -> str:
         for kind, fn in (("f", t.force), ("u", t.update)):
             py = fn.py_func
             lines.append(f"from {py.__module__} import {py.__name__} as _{kind}{k}")
+    lines += ["", f"N_P = {layout.n_p}", f"N_S = {layout.n_s}"]
     lines += ["", "", "@njit(cache=True, inline=\"always\")", "def terms_force(p, s, i, c, mask):", "    f = 0.0"]
     for k, t in enumerate(terms):
         po, so = layout.param_offsets[k], layout.state_offsets[k]
@@ -75,7 +76,7 @@ def _terms_block(terms: tuple[PhysicsTerm, ...], layout: KernelLayout) -> str:
 def _dependency_digest(terms: tuple[PhysicsTerm, ...]) -> str:
     """Hash of every source file the kernel compiles in. Numba's cache does not notice a change in a
     function imported from another file, so a change there must change the kernel's own file."""
-    files = {Path(__file__).with_name("layout.py"), Path(__file__).with_name("terms.py")}
+    files = {Path(__file__).with_name(f) for f in ("layout.py", "terms.py", "inline_math.py")}
     for t in terms:
         for fn in (t.force, t.update):
             files.add(Path(inspect.getsourcefile(fn.py_func)))

@@ -27,7 +27,11 @@ A term declares:
   deflection increment ``dx`` [m] of the step. Must not touch anything but its own states.
 
 The functions must live at module level in an importable module (the kernel is generated code that
-imports them by name; see :mod:`.kernel`).
+imports them by name; see :mod:`.kernel`). The kernel calls them inside loops over the vehicles of a
+block (``p``, ``s``, ``c`` are then one vehicle's column); written as arithmetic with selects rather
+than branches, and with :mod:`.inline_math` instead of ``math.exp``/``math.tanh``, those loops compile
+to SIMD instructions. A term that branches or calls libm still gives the same numbers; it only makes
+the compiler step the vehicles of a block one after another.
 """
 from __future__ import annotations
 
@@ -38,9 +42,11 @@ from typing import Callable
 import numpy as np
 from numba import njit
 
+from .inline_math import expm1_nonpos
 from .layout import C_INDEX
 
 _C_SV, _C_SOIL, _C_SH, _C_D = C_INDEX["SV"], C_INDEX["SOIL"], C_INDEX["SH"], C_INDEX["D"]
+_TINY_LEVEL = 1e-300  # N; guards the division when the level is 0 (that result is discarded)
 
 
 @dataclass(frozen=True)
@@ -90,22 +96,17 @@ def dahl_exact(f, level, sigma, dx):
 
     ``F_new = s*Fc + (F - s*Fc) * exp(-sigma*|dx|/Fc)`` (evaluated as an increment), ``s = sign(dx)``; unconditionally stable and
     rate independent (model-spec 1). ``f`` is first clipped to the current level, so friction never
-    exceeds its level when the level drops.
+    exceeds its level when the level drops; a level <= 0 gives 0. Written without branches (selects
+    only), so the kernel runs it on several vehicles per SIMD instruction.
     """
-    if level <= 0.0:
-        return 0.0
-    if f > level:
-        f = level
-    elif f < -level:
-        f = -level
-    target = level if dx > 0.0 else -level
-    if dx == 0.0 or f == target:  # no motion, or already saturated to the last bit: exp changes nothing
-        return f
+    lv = max(level, 0.0)
+    f = min(max(f, -lv), lv)
+    target = lv if dx > 0.0 else -lv
     # written as an increment with expm1: monotone in dx and accurate for tiny steps
-    f_new = f - (target - f) * math.expm1(-sigma * abs(dx) / level)
-    if (dx > 0.0 and f_new > target) or (dx < 0.0 and f_new < target):
-        return target
-    return f_new
+    f_new = f - (target - f) * expm1_nonpos(-sigma * abs(dx) / max(lv, _TINY_LEVEL))
+    f_new = min(f_new, target) if dx > 0.0 else max(f_new, target)
+    f_new = f if dx == 0.0 else f_new
+    return f_new if level > 0.0 else 0.0
 
 
 # ---- built-in term: axle friction (bearings, ball joints, elastomer mounts) ----------------------
