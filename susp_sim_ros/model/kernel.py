@@ -5,7 +5,7 @@ template ``_kernel_template.py`` gets its TERMS block replaced by direct calls t
 and ``update`` functions at the term's parameter/state offsets. The generated module is written to a
 cache directory under a content hash and imported from there, so numba's on-disk cache
 (``cache=True``) keeps the machine code across processes: only the first run of a new term list pays
-the compile time (a few seconds).
+the compile time (about 20 s).
 
 Cache directory: ``$SUSP_SIM_CACHE`` if set, else ``$XDG_CACHE_HOME/susp_sim_ros`` or
 ``~/.cache/susp_sim_ros``; a temporary directory if none of these is writable.
