@@ -278,7 +278,8 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
             yi = P[_Y_I + i, l]
             W[_W_D + i, l] = S[_ZW + i, l] - (z - xi * th + yi * phi)
             W[_W_DD + i, l] = S[_ZWD + i, l] - (S[_ZD, l] - xi * S[_THETAD, l] + yi * S[_PHID, l])
-            ft = P[_KT, l] * (W[_W_ZR + i, l] - S[_ZW + i, l]) + P[_CT, l] * (W[_W_ZRD + i, l] - S[_ZWD + i, l])
+            ft = (P[_KT, l] * (W[_W_ZR + i, l] - S[_ZW + i, l])
+                  + P[_CT, l] * (W[_W_ZRD + i, l] - S[_ZWD + i, l]))
             # geometric load transfer of the axle's lateral force through its roll centre: wheels only
             fy_axle = S[_FYT, l] + S[_FYT + 1, l] if i < 2 else S[_FYT + 2, l] + S[_FYT + 3, l]
             dfz = fy_axle * DV[_D_DFZ + i, l]
@@ -333,8 +334,10 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
         # body: heave, roll, pitch
         zdd = ((fs0 + fs1) + (fs2 + fs3)) * DV[_D_INV_MS, l]
         ay = ((fy0 + fy1) + (fy2 + fy3)) * DV[_D_INV_M, l]
-        roll_moment = (P[_Y_I, l] * fs0 + P[_Y_I + 1, l] * fs1) + (P[_Y_I + 2, l] * fs2 + P[_Y_I + 3, l] * fs3)
-        pitch_moment = -((P[_X_I, l] * fs0 + P[_X_I + 1, l] * fs1) + (P[_X_I + 2, l] * fs2 + P[_X_I + 3, l] * fs3))
+        roll_moment = ((P[_Y_I, l] * fs0 + P[_Y_I + 1, l] * fs1)
+                       + (P[_Y_I + 2, l] * fs2 + P[_Y_I + 3, l] * fs3))
+        pitch_moment = -((P[_X_I, l] * fs0 + P[_X_I + 1, l] * fs1)
+                         + (P[_X_I + 2, l] * fs2 + P[_X_I + 3, l] * fs3))
         phidd = (roll_moment + ms * (P[_H_CG, l] - P[_H_RC, l]) * (ay + g * phi)) * DV[_D_INV_IXX, l]
         thdd = (pitch_moment + ms * (P[_H_CG, l] - P[_H_PC, l]) * (g * th - ax)) * DV[_D_INV_IYY, l]
         # planar: lateral and yaw

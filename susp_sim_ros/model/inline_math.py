@@ -29,7 +29,8 @@ _INV_LN2 = 1.44269504088896338700e+00
 _X_MIN = -40.0  # exp(-40) < 2^-57: below this expm1 rounds to -1
 # 1/n! for n = 2 .. 13
 _C2, _C3, _C4, _C5, _C6, _C7 = 0.5, 1 / 6, 1 / 24, 1 / 120, 1 / 720, 1 / 5040
-_C8, _C9, _C10, _C11, _C12, _C13 = 1 / 40320, 1 / 362880, 1 / 3628800, 1 / 39916800, 1 / 479001600, 1 / 6227020800
+_C8, _C9, _C10 = 1 / 40320, 1 / 362880, 1 / 3628800
+_C11, _C12, _C13 = 1 / 39916800, 1 / 479001600, 1 / 6227020800
 
 
 @intrinsic
@@ -37,7 +38,8 @@ def _pow2(typingctx, k):
     """``2.0 ** k`` for an integral float ``k`` in [-1022, 1023], built from its exponent bits."""
     def codegen(context, builder, sig, args):
         i64 = ir.IntType(64)
-        bits = builder.shl(builder.add(builder.fptosi(args[0], i64), ir.Constant(i64, 1023)), ir.Constant(i64, 52))
+        biased = builder.add(builder.fptosi(args[0], i64), ir.Constant(i64, 1023))
+        bits = builder.shl(biased, ir.Constant(i64, 52))
         return builder.bitcast(bits, ir.DoubleType())
     return types.float64(types.float64), codegen
 
