@@ -22,7 +22,7 @@ from numba import njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from susp_sim_ros.model.inline_math import expm1_nonpos, tanh
+from susp_sim_ros.model.inline_math import TINY, expm1_nonpos, tanh
 from susp_sim_ros.model.layout import (C_INDEX, N_CTX, N_GRID, N_P_FIXED, N_S_FIXED, N_Y, P_GRID,
                                        P_H_EMPTY, P_H_INTACT, P_INDEX, S_INDEX, U_INDEX, Y_INDEX)
 
@@ -74,7 +74,6 @@ LANES = 16
 _W_ZR, _W_ZRD, _W_SLOPE, _W_D, _W_DD, _W_FZ, _W_WF, _W_FX, _W_FS = 0, 4, 8, 12, 16, 20, 24, 28, 32
 _W_V, _W_AX, _W_DELTA, _W_ZDD, _W_AY, _W_OK = 36, 37, 38, 39, 40, 41
 N_SCRATCH = 42
-_TINY = 1e-300  # guards a division whose result is discarded (tyre force without load)
 
 # reciprocals of constant parameters, computed once per run (:func:`derive`): the step then
 # multiplies instead of dividing, and a parameter changed between runs is always seen
@@ -109,7 +108,8 @@ def _stack_array(shape, dtype=types.float64):
     (no allocation, no reference counting; valid while that function runs)."""
     arrty = types.Array(dtype, len(shape), "C")
     n = int(np.prod(shape))
-    strides = [8 * int(np.prod(shape[k + 1:])) for k in range(len(shape))]
+    itemsize = dtype.bitwidth // 8
+    strides = [itemsize * int(np.prod(shape[k + 1:])) for k in range(len(shape))]
 
     @intrinsic
     def stack(typingctx):
@@ -118,7 +118,7 @@ def _stack_array(shape, dtype=types.float64):
             ptr = cgutils.alloca_once(builder, context.get_value_type(dtype), size=intp(n))
             ary = context.make_array(arrty)(context, builder)
             context.populate_array(ary, data=ptr, shape=[intp(d) for d in shape],
-                                   strides=[intp(st) for st in strides], itemsize=intp(8), meminfo=None)
+                                   strides=[intp(st) for st in strides], itemsize=intp(itemsize), meminfo=None)
             return ary._getvalue()
         return arrty(), codegen
     return stack
@@ -384,7 +384,7 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
             alpha = alpha_f if i < 2 else alpha_r
             fz = W[_W_FZ + i, l]
             mfz = mu * fz
-            fss = mfz * tanh(P[_C_ALPHA + i, l] * alpha / max(mfz, _TINY))
+            fss = mfz * tanh(P[_C_ALPHA + i, l] * alpha / max(mfz, TINY))
             fss = fss if fz > 0.0 else 0.0
             S[_FYT + i, l] += relax * (fss - S[_FYT + i, l])
 
@@ -434,6 +434,13 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
         Y[_Y_VY, l] = vy
         Y[_Y_HEAVE, l] = S[_Z, l]
         Y[_Y_PATH, l] = S[_SPATH, l]
+
+
+@njit(cache=True, inline="always")
+def _store_state(Sv, b, S, l):
+    """Copy lane ``l`` of the block's state back to row ``b`` of the caller's states."""
+    for q in range(N_S):
+        Sv[b, q] = S[q, l]
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", fastmath={"arcp", "nsz"})
@@ -491,15 +498,13 @@ def _run_block(Pv, Sv, b0, nl, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, d
             if W[_W_OK, l] == 0.0 and done[b0 + l] > k + 1:
                 # this vehicle's state stopped being finite: it stops here, its state as after the step
                 done[b0 + l] = k + 1
-                for q in range(N_S):
-                    Sv[b0 + l, q] = S[q, l]
+                _store_state(Sv, b0 + l, S, l)
                 alive -= 1
         if alive == 0:
             break
     for l in range(nl):
         if done[b0 + l] == U.shape[1]:
-            for q in range(N_S):
-                Sv[b0 + l, q] = S[q, l]
+            _store_state(Sv, b0 + l, S, l)
 
 
 @njit(cache=True)

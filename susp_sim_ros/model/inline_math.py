@@ -27,6 +27,9 @@ _LN2_HI = 6.93147180369123816490e-01  # fdlibm: ln2 with its low 32 bits zero, s
 _LN2_LO = 1.90821492927058770002e-10
 _INV_LN2 = 1.44269504088896338700e+00
 _X_MIN = -40.0  # exp(-40) < 2^-57: below this expm1 rounds to -1
+# divisor floor where a quotient is computed for every vehicle but kept only where the divisor is > 0
+# (branch-free code evaluates both sides of a select)
+TINY = 1e-300
 # 1/n! for n = 2 .. 13
 _C2, _C3, _C4, _C5, _C6, _C7 = 0.5, 1 / 6, 1 / 24, 1 / 120, 1 / 720, 1 / 5040
 _C8, _C9, _C10 = 1 / 40320, 1 / 362880, 1 / 3628800

@@ -42,11 +42,10 @@ from typing import Callable
 import numpy as np
 from numba import njit
 
-from .inline_math import expm1_nonpos
+from .inline_math import TINY, expm1_nonpos
 from .layout import C_INDEX
 
 _C_SV, _C_SOIL, _C_SH, _C_D = C_INDEX["SV"], C_INDEX["SOIL"], C_INDEX["SH"], C_INDEX["D"]
-_TINY_LEVEL = 1e-300  # N; guards the division when the level is 0 (that result is discarded)
 
 
 @dataclass(frozen=True)
@@ -103,7 +102,7 @@ def dahl_exact(f, level, sigma, dx):
     f = min(max(f, -lv), lv)
     target = lv if dx > 0.0 else -lv
     # written as an increment with expm1: monotone in dx and accurate for tiny steps
-    f_new = f - (target - f) * expm1_nonpos(-sigma * abs(dx) / max(lv, _TINY_LEVEL))
+    f_new = f - (target - f) * expm1_nonpos(-sigma * abs(dx) / max(lv, TINY))
     f_new = min(f_new, target) if dx > 0.0 else max(f_new, target)
     f_new = f if dx == 0.0 else f_new
     return f_new if level > 0.0 else 0.0
