@@ -5,10 +5,11 @@ Dask workers, and the per-run overhead the study engine adds over the bare batch
 
 What is timed (wall time unless said otherwise; plots off, they are not per-run cost):
 
-- ``bare``: the batch simulations the study needs and nothing else: one ``simulate_batch`` call per chunk
-  plus one for the study's distinct reference runs (3 for the example: the intact car on each bump;
-  ``rmse_ref`` needs them, so they are simulation work, not engine work). Parameter vectors, inputs and
-  roads are prepared before the timer starts. All cores to the compiled kernel.
+- ``bare``: the batch simulations the study needs and nothing else: the ``simulate_batch`` calls of the
+  study's tasks as planned for one worker thread (for the example one call of all 363 runs; the
+  reference runs ``rmse_ref`` needs ride in the tasks' batches as the engine puts them, here they are runs
+  of the study). Parameter vectors, inputs and roads are prepared before the timer starts. All cores to
+  the compiled kernel.
 - ``inprocess``: ``run_study`` without Dask, start to end: result store, reference runs, parameters,
   batched simulation, metrics, chunk files, the final ``results.csv`` and ``summary.json``. All cores.
 - ``1`` / ``2``: the same on a local cluster of 1 / 2 single-threaded worker processes (the kernel gets
@@ -45,50 +46,25 @@ sys.path.insert(0, str(ROOT))
 from susp_sim_ros.analysis.sweep import InProcessExecutor, load_study, make_executor, run_study  # noqa: E402
 from susp_sim_ros.analysis.sweep import engine, runner  # noqa: E402
 from susp_sim_ros.analysis.sweep import store as store_mod  # noqa: E402
-from susp_sim_ros.analysis.sweep.spec import reference_run  # noqa: E402
+from susp_sim_ros.analysis.sweep.runner import plan_tasks  # noqa: E402
 import susp_sim_ros.model as model_mod  # noqa: E402
 from susp_sim_ros.model import simulate_batch  # noqa: E402
 
 
-def _batch(data, runs):
-    """Everything one simulate_batch call needs for ``runs`` (one kernel, one step count)."""
-    dt = data["step_s"]
-    model, _ = engine.model_of(data, runs[0])
-    mans = [engine.maneuver_of(data, r, engine.model_of(data, r)[0].vehicle.wheelbase) for r in runs]
-    U, u_row, roads, road_row, ids = [], [], [], [], []
-    for m in mans:                              # maneuvers are cached: equal ones are one object
-        if id(m) not in ids:
-            ids.append(id(m))
-            U.append(m.to_inputs(dt))
-            roads.append(m.road)
-        u_row.append(ids.index(id(m)))
-        road_row.append(ids.index(id(m)))
-    P = np.stack([engine.params_of(data, r) for r in runs])
-    return model, P, np.stack(U), roads, np.array(u_row), np.array(road_row)
-
-
-def bare_batches(spec):
-    """Per chunk, and for the distinct reference runs: the inputs of simulate_batch, prepared in advance."""
-    data = spec.data
-    out = [_batch(data, [spec.runs[r] for r in c.runs]) for c in spec.chunks]
-    if data.get("reference") is not None:
-        refs = list({json.dumps(reference_run(data, r), sort_keys=True): reference_run(data, r)
-                     for r in spec.runs}.values())
-        by_kernel: dict = {}
-        for r in refs:
-            by_kernel.setdefault((r.get("variant", "full"), engine.maneuver_of(
-                data, r, engine.model_of(data, r)[0].vehicle.wheelbase).n_steps(data["step_s"])), []).append(r)
-        out += [_batch(data, rs) for rs in by_kernel.values()]
-    return out
+def bare_batches(spec, threads_total: int = 1):
+    """The kernel calls the study's tasks make (``simulate_batch`` inputs per task, the reference runs in
+    the task's batch as the engine puts them), prepared in advance. ``threads_total``: worker threads the
+    tasks are planned for (1: in-process and one Dask worker)."""
+    tasks = plan_tasks(spec.chunks, threads_total)
+    runs = [[spec.runs[r] for c in t for r in c.runs] for t in tasks]
+    return [b for rs in runs for b in engine.batch_inputs(spec.data, engine.task_batch(spec.data, rs)[0])]
 
 
 def time_bare(spec, batches, cpu: bool = False) -> float:
     clock = time.process_time if cpu else time.perf_counter
-    labels = engine.selection(spec.data)
     t0 = clock()
-    for model, P, U, roads, u_row, road_row in batches:
-        simulate_batch(model, P, U, dt=spec.data["step_s"], roads=roads, u_row=u_row, road_row=road_row,
-                       decim=spec.data["decim"], outputs=labels)
+    for b in batches:
+        simulate_batch(*b["args"], **b["kw"])
     return clock() - t0
 
 
@@ -104,10 +80,9 @@ def breakdown(spec, tmp: Path, n: int = 7) -> dict:
     """Where an in-process study's time goes (one kernel thread; ms, median of ``n``)."""
     parts = {"kernel (simulate_batch)": (model_mod, "simulate_batch"),
              "store: open": (store_mod.ResultStore, "__init__"),
-             "reference runs (incl. kernel)": (runner, "_references"),
-             "chunk preparation": (engine, "_prepare"),
+             "batch preparation": (engine, "_prepare"),
              "metrics": (engine, "batch_metrics"),
-             "chunk tasks (incl. kernel, metrics)": (engine, "chunk_task"),
+             "tasks (incl. kernel, metrics)": (engine, "sweep_task"),
              "chunk files": (store_mod.ResultStore, "write_chunk"),
              "final table and summary": (runner, "_finish_sweep")}
     acc: dict = collections.defaultdict(float)
@@ -140,6 +115,98 @@ def breakdown(spec, tmp: Path, n: int = 7) -> dict:
     return {k: round(1e3 * float(np.median([r.get(k, 0.0) for r in rounds])), 3) for k in rounds[0]}
 
 
+def _variant(path: str, oil_levels: int | None, chunk_size: int | None):
+    """The study at ``path``, with ``oil_levels`` per axle and ``chunk_size`` overridden; plots off."""
+    spec = load_study(path)
+    if oil_levels or chunk_size:
+        import yaml
+        from susp_sim_ros.analysis.sweep import study_from_dict
+        raw = yaml.safe_load(Path(path).read_text())
+        if oil_levels:
+            for k in ("oil_front", "oil_rear"):
+                raw["parameters"][k] = {"from": 0.0, "to": 1.0, "num": oil_levels}
+        if chunk_size:
+            raw["chunk_size"] = chunk_size
+        raw.pop("plot", None)
+        spec = study_from_dict(raw, path)
+    spec.data["plot"] = None
+    return spec
+
+
+def measure(specs: dict, repeat: int, tmp: Path) -> dict:
+    """Interleaved rounds over the studies in ``specs``: per study and mode, the list of times [s]."""
+    all_threads = numba.config.NUMBA_NUM_THREADS
+    inproc, one = InProcessExecutor(), InProcessExecutor(threads=1)
+    batches = {name: bare_batches(spec) for name, spec in specs.items()}
+    for name, spec in specs.items():   # warm-up outside the timers: kernel, metrics, model/maneuver caches
+        time_bare(spec, batches[name])
+        time_engine(spec, inproc, tmp / "warm")
+    execs, start_s = {}, {}
+    rounds = {name: collections.defaultdict(list) for name in specs}
+    try:
+        for w in (1, 2):
+            t0 = time.perf_counter()
+            execs[str(w)] = make_executor("local", w)         # what `susp study --workers W` uses
+            for spec in specs.values():                       # workers import and load the kernel
+                time_engine(spec, execs[str(w)], tmp / f"warm{w}")
+                time_engine(spec, execs[str(w)], tmp / f"warm{w}")
+            start_s[str(w)] = time.perf_counter() - t0
+        for k in range(repeat):
+            for name, spec in specs.items():
+                r = rounds[name]
+                numba.set_num_threads(all_threads)
+                r["bare"].append(time_bare(spec, batches[name]))
+                r["inprocess"].append(time_engine(spec, inproc, tmp / "inproc"))
+                numba.set_num_threads(1)        # CPU time with one kernel thread (robust to other load)
+                r["bare_cpu"].append(time_bare(spec, batches[name], cpu=True))
+                r["engine_cpu"].append(time_engine(spec, one, tmp / "cpu", cpu=True))
+                numba.set_num_threads(all_threads)
+                for w, ex in execs.items():
+                    r[w].append(time_engine(spec, ex, tmp / f"dask{w}"))
+    finally:
+        numba.set_num_threads(all_threads)
+        for ex in execs.values():
+            ex.close()
+    return {"rounds": rounds, "cluster_startup_and_warmup_s": start_s,
+            "reference_runs_added": {name: sum(len(b["idx"]) for b in batches[name]) - specs[name].n_runs
+                                     for name in specs}}
+
+
+def figures(spec, rounds: dict, n_ref: int) -> dict:
+    """Runs/s and overheads of one study from its rounds (each figure the best of its rounds)."""
+    n = spec.n_runs
+    best = {k: min(v) for k, v in rounds.items()}
+    over = {"dask_1_worker": 100 * (best["1"] - best["bare"]) / best["bare"],
+            "inprocess": 100 * (best["inprocess"] - best["bare"]) / best["bare"],
+            "engine_cpu": 100 * (best["engine_cpu"] - best["bare_cpu"]) / best["bare_cpu"]}
+    return {"study": spec.name, "runs": n, "reference_runs_added": n_ref, "chunks": len(spec.chunks),
+            "chunk_size": spec.data["chunk_size"],
+            "tasks": {"1": len(plan_tasks(spec.chunks, 1)), "2": len(plan_tasks(spec.chunks, 2))},
+            "runs_per_s": {"bare": n / best["bare"], "inprocess": n / best["inprocess"],
+                           "1": n / best["1"], "2": n / best["2"]},
+            "seconds": {k: best[k] for k in ("bare", "inprocess", "1", "2", "bare_cpu", "engine_cpu")},
+            "seconds_median": {k: float(np.median(v)) for k, v in rounds.items()},
+            "overhead_pct": over,
+            "overhead_us_per_run": {"dask_1_worker": 1e6 * (best["1"] - best["bare"]) / n,
+                                    "inprocess": 1e6 * (best["inprocess"] - best["bare"]) / n,
+                                    "engine_cpu": 1e6 * (best["engine_cpu"] - best["bare_cpu"]) / n}}
+
+
+def marginal(small: dict, large: dict) -> dict:
+    """Per-run overhead as the cost of one more run: (engine_L - engine_S) / (bare_L - bare_S) - 1 between
+    two sizes of the same study, and the fixed cost per study it leaves: (engine - bare) of the small one
+    minus its runs at the per-run overhead [ms]."""
+    out = {"runs": [small["runs"], large["runs"]], "overhead_pct": {}, "fixed_ms": {}}
+    for key, mode, base in (("dask_1_worker", "1", "bare"), ("inprocess", "inprocess", "bare"),
+                            ("engine_cpu", "engine_cpu", "bare_cpu")):
+        es, el = small["seconds"][mode], large["seconds"][mode]
+        bs, bl = small["seconds"][base], large["seconds"][base]
+        rate = (el - es) / (bl - bs) - 1
+        out["overhead_pct"][key] = 100 * rate
+        out["fixed_ms"][key] = 1e3 * ((es - bs) - rate * bs)
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--study", default=str(ROOT / "config" / "studies" / "bump_oil_inspection.yaml"))
@@ -147,100 +214,60 @@ def main(argv=None) -> int:
     ap.add_argument("--oil-levels", type=int, default=None,
                     help="override the number of oil levels per axle (a bigger study than the example)")
     ap.add_argument("--chunk-size", type=int, default=None, help="override the study's chunk_size")
+    ap.add_argument("--scale-oil-levels", type=int, default=31,
+                    help="oil levels per axle of the larger copy of the study that gives the per-run "
+                         "overhead (default 31: 8x the example's runs; 0: none)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
 
-    spec = load_study(args.study)
-    if args.oil_levels or args.chunk_size:
-        import yaml
-        from susp_sim_ros.analysis.sweep import study_from_dict
-        raw = yaml.safe_load(Path(args.study).read_text())
-        if args.oil_levels:
-            for k in ("oil_front", "oil_rear"):
-                raw["parameters"][k] = {"from": 0.0, "to": 1.0, "num": args.oil_levels}
-        if args.chunk_size:
-            raw["chunk_size"] = args.chunk_size
-        raw.pop("plot", None)
-        spec = study_from_dict(raw, args.study)
-    spec.data["plot"] = None
-    n, cores, all_threads = spec.n_runs, os.cpu_count() or 1, numba.config.NUMBA_NUM_THREADS
+    specs = {"study": _variant(args.study, args.oil_levels, args.chunk_size)}
+    if args.scale_oil_levels:
+        specs["scaled"] = _variant(args.study, args.scale_oil_levels, args.chunk_size)
     tmp = Path(tempfile.mkdtemp(prefix="bench-study-"))
     load0 = os.getloadavg()[0]
-    batches = bare_batches(spec)
-    n_ref_runs = sum(len(b[1]) for b in batches) - n
-    inproc, one = InProcessExecutor(), InProcessExecutor(threads=1)
-    # warm-up outside the timers: kernel and metrics compiled/loaded, caches of models and maneuvers
-    time_bare(spec, batches)
-    time_engine(spec, inproc, tmp / "warm")
-    execs, start_s = {}, {}
-    try:
-        for w in (1, 2):
-            t0 = time.perf_counter()
-            execs[str(w)] = make_executor("local", w)         # what `susp study --workers W` uses
-            time_engine(spec, execs[str(w)], tmp / f"warm{w}")  # workers import and load the kernel
-            time_engine(spec, execs[str(w)], tmp / f"warm{w}")
-            start_s[str(w)] = time.perf_counter() - t0
-        rounds = collections.defaultdict(list)
-        for k in range(args.repeat):
-            numba.set_num_threads(all_threads)
-            rounds["bare"].append(time_bare(spec, batches))
-            rounds["inprocess"].append(time_engine(spec, inproc, tmp / "inproc"))
-            numba.set_num_threads(1)        # CPU time with one kernel thread (robust to other load)
-            rounds["bare_cpu"].append(time_bare(spec, batches, cpu=True))
-            rounds["engine_cpu"].append(time_engine(spec, one, tmp / "cpu", cpu=True))
-            numba.set_num_threads(all_threads)
-            for w, ex in execs.items():
-                rounds[w].append(time_engine(spec, ex, tmp / f"dask{w}"))
-        numba.set_num_threads(1)
-        parts = breakdown(spec, tmp)
-        numba.set_num_threads(all_threads)
-    finally:
-        for ex in execs.values():
-            ex.close()
-    best = {k: min(v) for k, v in rounds.items()}
-    t_bare = best["bare"]
-
-    def pct(t, base):
-        return 100 * (t - base) / base
-
-    def us(t, base):
-        return 1e6 * (t - base) / n
-    over = {"dask_1_worker": pct(best["1"], t_bare), "inprocess": pct(best["inprocess"], t_bare),
-            "engine_cpu": pct(best["engine_cpu"], best["bare_cpu"])}
-    out = {
-        "study": spec.name, "runs": n, "reference_runs": n_ref_runs, "chunks": len(spec.chunks),
-        "chunk_size": spec.data["chunk_size"], "cores": cores, "kernel_threads": all_threads,
-        "repeat": args.repeat,
-        "runs_per_s": {"bare": n / t_bare, "inprocess": n / best["inprocess"], "1": n / best["1"], "2": n / best["2"]},
-        "seconds": {k: best[k] for k in ("bare", "inprocess", "1", "2", "bare_cpu", "engine_cpu")},
-        "seconds_median": {k: float(np.median(v)) for k, v in rounds.items()},
-        "overhead_pct": over,
-        "overhead_us_per_run": {"dask_1_worker": us(best["1"], t_bare), "inprocess": us(best["inprocess"], t_bare),
-                                "engine_cpu": us(best["engine_cpu"], best["bare_cpu"])},
-        "overhead_target_pct": 10.0, "overhead_ok": max(over.values()) < 10.0,
-        "breakdown_ms": parts,
-        "load_average": [load0, os.getloadavg()[0]],
-        "cluster_startup_and_warmup_s": start_s,
-    }
+    m = measure(specs, args.repeat, tmp)
+    numba.set_num_threads(1)
+    parts = breakdown(specs["study"], tmp)
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    out = figures(specs["study"], m["rounds"]["study"], m["reference_runs_added"]["study"])
+    over = out["overhead_pct"]
+    out.update({"cores": os.cpu_count() or 1, "kernel_threads": numba.config.NUMBA_NUM_THREADS,
+                "repeat": args.repeat, "breakdown_ms": parts, "load_average": [load0, os.getloadavg()[0]],
+                "cluster_startup_and_warmup_s": m["cluster_startup_and_warmup_s"]})
+    if "scaled" in specs:
+        out["scaled"] = figures(specs["scaled"], m["rounds"]["scaled"], m["reference_runs_added"]["scaled"])
+        out["per_run"] = marginal(out, out["scaled"])
+    out["overhead_target_pct"] = 10.0
+    out["overhead_ok"] = max(over.values()) < 10.0
+    out["per_run_overhead_ok"] = "per_run" in out and max(out["per_run"]["overhead_pct"].values()) < 10.0
     if args.json:
         print(json.dumps(out))
-    else:
-        r, u = out["runs_per_s"], out["overhead_us_per_run"]
-        print(f"{spec.name}: {n} runs (+{n_ref_runs} reference runs) in {len(spec.chunks)} chunks, {cores} cores")
+        return 0
+    for f in [out] + ([out["scaled"]] if "scaled" in out else []):
+        r, u, o = f["runs_per_s"], f["overhead_us_per_run"], f["overhead_pct"]
+        print(f"{f['study']}: {f['runs']} runs (+{f['reference_runs_added']} reference runs) in {f['chunks']} "
+              f"chunks ({f['tasks']['1']} task(s) on 1 worker, {f['tasks']['2']} on 2), {out['cores']} cores")
         print(f"  bare batch simulation     {r['bare']:8.0f} runs/s")
-        print(f"  engine, no Dask           {r['inprocess']:8.0f} runs/s  (overhead {over['inprocess']:+.1f} %, "
+        print(f"  engine, no Dask           {r['inprocess']:8.0f} runs/s  (overhead {o['inprocess']:+.1f} %, "
               f"{u['inprocess']:.0f} us/run)")
-        print(f"  engine, Dask 1 worker     {r['1']:8.0f} runs/s  (overhead {over['dask_1_worker']:+.1f} %, "
-              f"{u['dask_1_worker']:.0f} us/run; target < 10 %)")
+        print(f"  engine, Dask 1 worker     {r['1']:8.0f} runs/s  (overhead {o['dask_1_worker']:+.1f} %, "
+              f"{u['dask_1_worker']:.0f} us/run)")
         print(f"  engine, Dask 2 workers    {r['2']:8.0f} runs/s")
-        print(f"  engine - bare, CPU        {over['engine_cpu']:+8.1f} %       (one kernel thread, "
+        print(f"  engine - bare, CPU        {o['engine_cpu']:+8.1f} %       (one kernel thread, "
               f"{u['engine_cpu']:.0f} us/run)")
-        print("  where an in-process study's time goes (one kernel thread, ms):")
-        for k, v in parts.items():
-            print(f"    {k:38s} {v:8.2f}")
-        print(f"  load average              {out['load_average'][0]:.1f} -> {out['load_average'][1]:.1f} "
-              f"on {cores} cores (figures are best of {args.repeat} interleaved rounds)")
-        print(f"  cluster start + warm-up   1 worker {start_s['1']:.1f} s, 2 workers {start_s['2']:.1f} s")
+    if "per_run" in out:
+        pr = out["per_run"]
+        print(f"per-run overhead (one more run, between {pr['runs'][0]} and {pr['runs'][1]} runs; target < 10 %) "
+              f"and the fixed cost per study it leaves:")
+        for k in ("dask_1_worker", "inprocess", "engine_cpu"):
+            print(f"  {k:18s} {pr['overhead_pct'][k]:+6.1f} %   fixed {pr['fixed_ms'][k]:6.1f} ms")
+    print("where an in-process study's time goes (one kernel thread, ms):")
+    for k, v in parts.items():
+        print(f"    {k:38s} {v:8.2f}")
+    print(f"load average {out['load_average'][0]:.1f} -> {out['load_average'][1]:.1f} on {out['cores']} cores "
+          f"(figures are best of {args.repeat} interleaved rounds); cluster start + warm-up "
+          f"{m['cluster_startup_and_warmup_s']['1']:.1f} s (1 worker), "
+          f"{m['cluster_startup_and_warmup_s']['2']:.1f} s (2 workers)")
     return 0
 
 

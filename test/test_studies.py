@@ -201,16 +201,57 @@ def test_dask_cluster_gives_the_same_table_as_a_plain_run(tmp_path, dask_executo
     assert Path(res["plots"][0]).stat().st_size > 10_000
 
 
-def test_dask_chunks_spread_over_the_workers(tmp_path, dask_executor):
-    """Chunk tasks carry the reference traces as data: had they depended on a reference future, Dask
-    would have placed every chunk next to it, on one worker."""
+def test_dask_tasks_spread_over_the_workers(tmp_path, dask_executor):
+    """Three chunks on two workers: two tasks (2 + 1 chunks), one on each worker. Each task simulates its
+    own reference runs: had the tasks depended on a shared reference future, Dask would have placed
+    them all next to it, on one worker."""
     from distributed import get_task_stream
     spec = study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml")
     with get_task_stream(client=dask_executor.client) as ts:
         run_study(spec, tmp_path / "spread", dask_executor, progress=False, plot=False)
-    chunk_workers = [t["worker"] for t in ts.data if t["key"].startswith("_timed")]
-    assert len(chunk_workers) == 3                  # the three chunks
-    assert len(set(chunk_workers)) == 2, chunk_workers
+    task_workers = [t["worker"] for t in ts.data if t["key"].startswith("_timed")]
+    assert len(task_workers) == 2
+    assert len(set(task_workers)) == 2, task_workers
+    log = [json.loads(x) for x in (tmp_path / "spread" / "chunks" / "log.jsonl").read_text().splitlines()]
+    assert sorted(e["task_chunks"] for e in log) == [1, 2, 2]
+
+
+def test_tasks_group_consecutive_chunks_of_one_batch_group():
+    from susp_sim_ros.analysis.sweep.runner import plan_tasks
+    from susp_sim_ros.analysis.sweep.spec import Chunk
+    chunks = [Chunk(i, (i,), ("full", 5000)) for i in range(5)] + [Chunk(5 + i, (5 + i,), ("dahl_only", 5000)) for i in range(3)]
+    ids = lambda tasks: [[c.id for c in t] for t in tasks]
+    assert ids(plan_tasks(chunks, threads=1)) == [[0, 1, 2, 3, 4], [5, 6, 7]]      # never across groups
+    assert ids(plan_tasks(chunks, threads=2)) == [[0, 1, 2, 3], [4], [5, 6, 7]]
+    assert ids(plan_tasks(chunks, threads=8)) == [[c.id] for c in chunks]        # one chunk per task
+    assert ids(plan_tasks(chunks, threads=1, max_chunks=2)) == [[0, 1], [2, 3], [4], [5, 6], [7]]
+    assert plan_tasks([], threads=2) == []
+    example = load_study(EXAMPLE)                  # the example: one task on one worker, two on two
+    assert [len(t) for t in plan_tasks(example.chunks, 1)] == [2]
+    assert [len(t) for t in plan_tasks(example.chunks, 2)] == [1, 1]
+
+
+def test_reference_runs_ride_in_the_task_batch_and_give_the_given_trace_results():
+    """A task adds the reference runs its runs need to its own batch (once each; none that is already
+    one of its runs) and its metrics equal those computed against separately simulated references."""
+    spec = study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml")
+    runs = spec.runs[:4]                      # oil_front 1.0, oil_rear 0/1, both bumps: holds the 2 references
+    batch, ref_at = engine.task_batch(spec.data, runs)
+    assert batch == runs and [batch[i] for i in ref_at] == [
+        {**r, "oil_front": 1.0, "oil_rear": 1.0} for r in runs]
+    runs = spec.runs[4:8]                     # oil_front 0.5: both references added, once each
+    batch, ref_at = engine.task_batch(spec.data, runs)
+    assert batch[:4] == runs and len(batch) == 6 and ref_at[4:] == [4, 5]
+    assert all(batch[ref_at[i]] == {**runs[i], "oil_front": 1.0, "oil_rear": 1.0} for i in range(4))
+    chunks = [spec.runs[4:7], spec.runs[7:10]]
+    got = engine.sweep_task(spec.data, chunks)
+    refs = {json.dumps(r, sort_keys=True): np.degrees(engine.simulate_groups(spec.data, [r])[0][1][0, :, 0])
+            for r in (spec.runs[2], spec.runs[3])}                       # the two references, alone
+    for c, res in zip(chunks, got):
+        given = engine.chunk_task(spec.data, c, [refs[json.dumps({**r, "oil_front": 1.0, "oil_rear": 1.0},
+                                                                  sort_keys=True)] for r in c])
+        np.testing.assert_array_equal(res["metrics"], np.array(given["metrics"]))    # bit for bit
+        assert res["ok"].tolist() == given["ok"]
 
 
 class Interrupt(Exception):

@@ -1,4 +1,4 @@
-"""What one task does: a chunk of runs as one batched simulation, then the metrics of each run.
+"""What one task does: the runs of one or more chunks as one batched simulation, then the metrics of each run.
 
 Everything here is a pure function of the normalised study description (``spec.data``) and the run
 parameters, so a chunk gives bit-identical results wherever it runs (a Dask worker process or thread, or
@@ -116,82 +116,82 @@ def selection(data: Mapping) -> list[str]:
 
 # ---- the batched simulation ---------------------------------------------------------------------------
 def _prepare(data: Mapping, runs: Sequence[Mapping]):
-    """Per run: model, base parameter vector, maneuver, wheelbase and oil levels; the cache is consulted
-    once per distinct (vehicle, variant) and maneuver in ``runs``, not once per run."""
+    """``(setups, which, oils)``: the distinct setups of ``runs`` — ``(model, base parameter vector,
+    maneuver, wheelbase)`` — ``which[i]`` the one of run ``i`` and ``oils[i]`` its oil levels FL, FR, RL,
+    RR. The caches are consulted once per distinct setup, not once per run."""
     models: dict = {}
-    mans: dict = {}
-    prepared = []
+    setup_of: dict = {}
+    setups, which, oils = [], [], []
     for run in runs:
-        mk = (run.get("vehicle_class"), run.get("vehicle"), run.get("variant", "full"))
-        mb = models.get(mk)
-        if mb is None:
-            mb = models[mk] = model_of(data, run)
-        wb = mb[0].vehicle.wheelbase
-        gk = (tuple(run.get(k) for k in MANEUVER_KEYS), wb)
-        man = mans.get(gk)
-        if man is None:
-            man = mans[gk] = maneuver_of(data, run, wb)
-        prepared.append((mb[0], mb[1], man, wb, oil_of(run)))
-    return prepared
+        key = (run.get("vehicle_class"), run.get("vehicle"), run.get("variant", "full"), *map(run.get, MANEUVER_KEYS))
+        k = setup_of.get(key)
+        if k is None:
+            mb = models.get(key[:3])
+            if mb is None:
+                mb = models[key[:3]] = model_of(data, run)
+            wb = mb[0].vehicle.wheelbase
+            k = setup_of[key] = len(setups)
+            setups.append((mb[0], mb[1], maneuver_of(data, run, wb), wb))
+        which.append(k)
+        oils.append(oil_of(run))
+    return setups, np.array(which, dtype=np.int64), np.array(oils, dtype=float).reshape(len(runs), 4)
+
+
+def batch_inputs(data: Mapping, runs: Sequence[Mapping]) -> list[dict]:
+    """The batched simulations of ``runs``: one per (kernel, step count), each a dict of ``idx`` (positions
+    in ``runs``), ``n_steps``, ``t_after[B]`` (end of the excitation [s]) and ``args``/``kw`` of
+    :func:`~susp_sim_ros.model.simulate_batch`."""
+    dt, decim = data["step_s"], data["decim"]
+    labels = selection(data)
+    setups, which, oils = _prepare(data, runs)
+    by_group: dict = {}                         # (kernel, n_p, step count) -> setup ids
+    for k, (model, _, man, _) in enumerate(setups):
+        by_group.setdefault((id(model.kernel), model.layout.n_p, man.n_steps(dt)), []).append(k)
+    k_oil = P_INDEX["OIL"]
+    out = []
+    for (_, _, n_req), ks in by_group.items():
+        model = setups[ks[0]][0]
+        u_keys, U, r_keys, roads = {}, [], {}, []
+        local = np.full(len(setups), -1)        # setup id -> row of this group's per-setup tables
+        u_of, road_of, t_of = [], [], []
+        for j, k in enumerate(ks):
+            _, _, man, wb = setups[k]
+            local[k] = j
+            uk = (man.speed, man.steer_amplitude, man.steer_frequency, man.steer_start, man.steer_periods)
+            if uk not in u_keys:
+                u_keys[uk] = len(U)
+                U.append(inputs_of(man, dt))
+            rk = (man.road.s.tobytes(), man.road.zl.tobytes(), man.road.zr.tobytes())
+            if rk not in r_keys:
+                r_keys[rk] = len(roads)
+                roads.append(man.road)
+            u_of.append(u_keys[uk])
+            road_of.append(r_keys[rk])
+            t_of.append(after_time(man, wb))
+        idx = np.nonzero(local[which] >= 0)[0]
+        row = local[which[idx]]
+        P = np.stack([setups[k][1] for k in ks])[row]
+        P[:, k_oil:k_oil + 4] = oils[idx]
+        out.append({"idx": idx.tolist(), "n_steps": n_req, "t_after": np.array(t_of)[row],
+                    "args": (model, P, np.stack(U)),
+                    "kw": {"dt": dt, "roads": roads, "u_row": np.array(u_of)[row],
+                           "road_row": np.array(road_of)[row], "decim": decim, "outputs": labels}})
+    return out
 
 
 def simulate_groups(data: Mapping, runs: Sequence[Mapping], threads: int | None = None) -> list:
-    """Simulate ``runs`` batched per (kernel, step count). Returns one entry per batch: ``(idx, Y, ok,
-    t_after, dt_out)`` with ``idx`` the positions in ``runs``, ``Y[B, n, n_sel]`` the recorded outputs
-    (the signal first), ``ok[B]`` (ran to the end and finite) and ``t_after[B]`` (end of the excitation)."""
+    """Simulate ``runs`` batched per (kernel, step count) (:func:`batch_inputs`). Returns one entry per
+    batch: ``(idx, Y, ok, t_after, dt_out)`` with ``idx`` the positions in ``runs``, ``Y[B, n, n_sel]`` the
+    recorded outputs (the signal first), ``ok[B]`` (ran to the end and finite) and ``t_after[B]``."""
     from ...model import simulate_batch
     if threads is not None:
         import numba
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
-    dt, decim = data["step_s"], data["decim"]
-    labels = selection(data)
-    prepared = _prepare(data, runs)
-    n_steps: dict = {}
-    groups: dict = {}
-    for i, (model, _, man, _, _) in enumerate(prepared):
-        n = n_steps.get(id(man))
-        if n is None:
-            n = n_steps[id(man)] = man.n_steps(dt)
-        groups.setdefault((id(model.kernel), model.layout.n_p, n), []).append(i)
-    k_oil = P_INDEX["OIL"]
     out = []
-    for (_, _, n_req), idx in groups.items():
-        model = prepared[idx[0]][0]
-        u_keys, U, r_keys, roads = {}, [], {}, []
-        row_of: dict = {}                       # (id(maneuver), wheelbase) -> (input row, road row, t_after)
-        u_row, road_row, t_after = [], [], []
-        for i in idx:
-            man, wb = prepared[i][2], prepared[i][3]
-            rows = row_of.get((id(man), wb))
-            if rows is None:
-                uk = (man.speed, man.steer_amplitude, man.steer_frequency, man.steer_start, man.steer_periods)
-                if uk not in u_keys:
-                    u_keys[uk] = len(U)
-                    U.append(inputs_of(man, dt))
-                rk = (man.road.s.tobytes(), man.road.zl.tobytes(), man.road.zr.tobytes())
-                if rk not in r_keys:
-                    r_keys[rk] = len(roads)
-                    roads.append(man.road)
-                rows = row_of[(id(man), wb)] = (u_keys[uk], r_keys[rk], after_time(man, wb))
-            u_row.append(rows[0])
-            road_row.append(rows[1])
-            t_after.append(rows[2])
-        P = np.stack([prepared[i][1] for i in idx])
-        P[:, k_oil:k_oil + 4] = [prepared[i][4] for i in idx]
-        _, Y, done = simulate_batch(model, P, np.stack(U), dt=dt, roads=roads, u_row=np.array(u_row),
-                                    road_row=np.array(road_row), decim=decim, outputs=labels)
-        ok = (done == n_req) & np.isfinite(Y).all(axis=(1, 2))
-        out.append((idx, Y, ok, np.array(t_after), dt * decim))
-    return out
-
-
-def simulate_runs(data: Mapping, runs: Sequence[Mapping], threads: int | None = None):
-    """Simulate ``runs``; batched per (variant, step count). Returns per run ``(Y[n, n_sel], done,
-    t_after, dt_out)`` in the order given."""
-    out: list = [None] * len(runs)
-    for idx, Y, ok, t_after, dt_out in simulate_groups(data, runs, threads):
-        for j, i in enumerate(idx):
-            out[i] = (Y[j], bool(ok[j]), float(t_after[j]), dt_out)
+    for b in batch_inputs(data, runs):
+        _, Y, done = simulate_batch(*b["args"], **b["kw"])
+        ok = (done == b["n_steps"]) & np.isfinite(Y).all(axis=(1, 2))
+        out.append((b["idx"], Y, ok, b["t_after"], data["step_s"] * data["decim"]))
     return out
 
 
@@ -337,42 +337,104 @@ def batch_metrics(data: Mapping, Y: np.ndarray, t_after: np.ndarray, dt_out: flo
 
 
 # ---- tasks ---------------------------------------------------------------------------------------------
-def reference_task(data: Mapping, refs: Sequence[Mapping], threads: int | None = None) -> list:
-    """Signal traces [deg/s] of reference runs."""
-    out: list = [None] * len(refs)
-    for idx, Y, ok, _, _ in simulate_groups(data, refs, threads):
-        for j, i in enumerate(idx):
-            if not ok[j]:
-                raise RuntimeError(f"reference run {json.dumps(dict(refs[i]))} became non-finite")
-            out[i] = np.degrees(Y[j, :, 0])
+def task_batch(data: Mapping, runs: Sequence[Mapping]) -> tuple[list, list]:
+    """What a task simulates: ``runs``, then the distinct reference runs they need that are not among
+    them, as one list (one batched simulation per kernel group). Returns ``(batch, ref_at)``:
+    ``ref_at[i]`` is the position in ``batch`` of the reference of ``batch[i]`` (``None``: no reference).
+
+    Riding in the same batch, a reference run usually costs nothing: the kernel advances vehicles in
+    blocks of 16 lanes and the last block of a batch is rarely full (the example's references are runs of
+    the study itself)."""
+    from .spec import reference_run
+    batch = list(runs)
+    ref = data.get("reference")
+    if ref is None:
+        return batch, [None] * len(batch)
+    # runs of a sweep share their keys in one order, so their items are a key (a reference run with its
+    # items in another order would just be simulated once more)
+    pos: dict = {}
+    for i, r in enumerate(batch):                   # first position of each distinct run
+        pos.setdefault(tuple(r.items()), i)
+    # a run's reference depends on its values of the keys the reference does not set
+    drop = set(ref) | ({"vehicle"} if "vehicle_class" in ref else set()) | (
+        {"vehicle_class"} if "vehicle" in ref else set())
+    ref_of: dict = {}
+    ref_at = []
+    for r in runs:
+        nk = tuple([kv for kv in r.items() if kv[0] not in drop])
+        p = ref_of.get(nk)
+        if p is None:
+            rr = reference_run(data, r)
+            p = pos.get(tuple(rr.items()))
+            if p is None:
+                p = pos[tuple(rr.items())] = len(batch)
+                batch.append(rr)
+            ref_of[nk] = p
+        ref_at.append(p)
+    ref_at += list(range(len(runs), len(batch)))        # a reference run is its own reference
+    return batch, ref_at
+
+
+def sweep_task(data: Mapping, chunks: Sequence[Sequence[Mapping]], threads: int | None = None) -> list[dict]:
+    """One task: the runs of one or more chunks and the reference runs they need, simulated together
+    (:func:`task_batch`), then the metrics of each run. Returns per chunk ``{"ok": bool[n], "metrics":
+    float[n, n_outputs]}`` (metrics NaN for a run that became non-finite). A reference run that became
+    non-finite raises ``RuntimeError`` (no run could be compared with it)."""
+    runs = [r for c in chunks for r in c]
+    batch, ref_at = task_batch(data, runs)
+    groups = simulate_groups(data, batch, threads)
+    R, ref_row = None, None
+    if data.get("reference") is not None:
+        where = {i: (g, j) for g, (idx, *_) in enumerate(groups) for j, i in enumerate(idx)}
+        distinct = sorted(set(ref_at))
+        for p in distinct:
+            g, j = where[p]
+            if not groups[g][2][j]:
+                raise RuntimeError(f"reference run {json.dumps(dict(batch[p]))} became non-finite")
+        R = np.degrees(np.stack([groups[where[p][0]][1][where[p][1], :, 0] for p in distinct]))
+        row = {p: k for k, p in enumerate(distinct)}
+        ref_row = np.array([row[p] for p in ref_at])
+    ok, metrics = _metrics(data, groups, len(batch), R, ref_row)
+    out, k = [], 0
+    for c in chunks:
+        out.append({"ok": ok[k:k + len(c)], "metrics": metrics[k:k + len(c)]})
+        k += len(c)
     return out
 
 
 def chunk_task(data: Mapping, runs: Sequence[Mapping], refs: Sequence[np.ndarray | None] | None = None,
-               ref_rows: Sequence[int] | None = None, threads: int | None = None) -> dict:
-    """One chunk: batched simulation and metrics. Returns ``{"ok": [...], "metrics": [[...], ...]}``
-    (metrics NaN for a run that became non-finite).
-
-    ``refs``: the reference trace of each run (or ``None``); or, with ``ref_rows``, outputs of
-    :func:`reference_task` (lists of traces) and ``ref_rows[i] = (list, trace)`` the one of run ``i``, so
-    a chunk ships each trace once."""
-    if refs is None:
-        refs = [None] * len(runs)
-    elif ref_rows is not None:
-        refs = [refs[t][k] for t, k in ref_rows]
+               threads: int | None = None) -> dict:
+    """Batched simulation and metrics of ``runs`` against given reference traces ``refs[i]`` [deg/s] (or
+    ``None``). Returns ``{"ok": [...], "metrics": [[...], ...]}`` (lists)."""
     groups = simulate_groups(data, runs, threads)
-    n_out = len(data["outputs"])
-    metrics = np.full((len(runs), n_out), math.nan)
-    ok = np.zeros(len(runs), bool)
+    R, ref_row = None, None
+    if refs is not None and any(r is not None for r in refs):
+        given = [i for i, r in enumerate(refs) if r is not None]
+        R = np.stack([refs[i] for i in given])
+        ref_row = np.full(len(runs), -1)
+        ref_row[given] = np.arange(len(given))
+    ok, metrics = _metrics(data, groups, len(runs), R, ref_row)
+    return {"ok": ok.tolist(), "metrics": metrics.tolist()}
+
+
+def _metrics(data: Mapping, groups: list, n: int, R: np.ndarray | None,
+             ref_row: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """``(ok[n], metrics[n, n_outputs])`` of the runs simulated in ``groups`` (:func:`simulate_groups`);
+    ``R[m, n_samples]``: reference traces [deg/s], ``ref_row[i]`` the one of run ``i`` (-1: none)."""
+    metrics = np.full((n, len(data["outputs"])), math.nan)
+    ok = np.zeros(n, bool)
     for idx, _, good, _, _ in groups:
         ok[idx] = good
-    want_ref = data.get("reference") is not None
-    if len(groups) == 1 and ok.all():           # the usual chunk: one batch, every run finished
+    want_ref = data.get("reference") is not None and R is not None
+
+    def ref_of(idx):
+        rows = ref_row[idx] if want_ref else None
+        return R[rows] if want_ref and (rows >= 0).all() else None
+
+    if len(groups) == 1 and ok.all():           # the usual task: one batch, every run finished
         idx, Y, _, ta, dt_out = groups[0]
-        have = want_ref and all(refs[i] is not None for i in idx)
-        ref = np.stack([refs[i] for i in idx]) if have else None
-        metrics[idx] = batch_metrics(data, Y, ta, dt_out, ref)
-        return {"ok": ok.tolist(), "metrics": metrics.tolist()}
+        metrics[idx] = batch_metrics(data, Y, ta, dt_out, ref_of(idx))
+        return ok, metrics
     # runs of equal output length together (as one batch: the metrics are row-wise)
     rows: dict = {}
     for g, (idx, Y, good, _, _) in enumerate(groups):
@@ -383,10 +445,8 @@ def chunk_task(data: Mapping, runs: Sequence[Mapping], refs: Sequence[np.ndarray
         idx = [i for i, _, _ in sel]
         Y = np.stack([groups[g][1][j] for _, g, j in sel])
         ta = np.array([groups[g][3][j] for _, g, j in sel])
-        have = want_ref and all(refs[i] is not None for i in idx)
-        ref = np.stack([refs[i] for i in idx]) if have else None
-        metrics[idx] = batch_metrics(data, Y, ta, groups[sel[0][1]][4], ref)
-    return {"ok": ok.tolist(), "metrics": metrics.tolist()}
+        metrics[idx] = batch_metrics(data, Y, ta, groups[sel[0][1]][4], ref_of(np.array(idx)))
+    return ok, metrics
 
 
 def drive_task(path: str, variants: Sequence[str], diagnose: bool = False) -> dict:

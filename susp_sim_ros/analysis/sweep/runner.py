@@ -1,7 +1,9 @@
 """Run a study on an executor: in this process, on a local Dask cluster, or on an existing scheduler.
 
-The client owns the store: workers return each chunk's metrics and the client writes the chunk file as
-soon as the chunk finishes, so workers need no shared disk for sweeps (drive studies read the recordings
+A task is one or more consecutive chunks of a sweep, simulated as one batch (:func:`plan_tasks`): as
+many tasks as worker threads where the study is small, tasks of at most ``MAX_CHUNKS_PER_TASK`` chunks
+where it is large. The client owns the store: workers return each chunk's metrics and the client writes
+the chunk files as soon as their task finishes, so workers need no shared disk for sweeps (drive studies read the recordings
 on the workers: the folder must be visible to them, as it is on a local cluster). At most a few chunks
 per worker thread are in flight, so a study of a million runs does not put a million tasks on the
 scheduler.
@@ -16,9 +18,11 @@ import sys
 import time
 from typing import Callable, Iterator, Sequence
 
+import numpy as np
+
 from ...errors import SuspInputError
 from . import engine
-from .spec import StudySpec, reference_run, run_key
+from .spec import StudySpec
 from .store import ResultStore, _parse
 
 
@@ -28,6 +32,7 @@ class InProcessExecutor:
 
     name = "inprocess"
     workers = 1
+    threads_total = 1           # tasks run one after another (each on all the kernel's threads)
 
     def __init__(self, threads: int | None = None):
         self.threads = threads
@@ -35,20 +40,15 @@ class InProcessExecutor:
     def map(self, fn: Callable, tasks: Sequence[tuple]) -> Iterator[tuple]:
         for key, args in tasks:
             t0 = time.perf_counter()
-            yield key, fn(*args, **self._kw(fn)), time.perf_counter() - t0
-
-    def _kw(self, fn) -> dict:
-        return {"threads": self.threads} if fn is not engine.drive_task else {}
-
-    def submit(self, fn: Callable, *args):
-        """A single task (here: computed now); :meth:`result` gives its output."""
-        return fn(*args, **self._kw(fn))
-
-    def result(self, handle):
-        return handle
+            yield key, fn(*args, **_threads_kw(fn, self.threads)), time.perf_counter() - t0
 
     def close(self) -> None:
         pass
+
+
+def _threads_kw(fn, threads: int | None) -> dict:
+    """The kernel's thread count for a task that runs the batch kernel (sweeps), nothing for others."""
+    return {"threads": threads} if fn is engine.sweep_task else {}
 
 
 def _timed(fn, *args, **kw):
@@ -64,18 +64,12 @@ class DaskExecutor:
         self.client, self.cluster, self.threads, self.name = client, cluster, threads, name
         info = client.scheduler_info()
         self.workers = len(info.get("workers", {})) or 1
-        self.slots = max(1, sum(w.get("nthreads", 1) for w in info.get("workers", {}).values())) * in_flight
-
-    def submit(self, fn: Callable, *args):
-        """A single task: a future; :meth:`result` waits for its output."""
-        return self.client.submit(fn, *args, pure=False, **({"threads": self.threads} if fn is not engine.drive_task else {}))
-
-    def result(self, handle):
-        return handle.result()
+        self.threads_total = max(1, sum(w.get("nthreads", 1) for w in info.get("workers", {}).values()))
+        self.slots = self.threads_total * in_flight
 
     def map(self, fn: Callable, tasks: Sequence[tuple]) -> Iterator[tuple]:
         from distributed import as_completed
-        kw = {"threads": self.threads} if fn is not engine.drive_task else {}
+        kw = _threads_kw(fn, self.threads)
         todo = list(tasks)[::-1]
         pending = {}
 
@@ -155,21 +149,21 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     computed: list[int] = []
     t_compute, cpu_compute = time.perf_counter(), time.process_time()
     try:
-        refs = None
         if spec.kind == "sweep":
-            refs = _references(spec, store, executor) if todo else None
-            tasks = [(c.id, (spec.data, [spec.runs[r] for r in c.runs], *_chunk_refs(refs, c.runs))) for c in todo]
-            fn = engine.chunk_task
+            tasks = [(tuple(c.id for c in t), (spec.data, [[spec.runs[r] for r in c.runs] for c in t]))
+                     for t in plan_tasks(todo, getattr(executor, "threads_total", 1))]
+            fn = engine.sweep_task
         else:
-            tasks = [(c.id, (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
+            tasks = [((c.id,), (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
                      for c in todo]
-            fn = engine.drive_task
-        for cid, result, elapsed in executor.map(fn, tasks):
-            store.write_chunk(cid, result, elapsed)
-            computed.append(cid)
-            bar.update(len(spec.chunks[cid].runs))
-            if on_chunk is not None:
-                on_chunk(cid)
+            fn = _drive_task
+        for cids, results, elapsed in executor.map(fn, tasks):
+            for cid, result in zip(cids, results):
+                store.write_chunk(cid, result, elapsed, task_chunks=len(cids))
+                computed.append(cid)
+                bar.update(len(spec.chunks[cid].runs))
+                if on_chunk is not None:
+                    on_chunk(cid)
     finally:
         bar.close()
         store.finish_session(chunks_computed=len(computed),
@@ -195,63 +189,33 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     return result
 
 
-class _Refs:
-    """The study's distinct reference runs: ``tasks[t]`` is the output of reference task ``t`` (a list of
-    traces) and ``where[r] = (t, k)`` the trace of run ``r``."""
-
-    def __init__(self, tasks, where):
-        self.tasks, self.where = tasks, where
+MAX_CHUNKS_PER_TASK = 8    # a task's chunks are stored when the task ends: this bounds what a kill loses
 
 
-def _references(spec: StudySpec, store: ResultStore, executor) -> _Refs | None:
-    """The distinct reference runs of the study: from the store (a resumed study), or computed before the
-    chunks are submitted (here when they fit in one chunk, else as tasks of ``chunk_size`` runs) and
-    stored; ``None`` without a reference.
-
-    The chunk tasks get the traces as data, not as futures of the reference tasks: Dask places a task
-    next to the data it depends on, so with futures every chunk went to the worker that had computed
-    the references (with 2 workers, a study took 1.8x as long as with the traces as data)."""
-    if spec.data.get("reference") is None:
-        return None
-    distinct: dict = {}
-    of_run = []
-    for r in spec.runs:
-        ref = reference_run(spec.data, r)
-        of_run.append(distinct.setdefault(tuple(sorted(ref.items())), (len(distinct), ref))[0])
-    refs = [ref for _, ref in distinct.values()]
-    names = [run_key(ref) for ref in refs]
-    size = spec.data["chunk_size"]
-    where = [divmod(d, size) for d in of_run]
-    stored = store.load_references(names)
-    if stored is not None:
-        traces = [stored[n] for n in names]
-    else:
-        if len(refs) <= size:  # one small batch: computed here, faster than a round trip to a worker
-            traces = engine.reference_task(spec.data, refs)
+def plan_tasks(chunks: Sequence, threads: int, max_chunks: int = MAX_CHUNKS_PER_TASK) -> list[list]:
+    """Consecutive chunks of one batch group (kernel and step count) into tasks of ``k`` chunks:
+    ``k = ceil(len(chunks) / threads)`` (every worker thread gets work, and a small study is one task per
+    thread rather than one per chunk: each task costs a round trip through the scheduler and a batch
+    with a partly empty last block of lanes), at most ``max_chunks``."""
+    k = max(1, min(max_chunks, -(-len(chunks) // max(1, threads))))
+    tasks: list[list] = []
+    for c in chunks:
+        if tasks and len(tasks[-1]) < k and tasks[-1][-1].group == c.group:
+            tasks[-1].append(c)
         else:
-            tasks = [executor.submit(engine.reference_task, spec.data, refs[j:j + size])
-                     for j in range(0, len(refs), size)]
-            traces = [tr for t in tasks for tr in executor.result(t)]
-        store.save_references(dict(zip(names, traces)))
-    return _Refs([traces[j:j + size] for j in range(0, len(traces), size)], where)
+            tasks.append([c])
+    return tasks
 
 
-def _chunk_refs(refs: _Refs | None, run_ids) -> tuple:
-    """``(refs, ref_rows)`` arguments of a chunk task: the outputs of the reference tasks the chunk needs
-    (each once: less to ship to a worker) and ``(task, trace)`` of each run in them."""
-    if refs is None:
-        return None, None
-    rows = [refs.where[r] for r in run_ids]
-    local = {t: i for i, t in enumerate(dict.fromkeys(t for t, _ in rows))}
-    return [refs.tasks[t] for t in local], [(local[t], k) for t, k in rows]
+def _drive_task(path: str, variants, diagnose: bool) -> list[dict]:
+    """:func:`engine.drive_task` as a task of one chunk."""
+    return [engine.drive_task(path, variants, diagnose)]
 
 
 def _finish_sweep(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
     header = store.columns()
     lines = store.lines()
     metric_cols = spec.metric_columns()
-    # "ok" and the metrics are the last fields of a row (numbers: never quoted)
-    tail = [ln.rsplit(",", len(metric_cols) + 1)[1:] for ln in lines]
     rows = None
     if spec.data["results"] == "csv":
         table = store.write_lines(header, lines, "results")
@@ -264,14 +228,15 @@ def _finish_sweep(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
         rows = rows if rows is not None else list(csv.reader(lines))
         cols = {h: [_parse(r[i]) for r in rows] for i, h in enumerate(header)}
         plots.append(str(plot_sweep(spec, cols, store.out / f"{spec.name}.png")))
-    good = [t[1:] for t in tail if t[0] == "1"]
+    ok, metrics = store.outcomes()
+    good = metrics[ok]
     ranges = {}
     for j, c in enumerate(metric_cols):
-        vals = [v for v in (float(t[j]) for t in good) if math.isfinite(v)]
-        if vals:
-            ranges[c] = [min(vals), max(vals)]
-    return {"table": str(table), "columns": header, "plots": plots, "runs_ok": len(good),
-            "runs_failed": len(lines) - len(good), "metric_ranges": ranges}
+        vals = good[np.isfinite(good[:, j]), j]
+        if vals.size:
+            ranges[c] = [float(vals.min()), float(vals.max())]
+    return {"table": str(table), "columns": header, "plots": plots, "runs_ok": good.shape[0],
+            "runs_failed": len(lines) - good.shape[0], "metric_ranges": ranges}
 
 
 def _finish_drives(spec: StudySpec, store: ResultStore, plot: bool) -> dict:

@@ -4,8 +4,7 @@ Layout of ``OUT``::
 
     manifest.json          the study (normalised), its hash, and one entry per session (start, resumed chunks)
     chunks/c000017.csv     the rows of finished chunk 17 (sweep); chunks/d000003.json: drive 3 (drives)
-    chunks/references.npz  traces of the reference runs (sweeps with ``reference:``)
-    chunks/log.jsonl       one line per chunk computed: chunk id, session, runs, wall time
+    chunks/log.jsonl       one line per chunk computed: chunk id, session, runs, wall time of its task
     results.csv            (or .parquet) all rows by run id, once every chunk is in; drives: drives.csv
 
 A chunk file is written to a temporary name and renamed into place (atomic on POSIX), so a killed study
@@ -43,17 +42,16 @@ def _fmt(v) -> str:
 _PLAIN = (float, int, str)      # types the csv writer formats as _fmt does (bool and numpy types are not)
 
 
-def _atomic_write(path: Path, data: bytes, sync: bool = True) -> None:
+def _atomic_write(path: Path, data: bytes) -> None:
     """Write to a temporary name, then rename: readers see the old file or the whole new one.
 
-    Chunk files skip the fsync (it cost ~10 % of a study's time): a killed process loses nothing that
-    was renamed; after a power loss a damaged chunk file fails the check on resume and is recomputed."""
+    No fsync (it cost ~10 % of a small study's time): a killed study, the case resume is for, loses
+    nothing that was renamed into place; after an OS crash or a power loss a damaged chunk file fails the
+    check on resume and is recomputed, a lost manifest starts the study over. Results are never wrong,
+    at worst computed again."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     with open(tmp, "wb") as f:
         f.write(data)
-        if sync:
-            f.flush()
-            os.fsync(f.fileno())
     os.replace(tmp, path)
 
 
@@ -88,6 +86,8 @@ class ResultStore:
                                      "source": spec.path, "spec": spec.data, "n_runs": spec.n_runs,
                                      "n_chunks": len(spec.chunks), "sessions": []}
         self.session = len(self.manifest["sessions"])
+        self._bodies: dict[int, str] = {}           # chunk id -> rows written in this session
+        self._values: dict[int, tuple] = {}         # chunk id -> (ok, metrics) of this session
         self.done = self._finished()
         self.manifest["sessions"].append({"started": time.strftime("%Y-%m-%dT%H:%M:%S"),
                                           "chunks_already_done": len(self.done)})
@@ -127,8 +127,10 @@ class ResultStore:
     def columns(self) -> list[str]:
         return ["run_id", *self.spec.swept, "ok", *self.spec.metric_columns()]
 
-    def write_chunk(self, cid: int, result, elapsed_s: float) -> None:
-        """Store a finished chunk (sweep: ``{"ok", "metrics"}`` from the chunk task; drives: a row)."""
+    def write_chunk(self, cid: int, result, elapsed_s: float, task_chunks: int = 1) -> None:
+        """Store a finished chunk (sweep: ``{"ok", "metrics"}`` from the task; drives: a row).
+
+        ``elapsed_s``: wall time of the task that computed it, a task of ``task_chunks`` chunks."""
         chunk = self.spec.chunks[cid]
         if self.spec.kind == "sweep":
             buf = io.StringIO()
@@ -139,15 +141,18 @@ class ResultStore:
             runs, swept = self.spec.runs, self.spec.swept
             w.writerows([rid, *[v if type(v) in _PLAIN else _fmt(v) for v in map(runs[rid].__getitem__, swept)],
                          "1" if ok else "0", *m]
-                        for rid, ok, m in zip(chunk.runs, result["ok"], metrics))
-            data = buf.getvalue().encode()
+                        for rid, ok, m in zip(chunk.runs, np.asarray(result["ok"]).tolist(), metrics))
+            text = buf.getvalue()
+            self._bodies[cid] = text[text.index("\n") + 1:]      # for the final table: not read back
+            self._values[cid] = (np.asarray(result["ok"], bool), np.asarray(result["metrics"], float))
+            data = text.encode()
         else:
             data = json.dumps(result, default=_fmt).encode()
-        _atomic_write(self._chunk_path(cid), data, sync=False)
+        _atomic_write(self._chunk_path(cid), data)
         self.done.add(cid)
         with open(self.chunk_dir / "log.jsonl", "a") as f:
             f.write(json.dumps({"chunk": cid, "session": self.session, "runs": len(chunk.runs),
-                                "elapsed_s": round(elapsed_s, 6)}) + "\n")
+                                "elapsed_s": round(elapsed_s, 6), "task_chunks": task_chunks}) + "\n")
 
     def log(self) -> list[dict]:
         path = self.chunk_dir / "log.jsonl"
@@ -161,23 +166,6 @@ class ResultStore:
                 pass
         return out
 
-    # -- references ------------------------------------------------------------------------------------
-    def load_references(self, keys: Sequence[str]) -> dict | None:
-        path = self.chunk_dir / "references.npz"
-        if not path.exists():
-            return None
-        with np.load(path, allow_pickle=False) as z:
-            stored = list(z["keys"])
-            if stored != list(keys):
-                return None
-            return {k: z[f"r{i}"] for i, k in enumerate(stored)}
-
-    def save_references(self, refs: dict) -> None:
-        buf = io.BytesIO()
-        keys = list(refs)
-        np.savez(buf, keys=np.array(keys), **{f"r{i}": refs[k] for i, k in enumerate(keys)})
-        _atomic_write(self.chunk_dir / "references.npz", buf.getvalue(), sync=False)  # recomputable
-
     # -- the final table ---------------------------------------------------------------------------------
     def rows(self) -> list[list[str]]:
         """All sweep rows (strings, as stored) ordered by run id."""
@@ -190,7 +178,9 @@ class ResultStore:
         the same writer, which gives the same text (so the table is what parsing every row would give)."""
         lines: list[str] = []
         for cid in sorted(self.done):
-            body = self._chunk_path(cid).read_text().split("\n", 1)[1]
+            body = self._bodies.get(cid)
+            if body is None:                    # a chunk of an earlier session
+                body = self._chunk_path(cid).read_text().split("\n", 1)[1]
             if '"' not in body and "\r" not in body:
                 lines.extend(body.split("\n")[:-1])
                 continue
@@ -198,8 +188,27 @@ class ResultStore:
                 buf = io.StringIO()
                 csv.writer(buf, lineterminator="\n").writerow(row)
                 lines.append(buf.getvalue()[:-1])
-        lines.sort(key=lambda ln: int(ln[:ln.index(",")]))
+        ids = [r for cid in sorted(self.done) for r in self.spec.chunks[cid].runs]
+        if any(a >= b for a, b in zip(ids, ids[1:])):     # chunks of several batch groups interleave
+            lines.sort(key=lambda ln: int(ln[:ln.index(",")]))
         return lines
+
+    def outcomes(self) -> tuple[np.ndarray, np.ndarray]:
+        """``ok[n]`` and ``metrics[n, n_outputs]`` of every stored run (chunk order): the computed values
+        of this session's chunks, the parsed ones of earlier sessions' (equal: stored as ``repr``)."""
+        n_out = len(self.spec.metric_columns())
+        oks, mets = [], []
+        for cid in sorted(self.done):
+            v = self._values.get(cid)
+            if v is None:
+                body = self._chunk_path(cid).read_text().split("\n", 1)[1]
+                tail = np.array([ln.rsplit(",", n_out + 1)[1:] for ln in body.split("\n")[:-1]], dtype=float)
+                v = (tail[:, 0] == 1.0, tail[:, 1:])
+            oks.append(v[0])
+            mets.append(v[1].reshape(len(v[0]), n_out))
+        if not oks:
+            return np.zeros(0, bool), np.zeros((0, n_out))
+        return np.concatenate(oks), np.concatenate(mets)
 
     def write_lines(self, header: Sequence[str], lines: Sequence[str], name: str) -> Path:
         """The CSV table from rows already formatted (:meth:`lines`)."""
@@ -231,7 +240,7 @@ class ResultStore:
 
     def finish_session(self, **info) -> None:
         self.manifest["sessions"][-1].update(info)
-        _atomic_write(self.manifest_path, json.dumps(self.manifest, indent=1, default=str).encode(), sync=False)
+        _atomic_write(self.manifest_path, json.dumps(self.manifest, indent=1, default=str).encode())
 
 
 def _parse(s: str):
