@@ -161,6 +161,33 @@ def test_vectorised_decay_ratio_equals_the_scalar_definition():
     np.testing.assert_array_equal(engine.decay_ratios(Q, k0), expected)   # same values, not just close
 
 
+def test_compiled_rms_metrics_equal_the_numpy_forms():
+    """rms_after, rmse_ref and {rms: LABEL} (one compiled pass per row, rows in parallel) equal numpy's
+    forms to rounding (sequential vs numpy's pairwise sums), and a run against itself is exactly 0."""
+    rng = np.random.default_rng(3)
+    B, n = 40, 300
+    Y = rng.normal(size=(B, n, 2)) * 0.05
+    t_after = rng.uniform(0.0, 3.5, B)               # some windows run past the end, some are empty
+    data = {**load_study(EXAMPLE).data, "outputs": ["rms_after", "rmse_ref", {"rms": "ROLL_RATE"}]}
+    data["after_window_s"], dt_out = 1.0, 0.01
+    R = np.degrees(Y[:3, :250, 0])                   # shorter references: the common length counts
+    ref_row = rng.integers(0, 3, B)
+    ref_row[:3] = [0, 1, 2]                         # the first three are their own references
+    got = engine.batch_metrics(data, Y, t_after, dt_out, R, ref_row)
+    k0 = np.clip(np.ceil(t_after / dt_out - 1e-9).astype(np.int64) - 1, 0, n)
+    w = 100
+    for b in range(B):
+        win = np.degrees(Y[b, k0[b]:k0[b] + w, 0])
+        expect = np.sqrt(np.mean(win ** 2)) if win.size else math.nan
+        np.testing.assert_allclose(got[b, 0], expect, rtol=1e-14, equal_nan=True)
+        d = np.degrees(Y[b, :250, 0]) - R[ref_row[b]]
+        np.testing.assert_allclose(got[b, 1], np.sqrt(np.mean(d * d)), rtol=1e-14)
+        np.testing.assert_allclose(got[b, 2], np.sqrt(np.mean(Y[b, :, 1] ** 2)), rtol=1e-14)
+    assert got[:3, 1].tolist() == [0.0, 0.0, 0.0]
+    assert np.isnan(got[k0 >= n, 0]).all() and (k0 >= n).any()
+    assert np.isnan(engine.batch_metrics(data, Y, t_after, dt_out)[:, 1]).all()     # no reference
+
+
 def test_example_metrics_equal_the_paper_study_path(model_full):
     """The study's peak pitch rate and ring-out equal those of a single `simulate` run (the path of
     `susp paper`) bit for bit, for the paper's three vehicle states."""
@@ -244,7 +271,7 @@ def test_reference_runs_ride_in_the_task_batch_and_give_the_given_trace_results(
     assert batch[:4] == runs and len(batch) == 6 and ref_at[4:] == [4, 5]
     assert all(batch[ref_at[i]] == {**runs[i], "oil_front": 1.0, "oil_rear": 1.0} for i in range(4))
     chunks = [spec.runs[4:7], spec.runs[7:10]]
-    got = engine.sweep_task(spec.data, chunks)
+    got = engine.sweep_task(spec.data, spec.hash, [range(4, 7), range(7, 10)])
     refs = {json.dumps(r, sort_keys=True): np.degrees(engine.simulate_groups(spec.data, [r])[0][1][0, :, 0])
             for r in (spec.runs[2], spec.runs[3])}                       # the two references, alone
     for c, res in zip(chunks, got):

@@ -17,7 +17,7 @@ import threading
 from typing import Mapping, Sequence
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ...model.layout import OUTPUT_LABELS, P_INDEX
 from .spec import MANEUVER_KEYS, SIGNAL, vehicle_key
@@ -234,49 +234,77 @@ _DEG = 180.0 / math.pi     # np.degrees(x) is x * (180 / pi): the same product, 
 
 
 @njit(cache=True, nogil=True)
+def _signal_row(Y, b, col, scale, k0, threshold, peak_out, decay_out, last_out):
+    """Row ``b`` of :func:`_row_metrics`."""
+    n = Y.shape[1]
+    top, last = 0.0, -1
+    for i in range(n):
+        v = abs(Y[b, i, col] * scale)
+        if v > top:
+            top = v
+        if v > threshold:
+            last = i
+    peak_out[b], last_out[b] = top, last
+    decay_out[b] = math.nan
+    if k0[b] >= n:
+        return
+    k, peak = -1, 0.0
+    for i in range(max(k0[b], 0), n):          # the first largest |q| (as argmax)
+        v = abs(Y[b, i, col] * scale)
+        if v > peak:
+            k, peak = i, v
+    if peak == 0.0:
+        return
+    pos = Y[b, k, col] * scale > 0.0
+    j0 = -1
+    for i in range(k + 1, n):                   # the next half-wave starts at the first sign change
+        v = Y[b, i, col] * scale
+        if (v < 0.0) if pos else (v > 0.0):
+            j0 = i
+            break
+    if j0 < 0:
+        decay_out[b] = 0.0
+        return
+    pos = Y[b, j0, col] * scale > 0.0
+    second = abs(Y[b, j0, col] * scale)
+    for i in range(j0 + 1, n):                  # ... and ends at the one after
+        v = Y[b, i, col] * scale
+        if (v < 0.0) if pos else (v > 0.0):
+            break
+        if abs(v) > second:
+            second = abs(v)
+    decay_out[b] = second / peak
+
+
+@njit(cache=True, nogil=True, parallel=True)
 def _row_metrics(Y, col, scale, k0, threshold, peak_out, decay_out, last_out):
     """Per row ``b`` of the signal ``q = Y[b, :, col] * scale``: the largest |q| (``peak_out``), the decay
     ratio from sample ``k0[b]`` on (:func:`decay_ratio`) and the last sample with |q| > ``threshold``
-    (-1: none). Only comparisons, maxima and one division: the values numpy's forms give, exactly."""
-    B, n = Y.shape[0], Y.shape[1]
-    for b in range(B):
-        top, last = 0.0, -1
-        for i in range(n):
-            v = abs(Y[b, i, col] * scale)
-            if v > top:
-                top = v
-            if v > threshold:
-                last = i
-        peak_out[b], last_out[b] = top, last
-        decay_out[b] = math.nan
-        if k0[b] >= n:
-            continue
-        k, peak = -1, 0.0
-        for i in range(max(k0[b], 0), n):          # the first largest |q| (as argmax)
-            v = abs(Y[b, i, col] * scale)
-            if v > peak:
-                k, peak = i, v
-        if peak == 0.0:
-            continue
-        pos = Y[b, k, col] * scale > 0.0
-        j0 = -1
-        for i in range(k + 1, n):                   # the next half-wave starts at the first sign change
-            v = Y[b, i, col] * scale
-            if (v < 0.0) if pos else (v > 0.0):
-                j0 = i
-                break
-        if j0 < 0:
-            decay_out[b] = 0.0
-            continue
-        pos = Y[b, j0, col] * scale > 0.0
-        second = abs(Y[b, j0, col] * scale)
-        for i in range(j0 + 1, n):                  # ... and ends at the one after
-            v = Y[b, i, col] * scale
-            if (v < 0.0) if pos else (v > 0.0):
-                break
-            if abs(v) > second:
-                second = abs(v)
-        decay_out[b] = second / peak
+    (-1: none). Only comparisons, maxima and one division: the values numpy's forms give, exactly. Rows
+    in parallel on the kernel's threads (a row's values do not depend on the others)."""
+    for b in prange(Y.shape[0]):
+        _signal_row(Y, b, col, scale, k0, threshold, peak_out, decay_out, last_out)
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _row_rms(Y, col, scale, start, count, R, ref_row, out):
+    """Per row ``b``: the RMS of ``Y[b, i, col] * scale - R[ref_row[b], i]`` (no reference where
+    ``ref_row[b] < 0``) over ``start[b] <= i < start[b] + count`` within the row; NaN if that is empty.
+    One pass per row, rows in parallel."""
+    n = Y.shape[1]
+    for b in prange(Y.shape[0]):
+        lo = max(start[b], 0)
+        hi = min(start[b] + count, n)
+        r = ref_row[b]
+        if r >= 0:
+            hi = min(hi, R.shape[1])
+        acc = 0.0
+        for i in range(lo, hi):
+            d = Y[b, i, col] * scale
+            if r >= 0:
+                d -= R[r, i]
+            acc += d * d
+        out[b] = math.sqrt(acc / (hi - lo)) if hi > lo else math.nan
 
 
 def damping_ratio(r: float) -> float:
@@ -290,27 +318,32 @@ def damping_ratio(r: float) -> float:
 
 
 def batch_metrics(data: Mapping, Y: np.ndarray, t_after: np.ndarray, dt_out: float,
-                  ref: np.ndarray | None) -> np.ndarray:
+                  R: np.ndarray | None = None, ref_row: np.ndarray | None = None) -> np.ndarray:
     """The study's ``outputs`` (columns, in order) of runs ``Y[B, n, n_sel]`` (rates in deg/s).
 
-    ``t_after[B]``: end of the excitation [s]; ``ref[B, n]``: reference traces [deg/s] or ``None``.
-    Every value is a function of its own run only (row-wise reductions)."""
+    ``t_after[B]``: end of the excitation [s]; ``R[m, n]``: reference traces [deg/s] and ``ref_row[B]``
+    the one of each run (or ``None``: no reference, ``rmse_ref`` is NaN). Every value is a function of its
+    own run only (row-wise reductions, compiled, rows in parallel)."""
     labels = selection(data)
     B, n = Y.shape[0], Y.shape[1]
     Y = np.ascontiguousarray(Y, dtype=np.float64)
     # sample k is at (k+1) dt_out: first sample at or after t_after
     k0 = np.clip(np.ceil(t_after / dt_out - 1e-9).astype(np.int64) - 1, 0, n)
-    rows = np.arange(B)
-    # one compiled pass over the signal (deg/s) for the peak, the decay ratio and the ring-out; sums (RMS)
-    # stay numpy reductions (their rounding is numpy's pairwise summation)
+    zero, none = np.zeros(B, np.int64), np.full(B, -1, np.int64)
+    no_ref = np.zeros((1, 1))
+    # one compiled pass over the signal (deg/s) for the peak, the decay ratio and the ring-out
     peak, decay, last = np.empty(B), np.empty(B), np.empty(B, np.int64)
     _row_metrics(Y, 0, _DEG, k0, float(data["ring_out_threshold_deg_s"]), peak, decay, last)
     cols = []
     for m in data["outputs"]:
         if isinstance(m, dict):
             kind, lab = next(iter(m.items()))
-            x = Y[:, :, labels.index(lab)]
-            cols.append(np.abs(x).max(axis=1) if kind == "peak" else np.sqrt(np.mean(x * x, axis=1)))
+            c = labels.index(lab)
+            if kind == "peak":
+                cols.append(np.abs(Y[:, :, c]).max(axis=1))
+            else:
+                _row_rms(Y, c, 1.0, zero, n, no_ref, none, out := np.empty(B))
+                cols.append(out)
         elif m == "peak_rate":
             cols.append(peak)
         elif m == "decay_ratio":
@@ -321,18 +354,14 @@ def batch_metrics(data: Mapping, Y: np.ndarray, t_after: np.ndarray, dt_out: flo
             cols.append(np.where(last >= 0, np.maximum((last + 1) * dt_out - t_after, 0.0), 0.0))
         elif m == "rms_after":
             w = max(int(round(data["after_window_s"] / dt_out)), 1)
-            idx = k0[:, None] + np.arange(w)[None, :]
-            valid = idx < n
-            x = np.where(valid, np.degrees(Y[rows[:, None], np.minimum(idx, n - 1), 0]), 0.0)
-            cnt = valid.sum(axis=1)
-            cols.append(np.where(cnt > 0, np.sqrt((x * x).sum(axis=1) / np.maximum(cnt, 1)), math.nan))
-        elif m == "rmse_ref" and ref is None:
+            _row_rms(Y, 0, _DEG, k0, w, no_ref, none, out := np.empty(B))
+            cols.append(out)
+        elif m == "rmse_ref" and R is None:
             cols.append(np.full(B, math.nan))
         elif m == "rmse_ref":
-            k = min(n, ref.shape[1])
-            d = np.degrees(Y[:, :k, 0])
-            np.subtract(d, ref[:, :k], out=d)
-            cols.append(np.sqrt(np.mean(np.multiply(d, d, out=d), axis=1)))
+            _row_rms(Y, 0, _DEG, zero, n, np.ascontiguousarray(R, dtype=np.float64),
+                     np.ascontiguousarray(ref_row, dtype=np.int64), out := np.empty(B))
+            cols.append(out)
     return np.stack(cols, axis=1) if cols else np.zeros((B, 0))
 
 
@@ -375,12 +404,30 @@ def task_batch(data: Mapping, runs: Sequence[Mapping]) -> tuple[list, list]:
     return batch, ref_at
 
 
-def sweep_task(data: Mapping, chunks: Sequence[Sequence[Mapping]], threads: int | None = None) -> list[dict]:
-    """One task: the runs of one or more chunks and the reference runs they need, simulated together
-    (:func:`task_batch`), then the metrics of each run. Returns per chunk ``{"ok": bool[n], "metrics":
-    float[n, n_outputs]}`` (metrics NaN for a run that became non-finite). A reference run that became
-    non-finite raises ``RuntimeError`` (no run could be compared with it)."""
-    runs = [r for c in chunks for r in c]
+def study_runs(data: Mapping, study: str) -> list[dict]:
+    """The runs of the sweep ``data`` (:func:`~.spec.expand_runs`), expanded once per process; ``study``
+    is its hash (the cache key; the last two studies are kept)."""
+    from .spec import expand_runs
+    with _lock:
+        runs = _runs_cache.get(study)
+        if runs is None:
+            while len(_runs_cache) >= 2:
+                _runs_cache.pop(next(iter(_runs_cache)))
+            runs = _runs_cache[study] = expand_runs(data)
+        return runs
+
+
+_runs_cache: dict = {}
+
+
+def sweep_task(data: Mapping, study: str, chunks: Sequence[Sequence[int]], threads: int | None = None) -> list[dict]:
+    """One task: the runs of one or more chunks (their run ids in the sweep ``data`` whose hash is
+    ``study``: a task ships ids, not run descriptions) and the reference runs they need, simulated
+    together (:func:`task_batch`), then the metrics of each run. Returns per chunk ``{"ok": bool[n],
+    "metrics": float[n, n_outputs]}`` (metrics NaN for a run that became non-finite). A reference run that
+    became non-finite raises ``RuntimeError`` (no run could be compared with it)."""
+    every = study_runs(data, study)
+    runs = [every[i] for c in chunks for i in c]
     batch, ref_at = task_batch(data, runs)
     groups = simulate_groups(data, batch, threads)
     R, ref_row = None, None
@@ -427,13 +474,14 @@ def _metrics(data: Mapping, groups: list, n: int, R: np.ndarray | None,
         ok[idx] = good
     want_ref = data.get("reference") is not None and R is not None
 
-    def ref_of(idx):
+    def refs_of(idx):
+        """``(R, rows)`` for the runs ``idx``, or ``(None, None)`` if one of them has no reference."""
         rows = ref_row[idx] if want_ref else None
-        return R[rows] if want_ref and (rows >= 0).all() else None
+        return (R, rows) if want_ref and (rows >= 0).all() else (None, None)
 
     if len(groups) == 1 and ok.all():           # the usual task: one batch, every run finished
         idx, Y, _, ta, dt_out = groups[0]
-        metrics[idx] = batch_metrics(data, Y, ta, dt_out, ref_of(idx))
+        metrics[idx] = batch_metrics(data, Y, ta, dt_out, *refs_of(np.asarray(idx)))
         return ok, metrics
     # runs of equal output length together (as one batch: the metrics are row-wise)
     rows: dict = {}
@@ -445,7 +493,7 @@ def _metrics(data: Mapping, groups: list, n: int, R: np.ndarray | None,
         idx = [i for i, _, _ in sel]
         Y = np.stack([groups[g][1][j] for _, g, j in sel])
         ta = np.array([groups[g][3][j] for _, g, j in sel])
-        metrics[idx] = batch_metrics(data, Y, ta, groups[sel[0][1]][4], ref_of(np.array(idx)))
+        metrics[idx] = batch_metrics(data, Y, ta, groups[sel[0][1]][4], *refs_of(np.array(idx)))
     return ok, metrics
 
 

@@ -27,7 +27,7 @@ import yaml
 
 from ...errors import ConfigError, SuspInputError
 
-ENGINE_VERSION = 1          # bump when a change alters results, so old stores are not resumed into
+ENGINE_VERSION = 2          # bump when a change alters results, so old stores are not resumed into
 MANEUVERS = ("bump_crossing", "sine_steer")
 SIGNAL = {"bump_crossing": "PITCH_RATE", "sine_steer": "ROLL_RATE"}
 OIL_KEYS = ("oil_front", "oil_rear", "oil_FL", "oil_FR", "oil_RL", "oil_RR")
@@ -397,10 +397,16 @@ def _drives(data: dict, source: str, name: str) -> StudySpec:
 
 
 # ---- expansion -----------------------------------------------------------------------------------------
+def expand_runs(data: Mapping) -> list[dict]:
+    """The runs of a normalised sweep description: the cartesian product of its ``parameters`` in the
+    order written (run ``i`` is the ``i``-th combination)."""
+    keys = [k for k, _ in data["parameters"]]
+    vals = [v for _, v in data["parameters"]]
+    return [dict(zip(keys, combo)) for combo in itertools.product(*vals)]
+
+
 def _expand(spec: StudySpec) -> None:
-    keys = [k for k, _ in spec.data["parameters"]]
-    vals = [v for _, v in spec.data["parameters"]]
-    spec.runs = [dict(zip(keys, combo)) for combo in itertools.product(*vals)]
+    spec.runs = expand_runs(spec.data)
     groups: dict[tuple, list[int]] = {}
     wheelbase_cache: dict = {}
     for i, run in enumerate(spec.runs):

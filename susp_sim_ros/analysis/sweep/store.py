@@ -88,7 +88,11 @@ class ResultStore:
         self.session = len(self.manifest["sessions"])
         self._bodies: dict[int, str] = {}           # chunk id -> rows written in this session
         self._values: dict[int, tuple] = {}         # chunk id -> (ok, metrics) of this session
+        self._texts: dict[str, dict] = {}            # swept key -> value -> its csv text
         self.done = self._finished()
+
+    def begin_session(self) -> None:
+        """Record this session in the manifest (before its first chunk is written)."""
         self.manifest["sessions"].append({"started": time.strftime("%Y-%m-%dT%H:%M:%S"),
                                           "chunks_already_done": len(self.done)})
         _atomic_write(self.manifest_path, json.dumps(self.manifest, indent=1, default=str).encode())
@@ -124,6 +128,21 @@ class ResultStore:
         return (text.endswith("\n") and bool(rows) and rows[0] == self.columns()
                 and ids == list(self.spec.chunks[cid].runs))
 
+    def _header(self) -> str:
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerow(self.columns())
+        return buf.getvalue()
+
+    def _field_text(self, key: str, value) -> str:
+        """A swept value as the csv writer writes it in a row, with its trailing comma (cached)."""
+        cache = self._texts.setdefault(key, {})
+        t = cache.get((type(value), value))          # (1 and 1.0 are one dict key, not one text)
+        if t is None:
+            buf = io.StringIO()
+            csv.writer(buf, lineterminator="\n").writerow([value if type(value) in _PLAIN else _fmt(value), ""])
+            t = cache[(type(value), value)] = buf.getvalue()[:-1]   # "text," (an empty second field)
+        return t
+
     def columns(self) -> list[str]:
         return ["run_id", *self.spec.swept, "ok", *self.spec.metric_columns()]
 
@@ -133,18 +152,17 @@ class ResultStore:
         ``elapsed_s``: wall time of the task that computed it, a task of ``task_chunks`` chunks."""
         chunk = self.spec.chunks[cid]
         if self.spec.kind == "sweep":
-            buf = io.StringIO()
-            w = csv.writer(buf, lineterminator="\n")
-            w.writerow(self.columns())
-            # the csv writer turns a Python float into repr() and an int or str into str(): as _fmt does
-            metrics = np.asarray(result["metrics"], dtype=float).reshape(len(chunk.runs), -1).tolist()
-            runs, swept = self.spec.runs, self.spec.swept
-            w.writerows([rid, *[v if type(v) in _PLAIN else _fmt(v) for v in map(runs[rid].__getitem__, swept)],
-                         "1" if ok else "0", *m]
-                        for rid, ok, m in zip(chunk.runs, np.asarray(result["ok"]).tolist(), metrics))
-            text = buf.getvalue()
-            self._bodies[cid] = text[text.index("\n") + 1:]      # for the final table: not read back
-            self._values[cid] = (np.asarray(result["ok"], bool), np.asarray(result["metrics"], float))
+            ok = np.asarray(result["ok"], bool)
+            metrics = np.asarray(result["metrics"], dtype=float).reshape(len(chunk.runs), -1)
+            runs, swept, text_of = self.spec.runs, self.spec.swept, self._field_text
+            # the csv writer's text of each field: repr() of a float (metrics: never quoted), a swept
+            # value's text once per distinct value
+            body = "".join([f"{rid},{''.join([text_of(k, runs[rid][k]) for k in swept])}{'1' if g else '0'}"
+                            f"{''.join([',' + repr(x) for x in m])}\n"
+                            for rid, g, m in zip(chunk.runs, ok.tolist(), metrics.tolist())])
+            self._bodies[cid] = body                     # for the final table: not read back
+            text = self._header() + body
+            self._values[cid] = (ok, metrics)
             data = text.encode()
         else:
             data = json.dumps(result, default=_fmt).encode()
