@@ -3,10 +3,10 @@
 A task is one or more consecutive chunks of a sweep, simulated as one batch (:func:`plan_tasks`): as
 many tasks as worker threads where the study is small, tasks of at most ``MAX_CHUNKS_PER_TASK`` chunks
 where it is large. The client owns the store: workers return each chunk's metrics and the client writes
-the chunk files as soon as their task finishes, so workers need no shared disk for sweeps (drive studies read the recordings
-on the workers: the folder must be visible to them, as it is on a local cluster). At most a few chunks
-per worker thread are in flight, so a study of a million runs does not put a million tasks on the
-scheduler.
+the chunk files as soon as their task finishes, so workers need no shared disk for sweeps (drive studies
+read the recordings on the workers: the folder must be visible to them, as it is on a local cluster). At
+most two tasks per worker thread are in flight, so a study of a million runs does not put a million
+tasks on the scheduler.
 """
 from __future__ import annotations
 

@@ -447,7 +447,3 @@ def reference_run(data: dict, run: Mapping) -> dict | None:
     if "vehicle" in ref:
         out.pop("vehicle_class", None)
     return out
-
-
-def run_key(run: Mapping) -> str:
-    return json.dumps(run, sort_keys=True)
