@@ -16,15 +16,21 @@ What is timed (wall time unless said otherwise; plots off, they are not per-run 
   cores/workers threads each: the same cores as ``bare``). Cluster start-up and each worker's first chunk
   (loading the compiled kernel) are warmed up outside the timer and reported apart.
 
-Overhead (target under 10 %), relative to ``bare`` of the same runs:
-- ``dask_1_worker`` / ``inprocess``: (engine - bare) / bare in wall time, all cores;
-- ``engine_cpu``: the same in CPU time of this process with one kernel thread (the figure least disturbed
-  by other load on the machine).
-Rounds are interleaved (bare, in-process, CPU pair, Dask 1, Dask 2, repeated ``--repeat`` times) and each
-figure is the best of its rounds: on a shared machine the best round is the one least disturbed.
-``breakdown_ms`` is where the engine's time goes in one in-process study (one kernel thread, median).
+Overhead (target under 10 %), relative to ``bare`` of the same runs, as the median over rounds of
+paired figures (this VM's speed swings by up to 35 % between seconds; a ratio taken within a round
+cancels what lasts longer than the round):
+- a round runs, per study, ``bare``, ``inprocess``, ``1``, ``2``, ``bare`` again, then the CPU pair; a mode's
+  overhead in that round is its time over the mean of the round's two ``bare`` times, minus 1;
+- ``dask_1_worker`` / ``inprocess``: that in wall time, all cores; ``engine_cpu``: in CPU time of this
+  process with one kernel thread (engine right after bare);
+- ``per_run``: the cost of one more run, from the example and an 8x larger copy of it in the same round:
+  (engine_large - engine_small) / (bare_large - bare_small) - 1, and the fixed cost per study it leaves
+  [ms]: (engine - bare) of the example minus its bare time at the per-run overhead.
+Runs per second are the best round of each mode (the least disturbed). ``breakdown_ms`` is where the
+engine's time goes in one in-process study (one kernel thread, median).
 JSON: ``{"runs": int, "runs_per_s": {"bare": f, "inprocess": f, "1": f, "2": f},
-"overhead_pct": {"dask_1_worker": f, "inprocess": f, "engine_cpu": f}, "overhead_us_per_run": {...}, ...}``.
+"overhead_pct": {"dask_1_worker": f, "inprocess": f, "engine_cpu": f}, "per_run": {"overhead_pct": {...},
+"fixed_ms": {...}}, "scaled": {...}, ...}``.
 """
 from __future__ import annotations
 
@@ -157,12 +163,13 @@ def measure(specs: dict, repeat: int, tmp: Path) -> dict:
                 numba.set_num_threads(all_threads)
                 r["bare"].append(time_bare(spec, batches[name]))
                 r["inprocess"].append(time_engine(spec, inproc, tmp / "inproc"))
-                numba.set_num_threads(1)        # CPU time with one kernel thread (robust to other load)
+                for w, ex in execs.items():
+                    r[w].append(time_engine(spec, ex, tmp / f"dask{w}"))
+                r["bare_after"].append(time_bare(spec, batches[name]))
+                numba.set_num_threads(1)        # CPU time with one kernel thread
                 r["bare_cpu"].append(time_bare(spec, batches[name], cpu=True))
                 r["engine_cpu"].append(time_engine(spec, one, tmp / "cpu", cpu=True))
                 numba.set_num_threads(all_threads)
-                for w, ex in execs.items():
-                    r[w].append(time_engine(spec, ex, tmp / f"dask{w}"))
     finally:
         numba.set_num_threads(all_threads)
         for ex in execs.values():
@@ -172,13 +179,22 @@ def measure(specs: dict, repeat: int, tmp: Path) -> dict:
                                      for name in specs}}
 
 
+PAIRS = {"dask_1_worker": ("1", "bare"), "inprocess": ("inprocess", "bare"), "engine_cpu": ("engine_cpu", "bare_cpu")}
+
+
+def _paired(rounds: dict) -> dict:
+    """Per round: the time of each mode and the bare time it is compared with (wall: the mean of the
+    round's two bare runs; CPU: the bare CPU run just before)."""
+    bare = (np.array(rounds["bare"]) + np.array(rounds["bare_after"])) / 2
+    return {k: (np.array(rounds[m]), bare if b == "bare" else np.array(rounds[b])) for k, (m, b) in PAIRS.items()}
+
+
 def figures(spec, rounds: dict, n_ref: int) -> dict:
-    """Runs/s and overheads of one study from its rounds (each figure the best of its rounds)."""
+    """Runs/s (best round of each mode) and overheads (median of the rounds' paired ratios) of one study."""
     n = spec.n_runs
     best = {k: min(v) for k, v in rounds.items()}
-    over = {"dask_1_worker": 100 * (best["1"] - best["bare"]) / best["bare"],
-            "inprocess": 100 * (best["inprocess"] - best["bare"]) / best["bare"],
-            "engine_cpu": 100 * (best["engine_cpu"] - best["bare_cpu"]) / best["bare_cpu"]}
+    best["bare"] = min(best["bare"], best["bare_after"])
+    over = {k: float(100 * np.median(e / b - 1)) for k, (e, b) in _paired(rounds).items()}
     return {"study": spec.name, "runs": n, "reference_runs_added": n_ref, "chunks": len(spec.chunks),
             "chunk_size": spec.data["chunk_size"],
             "tasks": {"1": len(plan_tasks(spec.chunks, 1)), "2": len(plan_tasks(spec.chunks, 2))},
@@ -187,23 +203,28 @@ def figures(spec, rounds: dict, n_ref: int) -> dict:
             "seconds": {k: best[k] for k in ("bare", "inprocess", "1", "2", "bare_cpu", "engine_cpu")},
             "seconds_median": {k: float(np.median(v)) for k, v in rounds.items()},
             "overhead_pct": over,
-            "overhead_us_per_run": {"dask_1_worker": 1e6 * (best["1"] - best["bare"]) / n,
-                                    "inprocess": 1e6 * (best["inprocess"] - best["bare"]) / n,
-                                    "engine_cpu": 1e6 * (best["engine_cpu"] - best["bare_cpu"]) / n}}
+            "overhead_pct_range": {k: [float(100 * np.min(e / b - 1)), float(100 * np.max(e / b - 1))]
+                                   for k, (e, b) in _paired(rounds).items()},
+            # the best round of each mode against the best bare round: least disturbed, but not paired
+            "overhead_pct_best": {k: 100 * (best[PAIRS[k][0]] / best[PAIRS[k][1]] - 1) for k in PAIRS},
+            "overhead_us_per_run": {k: float(1e6 * np.median(e - b) / n) for k, (e, b) in _paired(rounds).items()}}
 
 
 def marginal(small: dict, large: dict) -> dict:
-    """Per-run overhead as the cost of one more run: (engine_L - engine_S) / (bare_L - bare_S) - 1 between
-    two sizes of the same study, and the fixed cost per study it leaves: (engine - bare) of the small one
-    minus its runs at the per-run overhead [ms]."""
-    out = {"runs": [small["runs"], large["runs"]], "overhead_pct": {}, "fixed_ms": {}}
-    for key, mode, base in (("dask_1_worker", "1", "bare"), ("inprocess", "inprocess", "bare"),
-                            ("engine_cpu", "engine_cpu", "bare_cpu")):
-        es, el = small["seconds"][mode], large["seconds"][mode]
-        bs, bl = small["seconds"][base], large["seconds"][base]
+    """Per-run overhead as the cost of one more run, per round: (engine_L - engine_S) / (bare_L - bare_S)
+    - 1 between two sizes of the same study, and the fixed cost per study it leaves [ms]: (engine - bare)
+    of the small one minus its bare time at the per-run overhead; medians over the rounds."""
+    ps, pl = _paired(small), _paired(large)
+    out = {"overhead_pct": {}, "fixed_ms": {}, "overhead_pct_range": {}}
+    for k in PAIRS:
+        (es, bs), (el, bl) = ps[k], pl[k]
         rate = (el - es) / (bl - bs) - 1
-        out["overhead_pct"][key] = 100 * rate
-        out["fixed_ms"][key] = 1e3 * ((es - bs) - rate * bs)
+        out["overhead_pct"][k] = float(100 * np.median(rate))
+        out["overhead_pct_range"][k] = [float(100 * rate.min()), float(100 * rate.max())]
+        out["fixed_ms"][k] = float(1e3 * np.median((es - bs) - rate * bs))
+        # from the best rounds (of each mode and size) instead of per round
+        be, bb = (min(es), min(el)), (min(bs), min(bl))
+        out.setdefault("overhead_pct_best", {})[k] = 100 * ((be[1] - be[0]) / (bb[1] - bb[0]) - 1)
     return out
 
 
@@ -236,7 +257,8 @@ def main(argv=None) -> int:
                 "cluster_startup_and_warmup_s": m["cluster_startup_and_warmup_s"]})
     if "scaled" in specs:
         out["scaled"] = figures(specs["scaled"], m["rounds"]["scaled"], m["reference_runs_added"]["scaled"])
-        out["per_run"] = marginal(out, out["scaled"])
+        out["per_run"] = {"runs": [out["runs"], out["scaled"]["runs"]],
+                          **marginal(m["rounds"]["study"], m["rounds"]["scaled"])}
     out["overhead_target_pct"] = 10.0
     out["overhead_ok"] = max(over.values()) < 10.0
     out["per_run_overhead_ok"] = "per_run" in out and max(out["per_run"]["overhead_pct"].values()) < 10.0
@@ -265,7 +287,8 @@ def main(argv=None) -> int:
     for k, v in parts.items():
         print(f"    {k:38s} {v:8.2f}")
     print(f"load average {out['load_average'][0]:.1f} -> {out['load_average'][1]:.1f} on {out['cores']} cores "
-          f"(figures are best of {args.repeat} interleaved rounds); cluster start + warm-up "
+          f"(runs/s: best of {args.repeat} rounds; overheads: median of the rounds' paired ratios); "
+          f"cluster start + warm-up "
           f"{m['cluster_startup_and_warmup_s']['1']:.1f} s (1 worker), "
           f"{m['cluster_startup_and_warmup_s']['2']:.1f} s (2 workers)")
     return 0
