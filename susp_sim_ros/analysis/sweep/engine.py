@@ -19,7 +19,7 @@ from typing import Mapping, Sequence
 import numpy as np
 from numba import njit, prange
 
-from ...model.layout import OUTPUT_LABELS, P_INDEX
+from ...model.layout import P_INDEX
 from .spec import MANEUVER_KEYS, SIGNAL, vehicle_key
 
 _cache: dict = {}
@@ -394,14 +394,18 @@ def task_batch(data: Mapping, runs: Sequence[Mapping]) -> tuple[list, list]:
         p = ref_of.get(nk)
         if p is None:
             rr = reference_run(data, r)
-            p = pos.get(tuple(rr.items()))
+            key = tuple(rr.items())
+            p = pos.get(key)
             if p is None:
-                p = pos[tuple(rr.items())] = len(batch)
+                p = pos[key] = len(batch)
                 batch.append(rr)
             ref_of[nk] = p
         ref_at.append(p)
     ref_at += list(range(len(runs), len(batch)))        # a reference run is its own reference
     return batch, ref_at
+
+
+_runs_cache: dict = {}     # study hash -> its runs (this process)
 
 
 def study_runs(data: Mapping, study: str) -> list[dict]:
@@ -415,9 +419,6 @@ def study_runs(data: Mapping, study: str) -> list[dict]:
                 _runs_cache.pop(next(iter(_runs_cache)))
             runs = _runs_cache[study] = expand_runs(data)
         return runs
-
-
-_runs_cache: dict = {}
 
 
 def sweep_task(data: Mapping, study: str, chunks: Sequence[Sequence[int]], threads: int | None = None) -> list[dict]:
