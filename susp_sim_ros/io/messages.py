@@ -2,8 +2,11 @@
 
 Definitions are embedded as text (comments and blank lines stripped from the Jazzy ``.msg`` files), so
 MCAP files can be written and read with or without a ROS install. :func:`full_definition` gives the
-concatenated ``ros2msg`` schema text that MCAP needs: the type's own definition, then each dependency
-after a line of 80 ``=`` and ``MSG: pkg/msg/Type``.
+concatenated ``ros2msg`` schema text that MCAP needs, assembled exactly as rosbag2 does it
+(``rosbag2_cpp::LocalMessageDefinitionSource::get_full_text``): the type's own definition, then each
+dependency after a blank line, a line of 80 ``=`` and ``MSG: pkg/Type``, named as the fields reference it
+(``std_msgs/Header``, not ``std_msgs/msg/Header``: Foxglove's parser resolves field types by that name),
+depth first, each message's dependencies in sorted order, each included once.
 
 ``/sim/suspension`` (``std_msgs/msg/Float64MultiArray``), the per-wheel suspension state:
 
@@ -115,24 +118,30 @@ def _field_types(text: str, pkg: str) -> list[str]:
     return out
 
 
+def msg_name(msgtype: str) -> str:
+    """``pkg/msg/Type`` as a ``.msg`` field references it and rosbag2 names its section: ``pkg/Type``."""
+    pkg, _, name = msgtype.split("/")
+    return f"{pkg}/{name}"
+
+
 @lru_cache(maxsize=None)
 def full_definition(msgtype: str) -> str:
-    """Concatenated ros2msg schema text of ``msgtype`` with all dependencies (MCAP ``ros2msg``)."""
+    r"""Concatenated ros2msg schema text of ``msgtype`` with all dependencies (MCAP ``ros2msg``), as
+    rosbag2 writes it: own text, then per dependency (depth first, each message's dependencies sorted by
+    name, each once) ``"\n" + "=" * 80 + "\nMSG: pkg/Type\n" + text``."""
     if msgtype not in MSG_DEFS:
         raise KeyError(f"no embedded definition for {msgtype!r}; known: {', '.join(sorted(MSG_DEFS))}")
-    order: list[str] = []
+    seen: set[str] = set()
 
-    def visit(t: str) -> None:
-        for dep in _field_types(MSG_DEFS[t], t.split("/")[0]):
-            if dep not in order and dep != msgtype:
-                order.append(dep)
-                visit(dep)
+    def append(t: str) -> str:
+        out = MSG_DEFS[t]
+        for dep in sorted(set(_field_types(MSG_DEFS[t], t.split("/")[0])), key=msg_name):
+            if dep not in seen:
+                seen.add(dep)
+                out += f"\n{SEPARATOR}\nMSG: {msg_name(dep)}\n" + append(dep)
+        return out
 
-    visit(msgtype)
-    parts = [MSG_DEFS[msgtype].rstrip("\n")]
-    for dep in order:
-        parts.append(f"{SEPARATOR}\nMSG: {dep}\n{MSG_DEFS[dep].rstrip(chr(10))}")
-    return "\n".join(parts) + "\n"
+    return append(msgtype)
 
 
 @lru_cache(maxsize=None)
@@ -300,7 +309,7 @@ def clock_msg(t_ns: int) -> dict:
 
 
 __all__ = ["MSG_DEFS", "SEPARATOR", "FLOAT64", "FLOAT64_ARRAY", "IMU", "ODOMETRY", "DIAGNOSTIC_ARRAY",
-           "CLOCK", "SUSPENSION_QUANTITIES", "SUSPENSION_COLUMNS", "full_definition", "encode", "decode",
+           "CLOCK", "msg_name", "SUSPENSION_QUANTITIES", "SUSPENSION_COLUMNS", "full_definition", "encode", "decode",
            "encode_float64_multiarray",
            "to_dict", "stamp", "float64", "road_profile_msg", "wheel_heights_msg", "quaternion_from_rpy",
            "imu_msg", "odom_msg", "suspension_msg", "diagnostics_msg", "clock_msg", "OUTPUT_LABELS"]
