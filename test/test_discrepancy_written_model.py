@@ -31,7 +31,8 @@ import yaml
 
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder
 from susp_sim_ros.analysis.discrepancy.data import make_inputs_from_drive
-from susp_sim_ros.analysis.discrepancy.engine import RATES
+from susp_sim_ros.analysis.discrepancy.data import SIGNAL_OUTPUT
+from susp_sim_ros.analysis.discrepancy.engine import _TO_REPORT_UNITS
 from susp_sim_ros.analysis.discrepancy.report import write_outputs
 from susp_sim_ros.lockstep import run_lockstep
 from susp_sim_ros.model import Model, load_vehicle, simulate_batch
@@ -58,12 +59,18 @@ def _files(paths):
     return paths.get("vehicle", BASE_VEHICLE), paths["variant"]
 
 
-def _residual_rmse(f, r, rates_deg_s):
-    """The finder's in-sample RMSE definition for drive r: residual on the comparison grid with the
-    fitted measurement chain (time offset, per-drive gyro bias), which is not part of the car model."""
+def _residual_rmse(f, r, signals):
+    """The finder's in-sample RMSE definition for drive r: residual at the comparison samples with the
+    fitted measurement chain (time offset, per-drive bias), which is not part of the car model;
+    ``signals`` (n_steps, 6) in the finder's units (deg/s, m/s^2)."""
     ev, st, x = f.evaluator_, f.result_.structure, f.result_.x
-    e = ev.case_residual(r, rates_deg_s, st.lag(x), st.bias)
+    e = ev.case_residual(r, signals, st.lag(x), st.bias)
     return float(np.sqrt(np.mean(e ** 2)))
+
+
+def _fitted_rmse(f):
+    res = f.evaluator_.case_residuals(f.result_.structure, f.result_.x)
+    return np.array([float(np.sqrt(np.mean(res[r] ** 2))) for r in range(len(f.cases_))])
 
 
 def test_the_interesting_terms_were_fitted_and_written(diagnosed):
@@ -89,7 +96,7 @@ def test_written_damper_tables_give_back_the_fitted_hydraulic_curves(diagnosed):
     base, f, paths = diagnosed
     if "vehicle" not in paths:
         pytest.skip("no vehicle file written")
-    fitted = hydraulic_curves(f.model_.vehicle)   # what the fit's parameter rows hold
+    fitted = hydraulic_curves(f.calibrated_vehicle_)   # what the fit's parameter rows hold
     written = hydraulic_curves(load_vehicle(paths["vehicle"]))
     for a, b in zip(written, fitted):
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-9)
@@ -105,14 +112,15 @@ def test_written_model_reproduces_the_fitted_rmse_on_every_drive(diagnosed):
     """Model(vehicle_path, variant_path) on the finder's own inputs: the fitted in-sample RMSE per drive."""
     base, f, paths = diagnosed
     ev = f.evaluator_
-    fitted_rmse = ev.per_case_rmse(f.result_.structure, f.result_.x)
+    fitted_rmse = _fitted_rmse(f)
     fitted_rates = ev.simulate(f.result_.structure, f.result_.x[None])[0]
     m = Model(*_files(paths))
     P = np.stack([m.params(c.oil) for c in ev.cases])
     rows = np.arange(len(ev.cases))
-    _, Y, done = simulate_batch(m, P, ev.U, dt=ev.dt, roads=ev.roads, u_row=rows, road_row=rows, outputs=RATES)
+    _, Y, done = simulate_batch(m, P, ev.U, dt=ev.dt, roads=ev.roads, u_row=rows, road_row=rows,
+                                outputs=SIGNAL_OUTPUT)
     assert np.all(done == ev.U.shape[1])
-    Y = np.degrees(Y)
+    Y = Y * _TO_REPORT_UNITS
     for r, c in enumerate(ev.cases):
         np.testing.assert_allclose(Y[r], fitted_rates[r], rtol=0, atol=TOL, err_msg=c.name)
         assert abs(_residual_rmse(f, r, Y[r]) - fitted_rmse[r]) < TOL, c.name
@@ -130,7 +138,7 @@ def test_written_model_through_the_lockstep_runner_is_the_fitted_model(diagnosed
     handling, not the written model."""
     base, f, paths = diagnosed
     ev, st, x = f.evaluator_, f.result_.structure, f.result_.x
-    fitted_rmse = ev.per_case_rmse(st, x)
+    fitted_rmse = _fitted_rmse(f)
     vehicle, variant = _files(paths)
     t_steps = ev.dt * np.arange(1, ev.n_max + 1)
     for r, c in enumerate(ev.cases):
@@ -139,13 +147,14 @@ def test_written_model_through_the_lockstep_runner_is_the_fitted_model(diagnosed
         assert ls.healthy
         t_ls = (ls.t_ns - c.t0_ns) * 1e-9
         np.testing.assert_allclose(t_ls, t_steps[:c.n_steps], rtol=0, atol=1e-12)
-        rates = np.column_stack([np.interp(t_steps, t_ls, np.degrees(ls.imu.gyro[:, a])) for a in range(3)])
+        meas = np.column_stack([np.degrees(ls.imu.gyro), ls.imu.accel])
+        rates = np.column_stack([np.interp(t_steps, t_ls, meas[:, a]) for a in range(6)])
         U, _ = make_inputs_from_drive(c.drive, ev.dt, hold=True)
         Uh = np.empty((1, ev.n_max, U.shape[1]))
         Uh[0, :len(U)], Uh[0, len(U):] = U, U[-1]
         _, Yh, _ = simulate_batch(ev.model, ev.rows(st, x, [r]), Uh, dt=ev.dt, roads=[c.road],
-                                  u_row=np.array([0]), road_row=np.array([0]), outputs=RATES)
-        held = np.degrees(Yh[0])
+                                  u_row=np.array([0]), road_row=np.array([0]), outputs=SIGNAL_OUTPUT)
+        held = Yh[0] * _TO_REPORT_UNITS
         np.testing.assert_allclose(rates[:c.n_steps], held[:c.n_steps], rtol=0, atol=TOL, err_msg=c.name)
         rm = _residual_rmse(f, r, rates)
         assert abs(rm - _residual_rmse(f, r, held)) < TOL, c.name

@@ -175,6 +175,7 @@ class VehicleParams:
     damper_measured_empty: tuple[tuple[float, ...], tuple[float, ...]]
     source_file: str = ""
     sources: Mapping[str, tuple[str, str]] = field(default_factory=dict, compare=False, repr=False)
+    priors: Mapping[str, "Prior"] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def wheelbase(self) -> float:
@@ -195,6 +196,101 @@ class VehicleParams:
         return np.array([f, f, r, r])
 
 
+#: The parameter table: every vehicle parameter once, as (field of :class:`VehicleParams`, YAML section,
+#: YAML key, shape, check). Shape ``scalar`` (one number), ``axle`` ({front, rear}, per wheel of that axle)
+#: or ``table`` (damper curves, one list per axle); check ``positive``, ``nonneg`` or ``""``. Value, unit,
+#: source and plausible range live in the YAML file (:class:`Prior`); the kernel's parameter vector
+#: (:meth:`~susp_sim_ros.model.vehicle.Model.params`), the linear model and the calibration read the
+#: :class:`VehicleParams` made from it.
+PARAMETER_TABLE: tuple[tuple[str, str, str, str, str], ...] = (
+    ("gravity", "constants", "gravity", "scalar", "positive"),
+    ("sprung_mass", "body", "sprung_mass", "scalar", "positive"),
+    ("unsprung_mass", "body", "unsprung_mass", "axle", "positive"),
+    ("a", "body", "cg_to_front_axle", "scalar", "positive"),
+    ("b", "body", "cg_to_rear_axle", "scalar", "positive"),
+    ("track", "body", "track", "axle", "positive"),
+    ("cg_height", "body", "cg_height", "scalar", "positive"),
+    ("roll_inertia", "body", "roll_inertia", "scalar", "positive"),
+    ("pitch_inertia", "body", "pitch_inertia", "scalar", "positive"),
+    ("yaw_inertia", "body", "yaw_inertia", "scalar", "positive"),
+    ("roll_centre_height", "body", "roll_centre_height", "axle", ""),
+    ("pitch_centre_height", "body", "pitch_centre_height", "scalar", ""),
+    ("wheel_rate", "suspension", "wheel_rate", "axle", "positive"),
+    ("bump_stop_travel", "suspension", "bump_stop_travel", "axle", "positive"),
+    ("rebound_stop_travel", "suspension", "rebound_stop_travel", "axle", "positive"),
+    ("stop_rate", "suspension", "stop_rate", "scalar", "nonneg"),
+    ("stop_progression", "suspension", "stop_progression", "scalar", "positive"),
+    ("arb_rate", "suspension", "anti_roll_bar_rate", "axle", "nonneg"),
+    ("tyre_stiffness", "tyre", "vertical_stiffness", "scalar", "positive"),
+    ("tyre_damping", "tyre", "vertical_damping", "scalar", "nonneg"),
+    ("cornering_stiffness", "tyre", "cornering_stiffness", "axle", "positive"),
+    ("mu", "tyre", "friction_coefficient", "scalar", "positive"),
+    ("relaxation_length", "tyre", "relaxation_length", "scalar", "positive"),
+    ("slip_fade_speed", "tyre", "slip_fade_speed", "scalar", "positive"),
+    ("steering_ratio", "steering", "ratio", "scalar", "positive"),
+    ("drive_front_share", "drivetrain", "drive_front_share", "scalar", "nonneg"),
+    ("brake_front_share", "drivetrain", "brake_front_share", "scalar", "nonneg"),
+    ("dahl_stiffness", "friction", "dahl_stiffness", "scalar", "positive"),
+    ("axle_friction", "friction", "axle_level", "axle", "nonneg"),
+    ("damper_friction_intact", "friction", "damper_level_intact", "axle", "positive"),
+    ("damper_friction_empty", "friction", "damper_level_empty", "axle", "nonneg"),
+    ("sv_reference", "friction", "velocity_scaling_reference", "scalar", "positive"),
+    ("sv_plateau", "friction", "velocity_scaling_plateau", "scalar", "positive"),
+    ("sv_speed", "friction", "velocity_scaling_speed", "scalar", "positive"),
+    ("sh_longitudinal", "friction", "horizontal_scaling_longitudinal", "axle", "nonneg"),
+    ("sh_lateral", "friction", "horizontal_scaling_lateral", "axle", "nonneg"),
+    ("damper_velocity", "dampers", "velocity", "table", ""),
+    ("damper_measured_intact", "dampers", "measured_intact", "table", ""),
+    ("damper_measured_empty", "dampers", "measured_empty", "table", ""),
+)
+
+
+@dataclass(frozen=True)
+class Prior:
+    """The plausible range of one parameter (``range:`` in the vehicle file): the calibration's prior.
+
+    ``lo``/``hi`` per axle (front, rear) for ``axle`` parameters, one value for scalars; for damper
+    tables a factor on the whole curve (``unit`` then says so). ``calibrate``: the calibration may
+    re-estimate it from drives.
+    """
+
+    field: str
+    key: str
+    unit: str
+    source: str
+    shape: str
+    lo: tuple[float, ...]
+    hi: tuple[float, ...]
+    reason: str
+    calibrate: bool
+
+
+def _read_prior(r: "_Reader", fld: str, section: str, key: str, shape: str) -> Prior | None:
+    e = r.data[section][key]
+    if "range" not in e:
+        return None
+    rng = e["range"]
+    where = f"{r.path}: {section}.{key}.range"
+
+    def pair(x, what):
+        if (not isinstance(x, list) or len(x) != 2
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in x)
+                or x[0] > x[1]):
+            raise ConfigError(f"{what} must be [lo, hi] with lo <= hi, got {x!r}")
+        return float(x[0]), float(x[1])
+
+    if shape == "axle":
+        if not isinstance(rng, dict) or set(rng) != set(AXLES):
+            raise ConfigError(f"{where} must be {{front: [lo, hi], rear: [lo, hi]}}, got {rng!r}")
+        lohi = [pair(rng[a], f"{where}.{a}") for a in AXLES]
+    else:
+        lohi = [pair(rng, where)]
+    unit = "1 (factor on the curve)" if shape == "table" else str(e["unit"])
+    return Prior(field=fld, key=f"{section}.{key}", unit=unit, source=str(e["source"]), shape=shape,
+                 lo=tuple(x[0] for x in lohi), hi=tuple(x[1] for x in lohi),
+                 reason=str(e.get("range_source", "")), calibrate=bool(e.get("calibrate", False)))
+
+
 def load_vehicle(name_or_path: str | os.PathLike = "passat_b8_like") -> VehicleParams:
     """Load and validate a vehicle parameter set by name (``config/vehicles/``) or YAML path."""
     path = _resolve("vehicle", name_or_path)
@@ -202,50 +298,20 @@ def load_vehicle(name_or_path: str | os.PathLike = "passat_b8_like") -> VehicleP
     vel = r.table("dampers", "velocity")
     if any(b <= a for a, b in zip(vel, vel[1:])) or 0.0 not in vel:
         raise ConfigError(f"{path}: dampers.velocity must be strictly increasing and contain 0.0")
-    vp = VehicleParams(
-        name=str(r.data.get("name", path.stem)),
-        gravity=r.scalar("constants", "gravity", positive=True),
-        sprung_mass=r.scalar("body", "sprung_mass", positive=True),
-        unsprung_mass=r.axle("body", "unsprung_mass", positive=True),
-        a=r.scalar("body", "cg_to_front_axle", positive=True),
-        b=r.scalar("body", "cg_to_rear_axle", positive=True),
-        track=r.axle("body", "track", positive=True),
-        cg_height=r.scalar("body", "cg_height", positive=True),
-        roll_inertia=r.scalar("body", "roll_inertia", positive=True),
-        pitch_inertia=r.scalar("body", "pitch_inertia", positive=True),
-        yaw_inertia=r.scalar("body", "yaw_inertia", positive=True),
-        roll_centre_height=r.axle("body", "roll_centre_height"),
-        pitch_centre_height=r.scalar("body", "pitch_centre_height"),
-        wheel_rate=r.axle("suspension", "wheel_rate", positive=True),
-        bump_stop_travel=r.axle("suspension", "bump_stop_travel", positive=True),
-        rebound_stop_travel=r.axle("suspension", "rebound_stop_travel", positive=True),
-        stop_rate=r.scalar("suspension", "stop_rate", nonneg=True),
-        stop_progression=r.scalar("suspension", "stop_progression", positive=True),
-        arb_rate=r.axle("suspension", "anti_roll_bar_rate", nonneg=True),
-        tyre_stiffness=r.scalar("tyre", "vertical_stiffness", positive=True),
-        tyre_damping=r.scalar("tyre", "vertical_damping", nonneg=True),
-        cornering_stiffness=r.axle("tyre", "cornering_stiffness", positive=True),
-        mu=r.scalar("tyre", "friction_coefficient", positive=True),
-        relaxation_length=r.scalar("tyre", "relaxation_length", positive=True),
-        slip_fade_speed=r.scalar("tyre", "slip_fade_speed", positive=True),
-        steering_ratio=r.scalar("steering", "ratio", positive=True),
-        drive_front_share=r.scalar("drivetrain", "drive_front_share", nonneg=True),
-        brake_front_share=r.scalar("drivetrain", "brake_front_share", nonneg=True),
-        dahl_stiffness=r.scalar("friction", "dahl_stiffness", positive=True),
-        axle_friction=r.axle("friction", "axle_level", nonneg=True),
-        damper_friction_intact=r.axle("friction", "damper_level_intact", positive=True),
-        damper_friction_empty=r.axle("friction", "damper_level_empty", nonneg=True),
-        sv_reference=r.scalar("friction", "velocity_scaling_reference", positive=True),
-        sv_plateau=r.scalar("friction", "velocity_scaling_plateau", positive=True),
-        sv_speed=r.scalar("friction", "velocity_scaling_speed", positive=True),
-        sh_longitudinal=r.axle("friction", "horizontal_scaling_longitudinal", nonneg=True),
-        sh_lateral=r.axle("friction", "horizontal_scaling_lateral", nonneg=True),
-        damper_velocity=vel,
-        damper_measured_intact=r.table("dampers", "measured_intact", len(vel)),
-        damper_measured_empty=r.table("dampers", "measured_empty", len(vel)),
-        source_file=str(path),
-        sources=r.sources,
-    )
+    values: dict[str, Any] = {}
+    priors: dict[str, Prior] = {}
+    for fld, section, key, shape, check in PARAMETER_TABLE:
+        if shape == "scalar":
+            values[fld] = r.scalar(section, key, positive=check == "positive", nonneg=check == "nonneg")
+        elif shape == "axle":
+            values[fld] = r.axle(section, key, positive=check == "positive", nonneg=check == "nonneg")
+        else:
+            values[fld] = r.table(section, key, None if fld == "damper_velocity" else len(vel))
+        prior = _read_prior(r, fld, section, key, shape)
+        if prior is not None:
+            priors[fld] = prior
+    vp = VehicleParams(name=str(r.data.get("name", path.stem)), **values, source_file=str(path),
+                       sources=r.sources, priors=priors)
     for share in ("drive_front_share", "brake_front_share"):
         if getattr(vp, share) > 1.0:
             raise ConfigError(f"{path}: drivetrain.{share} must be in [0, 1], got {getattr(vp, share)}")

@@ -28,6 +28,7 @@ import numpy as np
 from ...model.layout import P_INDEX
 
 PHYSICS, PARAMETER, MEASUREMENT = "physics", "parameter", "measurement"
+CALIBRATION = "calibration"  # the base model's own parameters (see .calibration), never missing physics
 
 
 @dataclass(frozen=True)
@@ -41,6 +42,7 @@ class CandParam:
     upper: float
     step: float
     meaning: str = ""
+    prior_sd: float | None = None  # a normal prior around ``neutral`` (calibration parameters only)
 
 
 @dataclass(frozen=True)

@@ -29,8 +29,9 @@ SIM_RATE_HZ = 1000.0  # the model's 1 ms step
 class DriveCase:
     """One drive prepared for batch simulation and comparison.
 
-    ``U`` (n_steps, N_U) per-step inputs; ``grid_ns`` comparison times [ns]; ``y_meas`` (n_grid, n_sig)
-    measured rates [deg/s] on the grid for the gyro ``axes``; ``quiet`` mask of grid samples before the
+    ``U`` (n_steps, N_U) per-step inputs; ``grid_ns`` comparison times [ns] (the measured IMU sample
+    times in the analysis window); ``y_meas`` (n_grid, n_sig) measured signals there (rates [deg/s],
+    specific forces [m/s^2]), ``axes`` their columns in :data:`SIGNALS`; ``quiet`` mask of grid samples before the
     drive's first excitation (set after the base simulation, see :func:`mark_quiet`).
     """
 
@@ -50,10 +51,11 @@ class DriveCase:
     y_meas: np.ndarray
     drive: object = field(repr=False, default=None)
     quiet: np.ndarray | None = None
+    quiet_raw: np.ndarray | None = None      # the same over every recorded sample (t_raw_s)
     metadata: dict = field(default_factory=dict)
-    t_raw_s: np.ndarray | None = None       # measured sample times in the window [s since t0]
-    y_raw: np.ndarray | None = None         # measured rates there [deg/s], before resampling
-    resample_factor: float = 1.0            # noise variance factor of the linear resampling
+    t_raw_s: np.ndarray | None = None       # every measured sample time within the simulated span [s since t0]
+    y_raw: np.ndarray | None = None         # all six measured signals there (SIGNALS order), for the noise
+    resample_factor: float = 1.0            # noise variance factor of resampling (1: compared as sampled)
 
     @property
     def n_steps(self) -> int:
@@ -137,44 +139,72 @@ def make_inputs_from_drive(drive, dt: float = 0.001, hold: bool = False) -> tupl
     return U, t0
 
 
+#: Every IMU signal the finder can compare (interface.md, SIGNAL), its model output and unit.
+SIGNALS = ("roll_rate", "pitch_rate", "yaw_rate", "accel_x", "accel_y", "accel_z")
+SIGNAL_OUTPUT = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE", "AX_SF", "AY_SF", "AZ_SF")
+SIGNAL_UNIT = ("deg/s", "deg/s", "deg/s", "m/s^2", "m/s^2", "m/s^2")
+GYRO = ("roll_rate", "pitch_rate", "yaw_rate")
+
+
+def primary_signals(maneuver: str | None) -> tuple[str, ...]:
+    """The gyro signal(s) a drive's legacy deg/s figures are about: the paper's comparison signal of its
+    maneuver (pitch rate for bump crossings, roll rate for sine steering), else every gyro axis."""
+    return (va.MANEUVER_SIGNAL[maneuver],) if maneuver in va.MANEUVER_SIGNAL else GYRO
+
+
 def prepare_case(path: str | Path, drive, *, wheelbase: float, dt: float = 0.001,
                  signals: Sequence[str] | None = None) -> DriveCase:
-    """A :class:`DriveCase` of a read drive (``drive`` from :func:`~susp_sim_ros.io.drive.read_drive`)."""
+    """A :class:`DriveCase` of a read drive (``drive`` from :func:`~susp_sim_ros.io.drive.read_drive`).
+
+    The comparison is made at the measured IMU sample times inside the drive's analysis window (the
+    simulation, at 1 kHz and smooth, is interpolated onto them; the measurement is never resampled, so
+    the residual holds the sensor's noise exactly as sampled). ``signals`` (default: all six IMU
+    signals) are narrowed to the excited ones by the finder once the noise is known.
+    """
     path = Path(path)
     if drive.imu is None or len(drive.imu) < 10:
         raise RecordingError(f"{path}: no measured IMU samples on /imu/data: nothing to diagnose against")
     meta = drive.metadata
     maneuver = classify_maneuver(meta.get("maneuver", ""))
-    oil = np.array(drive.oil_levels(), float) if "damper_oil_level" in meta else np.ones(4)
+    oil_text = str(meta.get("damper_oil_level", "")).strip().lower()
+    oil = np.array(drive.oil_levels(), float) if oil_text not in ("", "unknown") else np.ones(4)
     U, t0 = make_inputs_from_drive(drive, dt)
     windows = va.analysis_windows(drive, wheelbase)
     wname = va.MANEUVER_WINDOW.get(maneuver, "whole")
     window = windows.get(wname, windows["whole"])
-    if signals is None:
-        signals = (va.MANEUVER_SIGNAL[maneuver],) if maneuver else ("roll_rate", "pitch_rate")
-    axes = np.array([va.SIGNAL_AXIS[s] for s in signals])
-    t_meas, g_meas = va.check_series(drive.imu.t_ns, drive.imu.gyro, f"{path} /imu/data")
+    signals = tuple(signals) if signals is not None else SIGNALS
+    unknown = [x for x in signals if x not in SIGNALS]
+    if unknown:
+        raise SuspInputError(f"unknown signals {unknown}; known: {', '.join(SIGNALS)}")
+    axes = np.array([SIGNALS.index(x) for x in signals])
+    meas_all = np.column_stack([np.degrees(drive.imu.gyro), drive.imu.accel])
+    t_meas, m_meas = va.check_series(drive.imu.t_ns, meas_all, f"{path} /imu/data")
     sim_span = (t0 + int(round(dt * NS)), t0 + U.shape[0] * int(round(dt * NS)))
     span = va.overlap((int(t_meas[0]), int(t_meas[-1])), sim_span, window.span,
                       what=[f"{path} /imu/data", "simulation", f"{window.name} window"])
-    rate = min(va.median_rate(t_meas), SIM_RATE_HZ)
-    grid = va.common_grid(span, rate)
-    if grid.size < 20:
-        raise RecordingError(f"{path}: only {grid.size} comparison samples in the {window.name} window")
-    y_meas = np.degrees(va.resample(t_meas, g_meas[:, axes], grid))
-    if y_meas.ndim == 1:
-        y_meas = y_meas[:, None]
-    # white noise through linear interpolation: variance x (w^2 + (1 - w)^2), w the grid point's position
-    # between its two measured samples
-    j = np.clip(np.searchsorted(t_meas, grid, side="right") - 1, 0, len(t_meas) - 2)
-    w = (grid - t_meas[j]) / (t_meas[j + 1] - t_meas[j])
-    factor = float(np.mean(w * w + (1 - w) ** 2))
     inwin = (t_meas >= span[0]) & (t_meas <= span[1])
+    if inwin.sum() < 20:
+        raise RecordingError(f"{path}: only {int(inwin.sum())} IMU samples in the {window.name} window")
+    grid = t_meas[inwin]
+    y = m_meas[inwin][:, axes]
+    insim = (t_meas >= sim_span[0]) & (t_meas <= sim_span[1])
     return DriveCase(name=path.stem, path=str(path), maneuver=maneuver, state=classify_state(oil),
-                     oil=oil, U=U, road=drive.road, t0_ns=int(t0), dt=dt, signals=tuple(signals), axes=axes,
-                     window=window, grid_ns=grid, y_meas=y_meas, drive=drive, metadata=dict(meta),
-                    t_raw_s=(t_meas[inwin] - t0) / NS, y_raw=np.degrees(g_meas[inwin][:, axes]),
-                    resample_factor=factor)
+                     oil=oil, U=U, road=drive.road, t0_ns=int(t0), dt=dt, signals=signals, axes=axes,
+                     window=window, grid_ns=grid, y_meas=y, drive=drive, metadata=dict(meta),
+                     t_raw_s=(t_meas[insim] - t0) / NS, y_raw=m_meas[insim], resample_factor=1.0)
+
+
+def select_signals(case: DriveCase, keep: Sequence[str]) -> None:
+    """Narrow ``case`` to the signals ``keep`` (in its own order)."""
+    cols = [j for j, s in enumerate(case.signals) if s in keep]
+    case.signals = tuple(case.signals[j] for j in cols)
+    case.axes = case.axes[cols]
+    case.y_meas = case.y_meas[:, cols]
+
+
+def has_road_input(case: DriveCase) -> bool:
+    """Whether the recording gives the road under the wheels (a profile or wheel heights)."""
+    return (case.road is not None and len(case.road) >= 2) or bool(np.any(case.U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4] != 0))
 
 
 def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.001) -> list[DriveCase]:
@@ -204,6 +234,7 @@ def mark_quiet(case: DriveCase, sim_rates_deg_s: np.ndarray, *, threshold_deg_s:
     active = np.nonzero(np.any(np.abs(sim_rates_deg_s) > threshold_deg_s, axis=1))[0]
     t_on = case.t_sim_s[active[0]] - margin_s if active.size else case.t_sim_s[-1]
     case.quiet = case.t_grid_s < t_on
+    case.quiet_raw = case.t_raw_s < t_on
 
 
 def excitation_onset_s(case: DriveCase) -> float:

@@ -14,17 +14,18 @@ import numpy as np
 
 from ...model import Model, simulate_batch
 from .candidates import BY_NAME, Candidate, neutral_base
-from .data import DriveCase
+from .data import SIGNAL_OUTPUT, SIGNAL_UNIT, DriveCase
 
 RATES = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")
+_TO_REPORT_UNITS = np.array([np.degrees(1.0) if u == "deg/s" else 1.0 for u in SIGNAL_UNIT])
 
 
 class Structure:
     """A list of candidates with the layout of their joint parameter vector."""
 
-    def __init__(self, names: Sequence[str]):
-        self.names = tuple(names)
-        self.cands: tuple[Candidate, ...] = tuple(BY_NAME[n] for n in self.names)
+    def __init__(self, items: Sequence[str | Candidate]):
+        self.cands: tuple[Candidate, ...] = tuple(BY_NAME[n] if isinstance(n, str) else n for n in items)
+        self.names = tuple(c.name for c in self.cands)
         self.offsets = np.cumsum([0] + [c.n_params for c in self.cands])
 
     @property
@@ -56,11 +57,19 @@ class Structure:
     def bias(self) -> bool:
         return "sensor_bias" in self.names
 
-    def with_(self, *names: str) -> "Structure":
-        return Structure(self.names + tuple(n for n in names if n not in self.names))
+    def with_(self, *items: str | Candidate) -> "Structure":
+        new = [BY_NAME[n] if isinstance(n, str) else n for n in items]
+        return Structure(self.cands + tuple(c for c in new if c.name not in self.names))
 
     def without(self, name: str) -> "Structure":
-        return Structure(tuple(n for n in self.names if n != name))
+        return Structure(tuple(c for c in self.cands if c.name != name))
+
+    def prior(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(indices, means, standard deviations) of the parameters with a normal prior."""
+        ps = [p for c in self.cands for p in c.params]
+        idx = np.array([j for j, p in enumerate(ps) if p.prior_sd is not None], np.int64)
+        return (idx, np.array([ps[j].neutral for j in idx], float),
+                np.array([ps[j].prior_sd for j in idx], float))
 
     def embed(self, other: "Structure", x_other: np.ndarray) -> np.ndarray:
         """This structure's vector with values taken from ``x_other`` where ``other`` has the term."""
@@ -93,6 +102,15 @@ class Evaluator:
         self.vehicle_seconds = 0.0
         self.progress = progress
         self.n_res = [c.y_meas.size for c in self.cases]
+        # residual weights (n_grid, n_sig): 1 / noise sigma of each drive's signal once known
+        self.weights = [np.ones_like(c.y_meas) for c in self.cases]
+
+    def set_noise(self, sigma: Sequence[np.ndarray]) -> None:
+        """Per drive, the white-noise sigma of each of its signals (native units): residuals are then
+        whitened (divided by it) wherever they are stacked for fitting."""
+        self.weights = [np.broadcast_to(1.0 / np.maximum(np.asarray(s, float), 1e-12), c.y_meas.shape).copy()
+                        for s, c in zip(sigma, self.cases)]
+        self.n_res = [c.y_meas.size for c in self.cases]
 
     # -- parameters ---------------------------------------------------------------------------------
     def rows(self, st: Structure, x: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:
@@ -106,25 +124,26 @@ class Evaluator:
 
     # -- simulation ---------------------------------------------------------------------------------
     def simulate(self, st: Structure, X: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:
-        """Gyro rates [deg/s] (M, len(idx), n_max, 3) for parameter vectors ``X`` (M, n)."""
+        """IMU signals (M, len(idx), n_max, 6) in :data:`~.data.SIGNALS` order (rates [deg/s], specific
+        forces [m/s^2]) for parameter vectors ``X`` (M, n)."""
         idx = list(range(len(self.cases))) if idx is None else list(idx)
         X = np.atleast_2d(X)
         M, R = X.shape[0], len(idx)
         P = np.concatenate([self.rows(st, x, idx) for x in X])
         u_row = np.tile(np.array(idx), M)
         _, Y, done = simulate_batch(self.model, P, self.U, dt=self.dt, roads=self.roads, u_row=u_row,
-                                    road_row=u_row, outputs=RATES)
+                                    road_row=u_row, outputs=SIGNAL_OUTPUT)
         bad = done < self.U.shape[1]
         Y[bad] = 1e3  # a diverged run: a huge residual, never a crash
         self.vehicle_seconds += M * R * self.n_max * self.dt
         if self.progress is not None:
             self.progress.update(M * R)
-        return np.degrees(Y).reshape(M, R, Y.shape[1], 3)
+        return (Y * _TO_REPORT_UNITS).reshape(M, R, Y.shape[1], len(SIGNAL_OUTPUT))
 
     # -- residuals ----------------------------------------------------------------------------------
     def case_residual(self, r: int, rates: np.ndarray, lag: float, bias: bool) -> np.ndarray:
-        """Residual (n_grid, n_sig) simulated - measured [deg/s] of drive ``r`` from its simulated rates
-        (n_max, 3); ``lag`` [s]: the measured signal is the model output delayed by ``lag``."""
+        """Residual (n_grid, n_sig) simulated - measured (native units) of drive ``r`` from its simulated
+        signals (n_max, 6); ``lag`` [s]: the measured signal is the model output delayed by ``lag``."""
         c = self.cases[r]
         t = c.dt * np.arange(1, self.n_max + 1)
         tq = c.t_grid_s - lag
@@ -152,13 +171,13 @@ class Evaluator:
         out = []
         for m, x in enumerate(X):
             lag = st.lag(x)
-            out.append(np.concatenate([self.case_residual(r, rates[m, j], lag, st.bias).ravel()
+            out.append(np.concatenate([(self.case_residual(r, rates[m, j], lag, st.bias) * self.weights[r]).ravel()
                                        for j, r in enumerate(idx)]))
         return np.array(out)
 
-    def per_case_rmse(self, st: Structure, x: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:
+    def case_residuals(self, st: Structure, x: np.ndarray, idx: Sequence[int] | None = None) -> dict:
+        """Native-unit residuals {drive index: (n_grid, n_sig)} of structure ``st`` at ``x``."""
         idx = list(range(len(self.cases))) if idx is None else list(idx)
         rates = self.simulate(st, x[None], idx)[0]
         lag = st.lag(x)
-        return np.array([float(np.sqrt(np.mean(self.case_residual(r, rates[j], lag, st.bias) ** 2)))
-                         for j, r in enumerate(idx)])
+        return {r: self.case_residual(r, rates[j], lag, st.bias) for j, r in enumerate(idx)}

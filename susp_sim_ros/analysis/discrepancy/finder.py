@@ -1,20 +1,26 @@
 """The estimator: :class:`DiscrepancyFinder` with ``fit``/``predict``/``score``/``report``.
 
-``fit(drives)`` runs the whole diagnosis:
+``fit(drives)`` runs the whole diagnosis: first make the known physics fit, then name only what no
+calibration explains.
 
-1. simulate every drive with the base model; residual = simulated - measured rate on the validator's
-   grid in the drive's analysis window; noise floor and significant windows (:mod:`.locate`);
-2. forward selection over the candidate library (:mod:`.candidates`): at each step every remaining
-   candidate and every pair is screened by a linearised fit (:func:`.fit.screen`), the best few are
-   refitted by nonlinear least squares over batch simulations of all drives jointly, and the best one is
-   accepted only if it lowers the information criterion clearly (``MIN_DELTA_BIC``) AND explains at least
-   ``MIN_EXPLAINED`` of the residual variance still above the noise floor; it stops at the noise floor;
-3. leave-one-drive-out: the final structure is refitted without each drive in turn and predicts it;
-   held-out RMSE before (base model) and after;
-4. verdict: ``missing_physics`` when physics/parameter terms were accepted and the held-out fit
-   improves; ``no_significant_discrepancy`` when nothing beyond the noise floor (or only the measurement
-   chain) was found; ``unexplained_residual`` when a real residual remains that the accepted terms do not
-   explain (then the windows describe it).
+1. simulate every drive with the base model; residual = simulated - measured at the measured IMU
+   sample times in the drive's analysis window, for every IMU signal the drive excites (roll, pitch, yaw
+   rate, specific forces); each signal's own noise floor (:mod:`.locate`); residuals whitened by it;
+2. unmeasured inputs: a drive without road input whose vertical signals show broadband residual power
+   around the body and wheel modes is driven by a road the recording lacks: those signals leave the fit
+   (verdict ``unmeasured_input``, with the ISO 8608 class estimated from the residual); its handling
+   signals (yaw rate, lateral acceleration) stay;
+3. calibration (:mod:`.calibration`): the base model's uncertain parameters, jointly over all drives,
+   maximum a posteriori within their documented priors, with the measurement chain (sensor bias, time
+   offset); identifiability decides which are informed, the rest stay at their prior;
+4. discovery on the calibrated model: forward selection over the physics candidates
+   (:mod:`.candidates`), each refitted jointly with the informed calibration parameters (so a residual a
+   recalibration within the priors explains is never named); a term is accepted only if it lowers the
+   information criterion clearly, explains a real share of the residual above noise, improves the drives
+   held out from its fit (leave-one-drive-out) and is selected in most of those refits;
+5. leave-one-drive-out of the whole result (calibration included) against the base model;
+6. verdict: ``missing_physics``, ``unmeasured_input``, ``no_significant_discrepancy`` or
+   ``unexplained_residual`` (:func:`.report.verdict`).
 """
 from __future__ import annotations
 
@@ -30,16 +36,23 @@ from ...errors import SuspInputError
 from ...model import Model, load_variant, load_vehicle
 from ...model.params import TermSetting
 from ...model.terms import get_term
-from .candidates import BY_NAME, LIBRARY, MEASUREMENT, PHYSICS, SWITCH_OF
-from .data import DriveCase, load_cases, mark_quiet
+from .calibration import (calibration_candidate, calibration_entries, calibration_params, identifiability,
+                          vehicle_at)
+from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PARAMETER, PHYSICS, SWITCH_OF
+from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .engine import Evaluator, Structure
 from .fit import FitResult, fit_structure, screen
 from .locate import base_outputs, locate, noise_floor
+from .unmeasured import detect_unmeasured_road
 
 MIN_DELTA_BIC = 10.0
 MIN_EXPLAINED = 0.05
 FLOOR_STOP = 1.05          # stop when the in-sample RMS is within 5 % of the noise floor
 UNEXPLAINED_RATIO = 1.5    # held-out after above this x noise floor and little explained -> unexplained
+EXCITED_RATIO = 4.0        # a signal is compared when its measured spread exceeds this x its noise floor
+MIN_HELDOUT_GAIN = 0.02    # a term must lower the held-out residual above noise by at least 2 %
+HELDOUT_NFEV = 6           # least-squares iterations of each final leave-one-drive-out refit (warm start)
+MIN_STABLE = 0.5           # ... and be selected (train-set BIC test) in at least half the refits
 TERM_MODULES = {"friction_amplitude": "susp_sim_ros.analysis.synthetic",
                 "extra_viscous_damping": "susp_sim_ros.model.extra_terms",
                 "damper_gas_preload": "susp_sim_ros.model.extra_terms"}
@@ -77,8 +90,8 @@ class DiscrepancyFinder:
 
     def __init__(self, *, vehicle: str = "passat_b8_like", variant: str = "full",
                  candidates: Sequence[str] | None = None, max_steps: int = 8, heldout: bool = True,
-                 progress: bool = False):
-        self.vehicle, self.variant = vehicle, variant
+                 progress: bool = False, calibrate: bool = True):
+        self.vehicle, self.variant, self.calibrate = vehicle, variant, calibrate
         self.candidates = tuple(candidates) if candidates is not None else tuple(c.name for c in LIBRARY)
         unknown = [c for c in self.candidates if c not in BY_NAME]
         if unknown:
@@ -102,6 +115,8 @@ class DiscrepancyFinder:
         in_base, out, skip = [], [], []
         for name in self.candidates:
             cand = BY_NAME[name]
+            if cand.kind != PHYSICS:  # parameters are calibrated, the measurement chain with them
+                continue
             sw = SWITCH_OF.get(name)
             if sw and getattr(base_variant, sw):
                 in_base.append(name)
@@ -148,30 +163,34 @@ class DiscrepancyFinder:
         ev = Evaluator(model, cases, progress=bar)
         self.cases_, self.evaluator_ = cases, ev
         allidx = tuple(range(len(cases)))
-        # 1. base run, quiet lead-ins, noise floor, windows
-        rates = ev.simulate(Structure([]), np.zeros((1, 0)))[0]
+        # 1. base run, quiet lead-ins, noise floors per signal
+        sims = ev.simulate(Structure([]), np.zeros((1, 0)))[0]
         for r, c in enumerate(cases):
-            mark_quiet(c, rates[r])
-        base_res = [ev.case_residual(r, rates[r], 0.0, False) for r in allidx]
+            mark_quiet(c, sims[r][:, :3])
+        self.noise_ = noise_floor(cases, list(sims))
+        # 2. which signals each drive excites; unmeasured road input
+        self.unmeasured_ = self._choose_signals(cases, sims)
+        ev.set_noise([self._case_sigma(c) for c in cases])
+        self.noise_floor_ = self.noise_["noise_floor_deg_s"]
+        base_res = [ev.case_residual(r, sims[r], 0.0, False) for r in allidx]
         self.base_residuals_ = base_res
-        self.noise_ = noise_floor(cases, list(rates))
-        sigma = self.noise_["noise_floor_deg_s"]
-        self.noise_floor_ = sigma
         outs = [base_outputs(model, c, ev.Pn[r]) for r, c in enumerate(cases)]
         self.base_outputs_ = outs
-        self.windows_ = locate(cases, base_res, sigma, outs)
+        self.windows_ = locate(cases, base_res, [self._case_sigma(c) for c in cases], outs)
         testable, skipped, in_base = self._testable(cases, self.base_variant_)
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
-        # 2. forward selection
-        cur = fit_structure(ev, Structure([]))
-        base_fit = cur
+        base_fit = fit_structure(ev, Structure([]))
+        self.base_fit_ = base_fit
+        # 3. calibration of the known physics (with the measurement chain)
+        cur = self._calibrate(ev, model)
         n = cur.n
-        path = [{"step": 0, "structure": [], "rss": cur.rss, "bic": cur.bic,
-                 "rmse_deg_s": math.sqrt(cur.rss / n)}]
+        path = [{"step": 0, "structure": list(cur.structure.names), "rss": cur.rss, "bic": cur.bic,
+                 "rms_x_noise": math.sqrt(cur.rss / n)}]
         accepted: list[dict] = []
         ranking = None
+        # 4. discovery on the calibrated model
         for step in range(1, self.max_steps + 1):
-            if math.sqrt(cur.rss / n) <= FLOOR_STOP * sigma:
+            if math.sqrt(cur.rss / n) <= FLOOR_STOP:
                 break
             remaining = [c for c in testable if c not in cur.structure.names]
             if not remaining:
@@ -181,22 +200,20 @@ class DiscrepancyFinder:
                 ranking = [o for o in opts if len(o.add) == 1]
                 # masked: a typical parameter change moves the residual by less than a tenth of the noise
                 for o in ranking:
-                    if o.excitation_rms < 0.1 * sigma and o.add[0] not in ("sensor_bias",):
+                    if o.excitation_rms < 0.1:
                         c = BY_NAME[o.add[0]]
                         skipped.append({"name": c.name, "reveal_with": c.reveal_with,
-                                        "why": f"masked in these drives: a typical change moves the rates by "
-                                               f"{o.excitation_rms:.4f} deg/s RMS, under a tenth of the noise"})
+                                        "why": f"masked in these drives: a typical change moves the signals by "
+                                               f"{o.excitation_rms:.3f} x their noise RMS, under a tenth"})
                         testable.remove(c.name)
                 remaining = [c for c in testable if c not in cur.structure.names]
                 opts = [o for o in opts if all(a in remaining for a in o.add)]
                 if not opts:
                     break
-            # singles first; a pair only when no single term alone passes (one is not enough)
-            excess = max(cur.rss - n * sigma ** 2, 1e-12)
-            best, best_fit, ok = None, None, False
-            for size in (1, 2):
-                cands = [o for o in opts if len(o.add) == size][:3]
-                for o in cands:
+            excess = max(cur.rss - n, 1e-12)
+            best, best_fit, ok, checks = None, None, False, {}
+            for size in (1, 2):  # singles first; a pair only when no single term alone passes
+                for o in [o for o in opts if len(o.add) == size][:3]:
                     st = cur.structure.with_(*o.add)
                     f = fit_structure(ev, st, _warm(st, cur, o), allidx, max_nfev=20)
                     if best_fit is None or f.bic < best_fit.bic:
@@ -204,53 +221,230 @@ class DiscrepancyFinder:
                 gain = cur.rss - best_fit.rss
                 ok = (cur.bic - best_fit.bic) >= MIN_DELTA_BIC and gain >= MIN_EXPLAINED * excess
                 if ok:
+                    checks = self._heldout_check(ev, cur, best_fit)
+                    ok = checks["passed"]
+                if ok:
                     break
             gain = cur.rss - best_fit.rss
-            per_before = _per_case_rms(ev, cur)
-            per_after = _per_case_rms(ev, best_fit)
+            per_before = self._per_drive_rmse(ev, cur)
+            per_after = self._per_drive_rmse(ev, best_fit)
             path.append({"step": step, "added": list(best.add), "structure": list(best_fit.structure.names),
                          "rss": best_fit.rss, "bic": best_fit.bic, "delta_bic": cur.bic - best_fit.bic,
                          "explained_fraction_of_excess": gain / excess,
-                         "rmse_deg_s": math.sqrt(best_fit.rss / n), "accepted": bool(ok)})
+                         "rms_x_noise": math.sqrt(best_fit.rss / n), "accepted": bool(ok), **checks})
             if not ok:
                 break
             for name in best.add:
                 accepted.append({"name": name, "step": step, "delta_bic": cur.bic - best_fit.bic,
                                  "explained_fraction_of_excess": gain / excess,
                                  "explained_fraction_of_base_excess":
-                                     gain / max(base_fit.rss - n * sigma ** 2, 1e-12),
-                                 "per_drive_rmse_before_deg_s": per_before,
-                                 "per_drive_rmse_after_deg_s": per_after, "with": list(best.add)})
+                                     gain / max(base_fit.rss - n, 1e-12),
+                                 "per_drive_rmse_before": per_before,
+                                 "per_drive_rmse_after": per_after, "with": list(best.add), **checks})
             cur = best_fit
-        # final polish
-        if cur.structure.n_params:
+        if any(c.kind == PHYSICS for c in cur.structure.cands):  # final polish, calibration jointly
             cur = fit_structure(ev, cur.structure, cur.x, allidx, max_nfev=30)
-        self.result_, self.base_fit_, self.path_, self.accepted_ = cur, base_fit, path, accepted
+            self._set_calibration(cur)
+        self.result_, self.path_, self.accepted_ = cur, path, accepted
         self.ranking_ = ranking or []
-        # 3. leave-one-drive-out
+        # 5. leave-one-drive-out of the whole result against the base model
         self.heldout_ = self._heldout(ev, cur) if self.heldout else None
         return self
 
+    # -- signals ------------------------------------------------------------------------------------
+    def _case_sigma(self, c: DriveCase) -> np.ndarray:
+        per = self.noise_["per_drive"][c.name]
+        pooled = self.noise_["noise_floors"]
+        return np.array([per[s] if math.isfinite(per[s]) and per[s] > 0 else pooled[s] for s in c.signals])
+
+    def _choose_signals(self, cases: Sequence[DriveCase], sims: np.ndarray) -> list[dict]:
+        """Narrow every drive to the signals it excites (measured spread above :data:`EXCITED_RATIO` x
+        noise; the maneuver's primary gyro signal always); drop the signals an unmeasured road drives."""
+        found = []
+        for r, c in enumerate(cases):
+            per = self.noise_["per_drive"][c.name]
+            keep = []
+            for j, sig in enumerate(c.signals):
+                spread = float(np.std(c.y_meas[:, j]))
+                if sig in primary_signals(c.maneuver) or spread > EXCITED_RATIO * per.get(sig, math.inf):
+                    keep.append(sig)
+            if not has_road_input(c):
+                t = c.dt * np.arange(1, sims.shape[1] + 1)
+                sim_on_grid = np.column_stack([np.interp(c.t_grid_s, t, sims[r][:, a]) for a in c.axes])
+                hit = detect_unmeasured_road(c, sim_on_grid - c.y_meas, per, self.model_)
+                if hit is not None:
+                    found.append(hit)
+                    keep = [s for s in keep if s not in hit["signals"]]
+            if not keep:
+                keep = [s for s in GYRO if s in c.signals][:1]
+            select_signals(c, keep)
+        return found
+
+    # -- calibration --------------------------------------------------------------------------------
+    def _calibrate(self, ev: Evaluator, model: Model) -> FitResult:
+        """MAP calibration of the base model with the measurement chain; identifiability; the
+        measurement-chain terms kept only where the criterion wants them. Sets ``calibration_``."""
+        allidx = tuple(range(len(ev.cases)))
+        meas = [n for n in ("sensor_bias", "time_offset") if n in self.candidates]
+        params = calibration_params(model.vehicle, model.variant) if self.calibrate else []
+        self.calibration_params_ = params
+        self.calibrated_vehicle_, self.calibrated_fields_, self.informed_ = model.vehicle, [], []
+        if not params and not meas:
+            self.calibration_, self.identifiability_ = [], None
+            return fit_structure(ev, Structure([]))
+        cand = calibration_candidate(model, params) if params else None
+        st = Structure(([cand] if cand else []) + meas)
+        fit1 = fit_structure(ev, st, st.neutral(), allidx, max_nfev=12)
+        ident, informed = None, []
+        if params:
+            k = len(params)
+            ident = identifiability(fit1.jac[:, :k], params, fit1.data_information_scale())
+            informed = [p for p, ok in zip(params, ident["informed"]) if ok]
+        self.identifiability_ = ident
+        cand2 = calibration_candidate(model, informed) if informed else None
+        st2 = Structure(([cand2] if cand2 else []) + meas)
+        x0 = st2.neutral()
+        if cand2:
+            first = {p.name: v for p, v in zip(params, fit1.x[:len(params)])}
+            x0[:len(informed)] = [first[p.name] for p in informed]
+        for name in meas:
+            if st.part(fit1.x, name).size:
+                st2.part(x0, name)[:] = st.part(fit1.x, name)
+        cur = fit_structure(ev, st2, x0, allidx, max_nfev=20)
+        # measurement-chain terms only where they pay for themselves
+        for name in meas:
+            if name not in cur.structure.names:
+                continue
+            st_wo = cur.structure.without(name)
+            f_wo = fit_structure(ev, st_wo, st_wo.embed(cur.structure, cur.x), allidx, max_nfev=10)
+            if cur.bic - f_wo.bic > -MIN_DELTA_BIC:
+                cur = f_wo
+        self.informed_ = informed
+        self._set_calibration(cur)
+        return cur
+
+    def _set_calibration(self, fit: FitResult) -> None:
+        """The calibration table and calibrated vehicle from ``fit`` (the calibration stage, and again
+        the final joint fit with the found terms, whose values are the ones reported)."""
+        params, informed = self.calibration_params_, self.informed_
+        vals = {}
+        if informed and CALIBRATION in fit.structure.names:
+            k = fit.structure.names.index(CALIBRATION)
+            a = fit.structure.offsets[k]
+            lo, hi = fit.ci95()
+            vals = {p.name: (fit.x[a + j], lo[a + j], hi[a + j]) for j, p in enumerate(informed)}
+        x_all = np.array([vals.get(p.name, (p.prior,))[0] for p in params])
+        lo_all = np.array([vals.get(p.name, (0, -math.inf))[1] for p in params])
+        hi_all = np.array([vals.get(p.name, (0, 0, math.inf))[2] for p in params])
+        self.calibration_ = calibration_entries(params, x_all, lo_all, hi_all, [p.name in vals for p in params])
+        self.calibrated_vehicle_ = vehicle_at(self.model_.vehicle, informed, [vals[p.name][0] for p in informed])
+        self.calibrated_fields_ = sorted({p.field for p in informed})
+
+    # -- proof --------------------------------------------------------------------------------------
+    def _heldout_check(self, ev: Evaluator, cur: FitResult, new: FitResult) -> dict:
+        """Leave-one-drive-out of the new term(s), linearised at the joint fit ``new`` (its Jacobian, no
+        further simulation): for each drive, the structure with and without the new term is refitted on
+        the other drives (Gauss-Newton step with the calibration's priors) and predicts the held-out
+        drive. The held-out drives' whitened residual must drop by :data:`MIN_HELDOUT_GAIN` of its excess
+        over noise, and the term must pass the criterion on the training drives in at least
+        :data:`MIN_STABLE` of the folds. With a single drive there is nothing to hold out: the in-sample
+        criterion decides."""
+        R = len(ev.cases)
+        if R < 2 or new.jac is None:
+            return {"passed": True, "heldout": "single drive: in-sample criterion only"}
+        J, r, x = new.jac, new.residual, new.x
+        st = new.structure
+        added = [n for n in st.names if n not in cur.structure.names]
+        labels = st.labels()
+        new_cols = [j for j, (t, _) in enumerate(labels) if t in added]
+        old_cols = [j for j in range(len(x)) if j not in new_cols]
+        neutral = st.neutral()
+        pidx, pmu, psd = st.prior()
+        edges = np.cumsum([0] + [ev.n_res[q] for q in new.idx])
+        sq_old = sq_new = 0.0
+        n_held = 0
+        n_sel = 0
+        for h in range(R):
+            held = np.zeros(len(r), bool)
+            held[edges[h]:edges[h + 1]] = True
+            tr = ~held
+            ne_t = max(new.n_eff * tr.sum() / len(r), 1.0)
+            pw = math.sqrt(tr.sum() / ne_t)
+            out = {}
+            for tag, free in (("new", list(range(len(x)))), ("old", old_cols)):
+                d0 = np.zeros(len(x))
+                if tag == "old":
+                    d0[new_cols] = neutral[new_cols] - x[new_cols]
+                base = r + J @ d0
+                A = J[tr][:, free]
+                b = -base[tr]
+                rows = [(free.index(j), m, sd) for j, m, sd in zip(pidx, pmu, psd) if j in free]
+                if rows:
+                    Ap = np.zeros((len(rows), len(free)))
+                    bp = np.zeros(len(rows))
+                    for q, (c, m, sd) in enumerate(rows):
+                        Ap[q, c] = pw / sd
+                        bp[q] = -pw * (x[free[c]] + d0[free[c]] - m) / sd
+                    A, b = np.vstack([A, Ap]), np.concatenate([b, bp])
+                d, *_ = np.linalg.lstsq(A, b, rcond=None)
+                e = base + J[:, free] @ d
+                out[tag] = (float(e[held] @ e[held]), float(e[tr] @ e[tr]))
+            sq_old += out["old"][0]
+            sq_new += out["new"][0]
+            n_held += int(held.sum())
+            k_new = len(new_cols)
+            d_bic = ne_t * math.log(max(out["old"][1], 1e-300) / max(out["new"][1], 1e-300)) - k_new * math.log(ne_t)
+            n_sel += int(d_bic >= MIN_DELTA_BIC)
+        excess = max(sq_old - n_held, 1e-12)
+        gain = (sq_old - sq_new) / excess
+        stable = n_sel / R
+        return {"passed": bool(gain >= MIN_HELDOUT_GAIN and stable >= MIN_STABLE),
+                "heldout_gain_fraction_of_excess": float(gain), "selected_in_fraction_of_refits": float(stable)}
+
+    def _per_drive_rmse(self, ev: Evaluator, f: FitResult) -> dict:
+        """Per drive, the RMSE of its primary gyro signal(s) [deg/s] at ``f``."""
+        res = ev.case_residuals(f.structure, f.x, f.idx)
+        return {ev.cases[r].name: _primary_rmse(ev.cases[r], e) for r, e in res.items()}
+
     def _heldout(self, ev: Evaluator, final: FitResult) -> dict:
-        n_all = sum(ev.n_res)
-        before = np.array([float(np.mean(e ** 2)) for e in self.base_residuals_])
-        sizes = np.array(ev.n_res, float)
-        after = []
+        """Leave-one-drive-out: the final structure (calibration included) refitted without each drive
+        predicts it; against the base model. Per signal and for the primary gyro signals [deg/s]."""
+        R = len(ev.cases)
         folds = []
-        for h in range(len(ev.cases)):
-            train = tuple(r for r in range(len(ev.cases)) if r != h)
+        before_sig: dict[str, list] = {}
+        after_sig: dict[str, list] = {}
+        prim_b = prim_a = prim_n = 0.0
+        for h in range(R):
+            train = tuple(r for r in range(R) if r != h)
             if final.structure.n_params and train:
-                f = fit_structure(ev, final.structure, final.x, train, max_nfev=12)
-                x = f.x
+                x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV).x
             else:
                 x = final.x
-            rm = ev.per_case_rmse(final.structure, x, [h])[0]
-            after.append(rm ** 2)
-            folds.append({"drive": ev.cases[h].name, "rmse_before_deg_s": math.sqrt(before[h]),
-                          "rmse_after_deg_s": rm, "params": x.tolist()})
-        after = np.array(after)
-        return {"before_deg_s": float(math.sqrt(np.sum(before * sizes) / n_all)),
-                "after_deg_s": float(math.sqrt(np.sum(after * sizes) / n_all)), "folds": folds}
+            e_after = ev.case_residuals(final.structure, x, [h])[h]
+            e_before = self.base_residuals_[h]
+            c = ev.cases[h]
+            for j, sig in enumerate(c.signals):
+                before_sig.setdefault(sig, []).append((float(np.sum(e_before[:, j] ** 2)), e_before.shape[0]))
+                after_sig.setdefault(sig, []).append((float(np.sum(e_after[:, j] ** 2)), e_after.shape[0]))
+            pj = [j for j, s in enumerate(c.signals) if s in primary_signals(c.maneuver)]
+            if pj:
+                prim_b += float(np.sum(e_before[:, pj] ** 2))
+                prim_a += float(np.sum(e_after[:, pj] ** 2))
+                prim_n += e_before.shape[0] * len(pj)
+            folds.append({"drive": c.name, "rmse_before_deg_s": _primary_rmse(c, e_before),
+                          "rmse_after_deg_s": _primary_rmse(c, e_after), "params": x.tolist(),
+                          "by_signal": {s: {"before": float(np.sqrt(np.mean(e_before[:, j] ** 2))),
+                                            "after": float(np.sqrt(np.mean(e_after[:, j] ** 2)))}
+                                        for j, s in enumerate(c.signals)}})
+
+        def pool(v):
+            return float(math.sqrt(sum(a for a, _ in v) / max(sum(b for _, b in v), 1)))
+
+        by_signal = {s: {"before": pool(before_sig[s]), "after": pool(after_sig[s])} for s in SIGNALS
+                     if s in before_sig}
+        return {"before_deg_s": math.sqrt(prim_b / prim_n) if prim_n else math.nan,
+                "after_deg_s": math.sqrt(prim_a / prim_n) if prim_n else math.nan,
+                "by_signal": by_signal, "folds": folds}
 
     # -- estimator API ------------------------------------------------------------------------------
     def predict(self, drive: int | str = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -290,11 +484,13 @@ def _warm(st: Structure, cur: FitResult, o) -> np.ndarray:
     return np.clip(x, lo, hi)
 
 
-def _per_case_rms(ev: Evaluator, f: FitResult) -> dict:
-    out, o = {}, 0
-    for r in f.idx:
-        m = ev.n_res[r]
-        e = f.residual[o:o + m]
-        out[ev.cases[r].name] = float(np.sqrt(np.mean(e * e)))
-        o += m
-    return out
+def _primary_rmse(c: DriveCase, e: np.ndarray) -> float:
+    """RMSE [deg/s] of drive ``c``'s primary gyro signal(s) in its residual ``e`` (n_grid, n_sig)."""
+    pj = [j for j, s in enumerate(c.signals) if s in primary_signals(c.maneuver)]
+    return float(np.sqrt(np.mean(e[:, pj] ** 2))) if pj else math.nan
+
+
+def _whitened(ev: Evaluator, st: Structure, x: np.ndarray, r: int) -> float:
+    """Whitened residual sum of squares of drive ``r`` at ``x``."""
+    e = ev.case_residuals(st, x, [r])[r] * ev.weights[r]
+    return float(np.sum(e * e))

@@ -6,9 +6,14 @@
   each single candidate and each pair is scored by its linearised (Gauss-Newton) fit: predicted residual
   sum of squares, information criterion and a linearised leave-one-drive-out error. The best few are
   refitted nonlinearly.
-- Information criterion: BIC on an effective sample count ``n / BLOCK`` (model errors are smooth, so
-  neighbouring samples at 200 Hz are not independent; one independent sample per 50 ms), ``k ln n_eff``
-  penalising parameters.
+- Residuals are whitened: every signal of every drive divided by its own white-noise sigma, so roll,
+  pitch and yaw rate [deg/s] and specific forces [m/s^2] add up in one sum of squares (1 per sample for
+  pure noise).
+- Information criterion: BIC on an effective sample count ``n_eff`` (model errors are smooth, so
+  neighbouring samples are not independent: one independent sample per :data:`T_CORR_S` of each drive),
+  ``k ln n_eff`` penalising parameters.
+- Parameters with a prior (the calibration's) add prior residuals ``sqrt(n / n_eff) (x - mu) / sd``: the
+  maximum a posteriori with the data counted at their effective sample size.
 """
 from __future__ import annotations
 
@@ -22,7 +27,18 @@ from scipy.optimize import least_squares
 
 from .engine import Evaluator, Structure
 
-BLOCK = 10
+T_CORR_S = 0.05  # one independent sample of model error per 50 ms
+
+
+def n_effective(ev: Evaluator, idx: Sequence[int]) -> float:
+    """Effective independent sample count of drives ``idx`` (all their signals)."""
+    n = 0.0
+    for r in idx:
+        c = ev.cases[r]
+        t = c.t_grid_s
+        dt = float(np.median(np.diff(t))) if t.size > 1 else T_CORR_S
+        n += c.y_meas.size * min(1.0, dt / T_CORR_S)
+    return max(n, 1.0)
 
 
 def debias(ev: Evaluator, vec: np.ndarray, idx: Sequence[int]) -> np.ndarray:
@@ -45,7 +61,7 @@ def raw_residuals(ev: Evaluator, st: Structure, X: np.ndarray, idx: Sequence[int
     out = []
     for m, x in enumerate(np.atleast_2d(X)):
         lag = st.lag(x)
-        out.append(np.concatenate([ev.case_residual(r, rates[m, j], lag, False).ravel()
+        out.append(np.concatenate([(ev.case_residual(r, rates[m, j], lag, False) * ev.weights[r]).ravel()
                                    for j, r in enumerate(idx)]))
     return np.array(out)
 
@@ -58,8 +74,9 @@ def n_params_bic(ev: Evaluator, st: Structure, idx: Sequence[int]) -> int:
     return k
 
 
-def bic(rss: float, n: int, k: int) -> float:
-    ne = max(n / BLOCK, k + 2.0)
+def bic(rss: float, n: int, k: int, n_eff: float) -> float:
+    """BIC of a whitened residual sum of squares ``rss`` over ``n`` samples worth ``n_eff``."""
+    ne = max(n_eff, k + 2.0)
     return ne * math.log(max(rss, 1e-300) / n) + k * math.log(ne)
 
 
@@ -89,25 +106,42 @@ class FitResult:
     residual: np.ndarray = field(repr=False)
     jac: np.ndarray | None = field(default=None, repr=False)
     idx: tuple[int, ...] = ()
+    n_eff: float = 0.0
 
-    def ci95(self) -> tuple[np.ndarray, np.ndarray]:
-        """95 % intervals from the Gauss-Newton covariance, inflated for residual autocorrelation
-        (AR(1) factor (1 + rho)/(1 - rho) from the lag-1 autocorrelation of the residual)."""
-        J = self.jac
+    def data_information_scale(self) -> float:
+        """1 / (residual variance x AR(1) inflation): how much one sample's squared Jacobian informs
+        (the inflation (1 + rho)/(1 - rho) from the residual's lag-1 autocorrelation)."""
         k = len(self.x)
-        if J is None or k == 0:
-            return np.zeros(0), np.zeros(0)
         e = self.residual
         rho = float(np.clip(np.dot(e[1:], e[:-1]) / max(np.dot(e, e), 1e-300), 0.0, 0.98))
         infl = (1 + rho) / (1 - rho)
-        s2 = self.rss / max(self.n - k, 1)
-        JTJ = J.T @ J
+        s2 = max(self.rss / max(self.n - k, 1), 1e-300)
+        return 1.0 / (s2 * infl)
+
+    def covariance(self) -> np.ndarray:
+        """Posterior covariance: Gauss-Newton information of the data (scaled by
+        :meth:`data_information_scale`) plus the priors' (the calibration's parameters)."""
+        J = self.jac
+        k = len(self.x)
+        if J is None or k == 0:
+            return np.zeros((k, k))
+        H = (J.T @ J) * self.data_information_scale()
+        pidx, _, psd = self.structure.prior()
+        H[pidx, pidx] += 1.0 / psd ** 2
         try:
-            cov = np.linalg.pinv(JTJ) * s2 * infl
+            cov = np.linalg.pinv(H)
         except np.linalg.LinAlgError:
             cov = np.full((k, k), np.inf)
-        se = np.sqrt(np.clip(np.diag(cov), 0, None))
-        se = np.where(np.diag(JTJ) > 1e-12, se, np.inf)
+        uninformed = np.diag(H) <= 1e-12
+        cov[uninformed, :] = np.inf
+        cov[:, uninformed] = np.inf
+        return cov
+
+    def ci95(self) -> tuple[np.ndarray, np.ndarray]:
+        """95 % intervals from :meth:`covariance`."""
+        if self.jac is None or len(self.x) == 0:
+            return np.zeros(0), np.zeros(0)
+        se = np.sqrt(np.clip(np.diag(self.covariance()), 0, None))
         return self.x - 1.96 * se, self.x + 1.96 * se
 
 
@@ -130,21 +164,36 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
         return cache[key]
 
     n = sum(ev.n_res[r] for r in idx)
+    ne = n_effective(ev, idx)
     k = n_params_bic(ev, st, idx)
     if st.n_params == 0:
         r = raw_residuals(ev, st, np.zeros((1, 0)), idx)[0]
         if st.bias:
             r = debias(ev, r, idx)
         rss = float(r @ r)
-        return FitResult(st, np.zeros(0), rss, n, k, bic(rss, n, k), True, "no free parameters", 1, r,
-                         None, idx)
+        return FitResult(st, np.zeros(0), rss, n, k, bic(rss, n, k, ne), True, "no free parameters", 1, r,
+                         None, idx, ne)
+    pidx, pmu, psd = st.prior()
+    pw = math.sqrt(n / ne)
+    prior_jac = np.zeros((len(pidx), st.n_params))
+    prior_jac[np.arange(len(pidx)), pidx] = pw / psd
+
+    def full(x):
+        r, J = resid(x)
+        if not len(pidx):
+            return r, J
+        return np.concatenate([r, pw * (x[pidx] - pmu) / psd]), np.vstack([J, prior_jac])
+
     x0 = np.clip(x0, lo, hi)
-    sol = least_squares(lambda x: resid(x)[0], x0, jac=lambda x: resid(x)[1], bounds=(lo, hi),
-                        x_scale=st.steps(), method="trf", max_nfev=max_nfev, xtol=1e-4, ftol=1e-6)
+    x_scale = st.steps().copy()
+    x_scale[pidx] *= 10.0  # a prior parameter's step is a tenth of its prior sd
+    sol = least_squares(lambda x: full(x)[0], x0, jac=lambda x: full(x)[1], bounds=(lo, hi),
+                        x_scale=x_scale, method="trf",
+                        max_nfev=max_nfev, xtol=1e-4, ftol=1e-6)
     r, J = resid(sol.x)
     rss = float(r @ r)
-    return FitResult(st, sol.x, rss, n, k, bic(rss, n, k), bool(sol.success), str(sol.message),
-                     int(sol.nfev), r, J, idx)
+    return FitResult(st, sol.x, rss, n, k, bic(rss, n, k, ne), bool(sol.success), str(sol.message),
+                     int(sol.nfev), r, J, idx, ne)
 
 
 @dataclass
@@ -167,6 +216,9 @@ def screen(ev: Evaluator, current: FitResult, remaining: Sequence[str], *, pairs
     lo, hi = st.bounds()
     labels = st.labels()
     n = len(r0)
+    ne = n_effective(ev, idx)
+    pidx, pmu, psd = st.prior()
+    pw = math.sqrt(n / ne)
     options = list(itertools.combinations(remaining, 1))
     if pairs:
         options += list(itertools.combinations(remaining, 2))
@@ -181,14 +233,24 @@ def screen(ev: Evaluator, current: FitResult, remaining: Sequence[str], *, pairs
         if sub.bias:
             r, Js = debias(ev, r0, idx), debias(ev, Js, idx)
         if Js.shape[1]:
-            d, *_ = np.linalg.lstsq(Js, -r, rcond=None)
+            # prior rows of the calibration's parameters keep the linearised step within reason
+            pc = [(cols.index(j), m, sd) for j, m, sd in zip(pidx, pmu, psd) if j in cols]
+            A, b = Js, -r
+            if pc:
+                Ap = np.zeros((len(pc), len(cols)))
+                bp = np.zeros(len(pc))
+                for q, (c, m, sd) in enumerate(pc):
+                    Ap[q, c] = pw / sd
+                    bp[q] = -pw * (x[cols[c]] - m) / sd
+                A, b = np.vstack([Js, Ap]), np.concatenate([-r, bp])
+            d, *_ = np.linalg.lstsq(A, b, rcond=None)
             d = np.clip(x[cols] + d, lo[cols], hi[cols]) - x[cols]
             e = r + Js @ d
         else:
             d, e = np.zeros(0), r
         rss = float(e @ e)
         k = n_params_bic(ev, sub, idx)
-        opt = Option(add, rss, bic(rss, n, k), d)
+        opt = Option(add, rss, bic(rss, n, k, ne), d)
         new = [j for j, (t, _) in enumerate(labels) if t in add]
         if new:  # RMS change of the rates for one typical step of each new parameter (root-sum-square)
             steps = st.steps()[new]

@@ -1,22 +1,27 @@
-"""Locate the mismatch: the noise floor from the data itself, and the windows where the residual exceeds it.
+"""Locate the mismatch: the noise floor of every signal from the data itself, and the windows where
+the residual exceeds it.
 
-Noise floor: the white-noise RMS of the gyro as the comparison sees it (after resampling onto the
-validator's grid). The model error is smooth (body modes of 1-15 Hz seen at 200 Hz), sensor noise is
-white, so the second difference of the residual at the measured sample times (base simulation minus
-measurement, before any resampling), ``e[k+1] - 2 e[k] + e[k-1]``, is noise-dominated and has variance
-``6 sigma^2`` for white noise; ``sigma`` is estimated robustly from its median absolute deviation. Linear
-resampling onto the comparison grid averages neighbouring samples, which lowers the noise variance by
-``mean(w^2 + (1 - w)^2)`` (``w``: each grid point's position between its two samples); the floor is
-``sigma`` times the root of that factor, i.e. the noise RMS the RMSE figures actually contain. (Taking
-second differences of the already resampled residual would underestimate it: interpolation correlates
-neighbouring grid samples.) The standard deviation of the resampled measurement over each drive's quiet
-lead-in (before the first excitation) is reported next to it as a cross-check. No fitted model enters.
+Noise floor: the white-noise RMS per sample of each IMU signal. The model error is smooth (body modes of
+1-15 Hz), sensor noise is white, so the third difference of the residual at the measured sample times
+(base simulation minus measurement over the whole recording), ``e[k+2] - 3 e[k+1] + 3 e[k] - e[k-1]``,
+is noise-dominated with variance ``20 sigma^2`` for white noise. Where a drive has a quiet lead-in (the
+base simulation still at rest, at least :data:`MIN_QUIET` samples), the spread of the measurement there is
+a second estimate; both can only overstate the noise (road or model content adds to them), so the smaller
+is taken: on a rough road sampled at 100 Hz the wheel-hop response reaches the differences. ``sigma`` is estimated robustly and
+efficiently: a first estimate from the median absolute deviation, then the standard deviation of the
+differences within +-3 of those sigmas, corrected for the truncation (a Gaussian truncated at 3 sigma
+keeps 97.3 % of its variance). The comparison is made at the measured sample times (no resampling), so
+this is the noise the RMSE figures contain. The standard deviation of the measurement over each drive's
+quiet lead-in (before the first excitation) is reported next to it as a cross-check. No fitted model
+enters.
 
-Windows: sliding windows of ``WINDOW_S`` over each drive's comparison grid; a window is significant when
-its residual mean square exceeds what noise alone gives with probability 1e-3
-(``sigma^2 * chi2.ppf(0.999, n) / n``). Overlapping significant windows are merged, and each gets the
-operating conditions there from the base simulation (deflection amplitude and velocity per axle,
-horizontal wheel forces, oil levels) and the residual's dominant frequency.
+Windows: sliding windows of ``WINDOW_S`` over each drive's comparison samples; a window is significant
+when its residual mean square exceeds what noise alone gives with probability 1e-3
+(``sigma^2 * chi2.ppf(0.999, n) / n``, with the signal's own sigma). Overlapping significant windows are
+merged, and each gets the operating conditions there from the base simulation (deflection amplitude and
+velocity per axle, horizontal wheel forces, oil levels) and the residual's dominant frequency; it names an
+axle only where the road excited one (a drive with road input, deflection velocity above
+:data:`AXLE_EXCITED_M_S`).
 """
 from __future__ import annotations
 
@@ -28,49 +33,76 @@ from scipy import stats
 
 from ...model import simulate
 from ...model.layout import WHEELS
-from .data import DriveCase
+from .data import SIGNAL_UNIT, SIGNALS, DriveCase, has_road_input, primary_signals
 
 WINDOW_S = 0.5
 HOP_S = 0.25
 P_FALSE = 1e-3
+DIFF_ORDER = 3
+MIN_QUIET = 30            # samples of quiet lead-in that make its spread a noise estimate of its own
+AXLE_EXCITED_M_S = 0.01   # RMS deflection velocity [m/s] above which an axle counts as excited there
+_TRUNC = 3.0
+_TRUNC_VAR = 1.0 - 2 * _TRUNC * stats.norm.pdf(_TRUNC) / (2 * stats.norm.cdf(_TRUNC) - 1)
 
 
-def noise_sigma(e: np.ndarray) -> float:
-    """Robust white-noise RMS of a residual column from its second differences (see module doc)."""
+def noise_sigma(e: np.ndarray, order: int = DIFF_ORDER) -> float:
+    """Robust white-noise RMS of a residual column from its ``order``-th differences (module doc)."""
     e = np.asarray(e, float)
-    if e.size < 5:
+    if e.size < order + 8:
         return math.nan
-    d2 = e[2:] - 2.0 * e[1:-1] + e[:-2]
-    mad = np.median(np.abs(d2 - np.median(d2)))
-    return float(1.4826 * mad / math.sqrt(6.0))
+    d = np.diff(e, order)
+    scale = math.sqrt(math.comb(2 * order, order))
+    med = np.median(d)
+    s0 = 1.4826 * np.median(np.abs(d - med))
+    if not s0 > 0:
+        return float(s0 / scale)
+    keep = np.abs(d - med) <= _TRUNC * s0
+    s1 = float(np.std(d[keep], ddof=1)) / math.sqrt(_TRUNC_VAR)
+    return s1 / scale
 
 
-def noise_floor(cases: Sequence[DriveCase], rates: Sequence[np.ndarray]) -> dict:
-    """Pooled noise floor [deg/s] over drives and compared signals, with per-drive values and the
-    quiet-lead-in cross-check; ``rates`` are the base simulation's gyro rates [deg/s] per drive
-    (n_steps, 3) at the step times."""
-    per, quiet, weights, raw = {}, {}, [], {}
-    var = []
-    for c, y in zip(cases, rates):
+def noise_floor(cases: Sequence[DriveCase], sims: Sequence[np.ndarray]) -> dict:
+    """Noise floors per drive and signal (native units: deg/s, m/s^2), pooled per signal over the drives,
+    and the legacy gyro figure (pooled over each drive's primary gyro signal); ``sims`` are the base
+    simulation's six IMU signals per drive (n_steps, 6) at the step times."""
+    per: dict[str, dict[str, float]] = {}
+    quiet: dict[str, float] = {}
+    pooled: dict[str, list[tuple[float, int]]] = {s: [] for s in SIGNALS}
+    for c, y in zip(cases, sims):
         t = c.dt * np.arange(1, y.shape[0] + 1)
-        e = np.column_stack([np.interp(c.t_raw_s, t, y[:, a]) for a in c.axes]) - c.y_raw
-        s = [noise_sigma(e[:, j]) for j in range(e.shape[1])]
-        raw[c.name] = float(np.sqrt(np.mean(np.square(s))))
-        per[c.name] = raw[c.name] * math.sqrt(c.resample_factor)
-        var.append(per[c.name] ** 2)
-        weights.append(c.y_meas.shape[0])
+        per[c.name] = {}
+        q = c.quiet_raw if c.quiet_raw is not None else np.zeros(c.t_raw_s.size, bool)
+        for j, sig in enumerate(SIGNALS):
+            e = np.interp(c.t_raw_s, t, y[:, j]) - c.y_raw[:, j]
+            sd = noise_sigma(e)
+            if q.sum() >= MIN_QUIET:  # both are upper bounds of the noise: the smaller is the better one
+                sd = min(sd, float(np.std(c.y_raw[q, j], ddof=1)))
+            per[c.name][sig] = sd
+            if math.isfinite(sd):
+                pooled[sig].append((sd, e.size))
         if c.quiet is not None and c.quiet.sum() >= 10:
-            quiet[c.name] = float(np.sqrt(np.mean(np.var(c.y_meas[c.quiet], axis=0, ddof=1))))
-    w = np.array(weights, float)
-    floor = float(np.sqrt(np.sum(w * np.array(var)) / np.sum(w)))
+            prim = [j for j, s in enumerate(c.signals) if s in primary_signals(c.maneuver)]
+            if prim:
+                quiet[c.name] = float(np.sqrt(np.mean(np.var(c.y_meas[c.quiet][:, prim], axis=0, ddof=1))))
+    floors = {s: float(np.sqrt(sum(v * v * n for v, n in pooled[s]) / sum(n for _, n in pooled[s])))
+              for s in SIGNALS if pooled[s]}
+    # legacy deg/s figure: each drive's primary gyro signal(s), weighted by their comparison samples
+    num = den = 0.0
+    for c in cases:
+        for s in primary_signals(c.maneuver):
+            v = per[c.name].get(s, math.nan)
+            if math.isfinite(v):
+                num += v * v * c.y_meas.shape[0]
+                den += c.y_meas.shape[0]
+    legacy = math.sqrt(num / den) if den else floors.get("pitch_rate", math.nan)
     q = list(quiet.values())
-    return {"noise_floor_deg_s": floor, "per_drive_deg_s": per, "raw_sample_noise_deg_s": raw,
-            "resample_variance_factor": {c.name: c.resample_factor for c in cases},
+    return {"noise_floor_deg_s": legacy, "noise_floors": floors, "per_drive": per,
+            "units": dict(zip(SIGNALS, SIGNAL_UNIT)),
             "quiet_lead_in_std_deg_s": quiet,
             "quiet_lead_in_pooled_deg_s": float(np.sqrt(np.mean(np.square(q)))) if q else None,
-            "method": "MAD of second differences of the raw-sample residual / sqrt(6), times the root of the "
-                      "linear-resampling variance factor, pooled over drives (white-noise RMS on the "
-                      "comparison grid); cross-check: std over each drive's quiet lead-in"}
+            "method": f"robust std of {DIFF_ORDER}rd differences of the residual (base simulation - "
+                      f"measurement, every sample of the recording, as sampled) / sqrt(20), pooled over "
+                      f"drives per signal; cross-check: std over each drive's quiet lead-in"}
 
 
 def _threshold(sigma: float, n: int) -> float:
@@ -114,17 +146,19 @@ def _dominant_frequency(e: np.ndarray, rate: float) -> float:
     return float(f[int(np.argmax(spec))])
 
 
-def locate(cases: Sequence[DriveCase], residuals: Sequence[np.ndarray], sigma: float,
+def locate(cases: Sequence[DriveCase], residuals: Sequence[np.ndarray], sigmas: Sequence[np.ndarray],
            outputs: Sequence[dict] | None = None) -> list[dict]:
-    """Significant windows (merged), each with drive, signal, time span, RMS, conditions."""
+    """Significant windows (merged), each with drive, signal, time span, RMS (native units), conditions;
+    ``sigmas`` per drive: the noise sigma of each of its signals."""
     found = []
     for ci, (c, e) in enumerate(zip(cases, residuals)):
         t = c.t_grid_s
         rate = 1.0 / float(np.median(np.diff(t)))
         nwin = max(int(round(WINDOW_S * rate)), 10)
         hop = max(int(round(HOP_S * rate)), 1)
-        thr = _threshold(sigma, nwin)
         for j, sig in enumerate(c.signals):
+            sigma = float(sigmas[ci][j])
+            thr = _threshold(sigma, nwin)
             flags = []
             for s in range(0, max(e.shape[0] - nwin, 0) + 1, hop):
                 seg = e[s:s + nwin, j]
@@ -139,16 +173,19 @@ def locate(cases: Sequence[DriveCase], residuals: Sequence[np.ndarray], sigma: f
             for a, b in merged:
                 seg = e[a:b, j]
                 t0, t1 = float(t[a]), float(t[min(b, len(t)) - 1])
-                w = {"drive": c.name, "signal": sig, "start_s": t0, "end_s": t1,
-                     "rms_deg_s": float(np.sqrt(np.mean(seg * seg))),
-                     "mean_deg_s": float(np.mean(seg)), "peak_deg_s": float(np.max(np.abs(seg))),
-                     "threshold_deg_s": thr, "ratio_to_noise": float(np.sqrt(np.mean(seg * seg)) / sigma),
+                w = {"drive": c.name, "signal": sig, "unit": SIGNAL_UNIT[SIGNALS.index(sig)],
+                     "start_s": t0, "end_s": t1, "rms": float(np.sqrt(np.mean(seg * seg))),
+                     "mean": float(np.mean(seg)), "peak": float(np.max(np.abs(seg))),
+                     "threshold": thr, "ratio_to_noise": float(np.sqrt(np.mean(seg * seg)) / sigma),
                      "dominant_frequency_hz": _dominant_frequency(seg, rate),
                      "maneuver": c.maneuver, "state": c.state}
                 if outputs is not None:
                     cond = _conditions(c, outputs[ci], t0, t1)
                     w["conditions"] = cond
-                    w["axle"] = max(cond, key=lambda a: cond[a]["deflection_velocity_rms_m_s"]
-                                    * (2.0 - sum(cond[a]["oil_level"]) / 2.0))
+                    excited = [a for a in cond if cond[a]["deflection_velocity_rms_m_s"] > AXLE_EXCITED_M_S
+                               and has_road_input(c)]
+                    if excited:  # named only where the road excited an axle (never on a flat road)
+                        w["axle"] = max(excited, key=lambda a: cond[a]["deflection_velocity_rms_m_s"]
+                                        * (2.0 - sum(cond[a]["oil_level"]) / 2.0))
                 found.append(w)
     return found

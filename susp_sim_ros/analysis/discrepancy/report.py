@@ -7,9 +7,11 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from .calibration import outside_statement
 from .candidates import BY_NAME, MEASUREMENT, PHYSICS
+from .data import SIGNAL_UNIT, SIGNALS
 
-VERDICTS = ("missing_physics", "no_significant_discrepancy", "unexplained_residual")
+VERDICTS = ("missing_physics", "no_significant_discrepancy", "unexplained_residual", "unmeasured_input")
 
 
 def _num(x):
@@ -40,6 +42,8 @@ def term_entries(f) -> list[dict]:
     out = []
     acc = {a["name"]: a for a in f.accepted_}
     for k, name in enumerate(st.names):
+        if name not in BY_NAME:  # the calibration: reported in its own table, never as a term
+            continue
         cand = BY_NAME[name]
         a, b = st.offsets[k], st.offsets[k + 1]
         x = res.x[a:b]
@@ -57,8 +61,8 @@ def term_entries(f) -> list[dict]:
                 for j, sig in enumerate(c.signals):
                     bias[f"{c.name}:{sig}"] = _num(m[j])
                     ci[f"{c.name}:{sig}"] = [_num(m[j] - 1.96 * se[j]), _num(m[j] + 1.96 * se[j])]
-            params = {"bias_deg_s": bias}
-            ev["units"] = {"bias_deg_s": "deg/s"}
+            params = {"bias": bias}
+            ev["units"] = {"bias": "deg/s for rates, m/s^2 for specific forces"}
         ev["statement"] = statement(name, params, ev, f)
         out.append({"name": name, "where": _where(name, x, lo[a:b], hi[a:b]) if cand.n_params else "all",
                     "params": params, "ci95": ci, "evidence": ev})
@@ -68,8 +72,8 @@ def term_entries(f) -> list[dict]:
 def statement(name: str, params: dict, ev: dict, f) -> str:
     """Plain words: what was left out, where, how sure."""
     cand = BY_NAME[name]
-    per_b = ev.get("per_drive_rmse_before_deg_s", {})
-    per_a = ev.get("per_drive_rmse_after_deg_s", {})
+    per_b = ev.get("per_drive_rmse_before", {})
+    per_a = ev.get("per_drive_rmse_after", {})
     gain = {d: per_b[d] - per_a.get(d, per_b[d]) for d in per_b}
     best = max(gain, key=gain.get) if gain else None
     s = f"{cand.meaning}"
@@ -81,31 +85,55 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
     s += f"; {cand.n_params} parameter(s)"
     if "delta_bic" in ev:
         s += f"; BIC lower by {ev['delta_bic']:.0f}"
+    if "heldout_gain_fraction_of_excess" in ev:
+        s += (f"; on drives held out from its fit it removes {100 * ev['heldout_gain_fraction_of_excess']:.0f} % "
+              f"of the residual above noise and is selected in {100 * ev['selected_in_fraction_of_refits']:.0f} % "
+              f"of the leave-one-drive-out refits")
+    s += "; no recalibration of the base model within its priors explains it (fitted jointly with them)"
     return s
 
 
 def verdict(f) -> tuple[str, str]:
-    sigma = f.noise_floor_
-    ho = f.heldout_ or {}
-    before = ho.get("before_deg_s", math.sqrt(f.base_fit_.rss / f.base_fit_.n))
-    after = ho.get("after_deg_s", math.sqrt(f.result_.rss / f.result_.n))
-    phys = [n for n in f.result_.structure.names if BY_NAME[n].kind != MEASUREMENT]
+    """The verdict and its reason in plain words. All figures in whitened units (x noise) pooled over
+    every compared signal, so a yaw-rate or acceleration residual counts like a pitch-rate one."""
+    before, after = _pooled_noise_ratio(f)
+    phys = [n for n in f.result_.structure.names if n in BY_NAME and BY_NAME[n].kind == PHYSICS]
     significant = bool(f.windows_)
-    excess_before = max(before ** 2 - sigma ** 2, 0.0)
-    excess_after = max(after ** 2 - sigma ** 2, 0.0)
+    excess_before = max(before ** 2 - 1.0, 0.0)
+    excess_after = max(after ** 2 - 1.0, 0.0)
     explained = 1.0 - excess_after / excess_before if excess_before > 0 else 1.0
-    if not significant and not phys:
-        return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
-    if after > UNEXPLAINED_RATIO * sigma and explained < 0.5:
-        return "unexplained_residual", (f"a residual of {after:.3f} deg/s held-out remains against a noise floor "
-                                        f"of {sigma:.3f} deg/s; the candidate library explains "
-                                        f"{100 * max(explained, 0):.0f} % of it")
+    unmeasured = getattr(f, "unmeasured_", [])
+    if unmeasured and not phys:
+        return "unmeasured_input", "; ".join(u["statement"] for u in unmeasured)
+    if not phys and after <= UNEXPLAINED_RATIO:
+        if not significant:
+            return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
+        return "no_significant_discrepancy", (f"the calibrated base model (and measurement chain) leaves "
+                                              f"{after:.2f} x the noise held-out; nothing is missing")
+    if after > UNEXPLAINED_RATIO and explained < 0.5:
+        return "unexplained_residual", (f"a residual of {after:.2f} x the noise floor remains held-out after "
+                                        f"calibration; the candidate library explains "
+                                        f"{100 * max(explained, 0):.0f} % of the base model's excess")
     if not phys:
-        if after <= UNEXPLAINED_RATIO * sigma:
-            return "no_significant_discrepancy", ("the residual is explained by the measurement chain "
-                                                  "(sensor bias, time offset) alone")
-        return "unexplained_residual", "no physics candidate explains the residual"
+        return "no_significant_discrepancy", "calibration of the known physics explains the residual"
     return "missing_physics", f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out residual above noise"
+
+
+def _pooled_noise_ratio(f) -> tuple[float, float]:
+    """Held-out RMS of the whitened residual (x noise) of the base model and of the final model (the
+    in-sample fit when held-out was switched off)."""
+    ho = f.heldout_
+    if ho and ho.get("by_signal"):
+        b = a = n = 0.0
+        for fo, c in zip(ho["folds"], f.cases_):
+            sig = f.evaluator_.weights[f.cases_.index(c)][0]
+            for j, s in enumerate(c.signals):
+                m = c.y_meas.shape[0]
+                b += (fo["by_signal"][s]["before"] * sig[j]) ** 2 * m
+                a += (fo["by_signal"][s]["after"] * sig[j]) ** 2 * m
+                n += m
+        return math.sqrt(b / n), math.sqrt(a / n)
+    return math.sqrt(f.base_fit_.rss / f.base_fit_.n), math.sqrt(f.result_.rss / f.result_.n)
 
 
 UNEXPLAINED_RATIO = 1.5
@@ -113,21 +141,40 @@ UNEXPLAINED_RATIO = 1.5
 
 def interface_json(f) -> dict:
     v, _ = verdict(f)
-    terms = term_entries(f) if v != "unexplained_residual" else [
+    terms = term_entries(f) if v not in ("unexplained_residual", "unmeasured_input") else [
         t for t in term_entries(f) if BY_NAME[t["name"]].kind == MEASUREMENT]
     ni = [{"name": s["name"], "reveal_with": s["reveal_with"]} for s in f.skipped_]
-    # tested terms whose parameters the drives do not determine
-    lo, hi = f.result_.ci95()
     ho = f.heldout_ or {}
-    return {
+    rep = {
         "verdict": v,
         "terms": terms,
         "windows": [_clean(w) for w in f.windows_],
         "not_identifiable": ni,
-        "heldout_rmse_before_deg_s": _num(ho.get("before_deg_s", math.sqrt(f.base_fit_.rss / f.base_fit_.n))),
-        "heldout_rmse_after_deg_s": _num(ho.get("after_deg_s", math.sqrt(f.result_.rss / f.result_.n))),
+        "heldout_rmse_before_deg_s": _num(ho.get("before_deg_s", math.nan)),
+        "heldout_rmse_after_deg_s": _num(ho.get("after_deg_s", math.nan)),
         "noise_floor_deg_s": _num(f.noise_floor_),
+        "calibration": _clean(f.calibration_),
+        "noise_floors": {s: _num(x) for s, x in f.noise_["noise_floors"].items()},
+        "heldout_rmse_by_signal": _clean(ho.get("by_signal", {})),
     }
+    if not f.heldout_:  # in-sample figures then
+        rep["heldout_rmse_before_deg_s"] = _num(_in_sample_primary(f, f.base_fit_))
+        rep["heldout_rmse_after_deg_s"] = _num(_in_sample_primary(f, f.result_))
+    if v == "unmeasured_input":
+        u = f.unmeasured_
+        classes = [x["iso8608_class"] for x in u if x.get("iso8608_class")]
+        rep["unmeasured_input"] = {"kind": "road", "signals": sorted({s for x in u for s in x["signals"]}),
+                                   "iso8608_class": max(classes) if classes else None,
+                                   "drives": [x["drive"] for x in u]}
+    return rep
+
+
+def _in_sample_primary(f, fit) -> float:
+    per = f._per_drive_rmse(f.evaluator_, fit)
+    n = {c.name: c.y_meas.shape[0] for c in f.cases_}
+    num = sum(per[k] ** 2 * n[k] for k in per if math.isfinite(per[k]))
+    den = sum(n[k] for k in per if math.isfinite(per[k]))
+    return math.sqrt(num / den) if den else math.nan
 
 
 def _clean(x):
@@ -187,9 +234,16 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
         p = st.part(x, "damper_gas_preload")
         var["terms"].append({"name": "damper_gas_preload", "module": TERM_MODULES["damper_gas_preload"],
                              "params": {"f0": float(p[0]), "k": float(p[1])}})
-    vp = f.model_.vehicle
+    vp = getattr(f, "calibrated_vehicle_", f.model_.vehicle)
     src = Path(vp.source_file) if vp.source_file else None
     veh_changes = {}
+    from ...model.params import PARAMETER_TABLE
+    for fld, sec, key, shape, _ in PARAMETER_TABLE:  # the calibration's informed values
+        if fld in getattr(f, "calibrated_fields_", ()):
+            val = getattr(vp, fld)
+            veh_changes[(sec, key)] = (_axle_map(*val) if shape == "axle" else
+                                       {"front": [float(v) for v in val[0]], "rear": [float(v) for v in val[1]]}
+                                       if shape == "table" else float(val))
     if "damper_friction_velocity" in st.names:
         p = st.part(x, "damper_friction_velocity")
         veh_changes[("friction", "velocity_scaling_plateau")] = float(p[0])
@@ -343,6 +397,7 @@ def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
     rep = f.report()
     detail = {"result": rep, "path": f.path_, "noise": f.noise_, "heldout": f.heldout_,
               "ranking": ranking_table(f), "tested": f.testable_, "in_base_model": f.in_base_,
+              "identifiability": getattr(f, "identifiability_", None), "unmeasured_input": f.unmeasured_,
               "elapsed_s": getattr(f, "elapsed_s_", None),
               "vehicle_seconds_simulated": f.evaluator_.vehicle_seconds}
     p = out / f"{name}.json"
@@ -356,44 +411,50 @@ def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
 
 def ranking_table(f) -> list[dict]:
     n = f.base_fit_.n
-    return [{"name": o.add[0], "rmse_linearised_deg_s": math.sqrt(o.rss_lin / n), "bic_linearised": o.bic_lin,
-             "heldout_rmse_linearised_deg_s": o.heldout_lin,
+    return [{"name": o.add[0], "rms_linearised_x_noise": math.sqrt(o.rss_lin / n), "bic_linearised": o.bic_lin,
+             "heldout_rms_linearised_x_noise": o.heldout_lin,
              "accepted": any(a["name"] == o.add[0] for a in f.accepted_)} for o in f.ranking_]
 
 
 def plot_overlays(f, out: Path, name: str) -> list[str]:
+    """One PNG per drive: one row per compared signal, measured against the base and the final
+    (calibrated, extended) model on the left, their residuals with the signal's noise band on the right."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     ev = f.evaluator_
     st, x = f.result_.structure, f.result_.x
-    rates = ev.simulate(st, x[None])[0]
+    after = ev.case_residuals(st, x)
     paths = []
     for r, c in enumerate(f.cases_):
-        e_after = ev.case_residual(r, rates[r], st.lag(x), st.bias)
-        e_before = f.base_residuals_[r]
+        e_after, e_before = after[r], f.base_residuals_[r]
         t = c.t_grid_s
-        fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+        n = len(c.signals)
+        fig, ax = plt.subplots(n, 2, figsize=(12, 2.3 * n + 0.8), sharex=True, squeeze=False)
         for j, sig in enumerate(c.signals):
-            ax[0].plot(t, c.y_meas[:, j], "k", lw=0.8, label=f"measured {sig}")
-            ax[0].plot(t, c.y_meas[:, j] + e_before[:, j], "tab:red", lw=1, label="base model")
-            ax[0].plot(t, c.y_meas[:, j] + e_after[:, j], "tab:blue", lw=1, label="extended model")
-            ax[1].plot(t, e_before[:, j], "tab:red", lw=0.8, label="residual, base")
-            ax[1].plot(t, e_after[:, j], "tab:blue", lw=0.8, label="residual, extended")
-        s = f.noise_floor_
-        ax[1].axhspan(-s, s, color="0.85", label="noise floor (+-1 sigma)")
-        for w in f.windows_:
-            if w["drive"] == c.name:
-                ax[1].axvspan(w["start_s"], w["end_s"], color="tab:orange", alpha=0.15)
-        ax[0].set_ylabel("rate [deg/s]")
-        ax[1].set_ylabel("sim - meas [deg/s]")
-        ax[1].set_xlabel("time since first input [s]")
-        ax[0].set_title(f"{c.name}: {', '.join(c.signals)} ({c.window.name} window)")
-        ax[0].legend(fontsize=7)
-        ax[1].legend(fontsize=7)
+            unit = SIGNAL_UNIT[SIGNALS.index(sig)]
+            a0, a1 = ax[j]
+            a0.plot(t, c.y_meas[:, j], color="0.2", lw=0.7, label="measured")
+            a0.plot(t, c.y_meas[:, j] + e_before[:, j], color="tab:red", lw=1, label="base model")
+            a0.plot(t, c.y_meas[:, j] + e_after[:, j], color="tab:blue", lw=1, label="calibrated + found terms")
+            a1.plot(t, e_before[:, j], color="tab:red", lw=0.7, label="base - measured")
+            a1.plot(t, e_after[:, j], color="tab:blue", lw=0.7, label="final - measured")
+            sd = 1.0 / ev.weights[r][0, j]
+            a1.axhspan(-sd, sd, color="0.85", label="noise (+-1 sigma)")
+            for w in f.windows_:
+                if w["drive"] == c.name and w["signal"] == sig:
+                    a1.axvspan(w["start_s"], w["end_s"], color="tab:orange", alpha=0.15)
+            a0.set_ylabel(f"{sig} [{unit}]")
+            a1.set_ylabel(f"residual [{unit}]")
+            if j == 0:
+                a0.legend(fontsize=7, loc="upper right")
+                a1.legend(fontsize=7, loc="upper right")
+        ax[-1][0].set_xlabel("time since first input [s]")
+        ax[-1][1].set_xlabel("time since first input [s]")
+        fig.suptitle(f"{c.name} ({c.window.name} window)")
         fig.tight_layout()
         p = out / f"{name}_{c.name}.png"
-        fig.savefig(p, dpi=90)
+        fig.savefig(p, dpi=80)
         plt.close(fig)
         paths.append(str(p))
     return paths
@@ -405,10 +466,34 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
          f"Base model: vehicle `{f.model_.vehicle.name}`, variant `{getattr(f.base_variant_, 'name', f.variant)}`; "
          f"{len(f.cases_)} drives. Rates in deg/s.", "",
          f"**Verdict: {v}** - {why}.", "",
-         f"Noise floor (white gyro noise as seen on the comparison grid): {f.noise_floor_:.4f} deg/s "
-         f"(raw-sample noise {np.mean(list(f.noise_['raw_sample_noise_deg_s'].values())):.4f} deg/s; "
-         f"quiet lead-in cross-check {f.noise_['quiet_lead_in_pooled_deg_s'] or float('nan'):.4f} deg/s).", "",
-         "## Findings", ""]
+         f"Noise floor of the primary gyro signals (white noise per sample): {f.noise_floor_:.4f} deg/s "
+         f"(quiet lead-in cross-check {f.noise_['quiet_lead_in_pooled_deg_s'] or float('nan'):.4f} deg/s). "
+         "Per signal: " + ", ".join(f"{k} {v:.4g} {f.noise_['units'][k]}" for k, v in f.noise_["noise_floors"].items())
+         + ".", ""]
+    L += ["## Calibration of the base model", "",
+          "Re-estimated within the documented priors (maximum a posteriori over all drives); not missing "
+          "physics. Not informed = the drives do not determine it: it stays at its prior.", "",
+          "| parameter | where | unit | prior | prior range | calibrated | 95 % interval | informed |",
+          "|---|---|---|---|---|---|---|---|"]
+    for e in rep["calibration"]:
+        flag = "yes" if e["informed"] else "no"
+        if e["outside_prior"]:
+            flag += " **(outside its range)**"
+        L.append(f"| {e['param']} | {e['where']} | {e['unit']} | {_fmt(e['prior'])} | {_fmt(e['prior_range'][0])}-"
+                 f"{_fmt(e['prior_range'][1])} | {_fmt(e['value'])} | [{_fmt(e['ci95'][0])}, {_fmt(e['ci95'][1])}] "
+                 f"| {flag} |")
+    if not rep["calibration"]:
+        L.append("| (none) | | | | | | | |")
+    for e in rep["calibration"]:
+        if e["outside_prior"]:
+            L.append(f"\n- **Finding:** {outside_statement(e)}")
+    ident = getattr(f, "identifiability_", None)
+    if ident and ident.get("combinations"):
+        L += ["", "Informed only as combinations (weights of one informed direction):"]
+        L += [f"- " + ", ".join(f"{k} {w:+.2f}" for k, w in c["weights"].items()) for c in ident["combinations"]]
+    for u in getattr(f, "unmeasured_", []):
+        L += ["", f"**Unmeasured input:** {u['statement']}."]
+    L += ["", "## Findings (missing physics)", ""]
     for t in rep["terms"]:
         L.append(f"- **{t['name']}** ({t['where']}): {t['evidence'].get('statement', '')}.")
         L.append(f"  - parameters: " + ", ".join(
@@ -420,26 +505,36 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
     L += [f"- {s['name']}: {s['why']}; reveal with {s['reveal_with']}" for s in f.skipped_] or ["- none"]
     if f.in_base_:
         L += ["", f"Already in the base model (not tested): {', '.join(f.in_base_)}."]
-    L += ["", "## Held-out (leave-one-drive-out) RMSE", "", "| drive | before | after |", "|---|---|---|"]
+    L += ["", "## Held-out (leave-one-drive-out) RMSE per signal", "",
+          "Before: the base model as given; after: calibration and found terms refitted without the drive.", "",
+          "| signal | unit | noise floor | before | after |", "|---|---|---|---|---|"]
+    for sig, v in rep["heldout_rmse_by_signal"].items():
+        L.append(f"| {sig} | {f.noise_['units'][sig]} | {_fmt(rep['noise_floors'].get(sig))} | {_fmt(v['before'])} | "
+                 f"{_fmt(v['after'])} |")
+    L += ["", "Per drive (primary gyro signal, deg/s):", "", "| drive | before | after |", "|---|---|---|"]
     for fo in (f.heldout_ or {}).get("folds", []):
         L.append(f"| {fo['drive']} | {fo['rmse_before_deg_s']:.4f} | {fo['rmse_after_deg_s']:.4f} |")
     L.append(f"| **pooled** | **{rep['heldout_rmse_before_deg_s']:.4f}** | **{rep['heldout_rmse_after_deg_s']:.4f}** |")
-    L += ["", "## Forward selection", "", "| step | added | RMSE in-sample | delta BIC | explained of excess | accepted |",
-          "|---|---|---|---|---|---|"]
+    L += ["", "## Forward selection on the calibrated model", "",
+          "| step | added | RMS in-sample [x noise] | delta BIC | explained of excess | held-out gain | "
+          "selected in refits | accepted |", "|---|---|---|---|---|---|---|---|"]
     for p in f.path_[1:]:
-        L.append(f"| {p['step']} | {', '.join(p['added'])} | {p['rmse_deg_s']:.4f} | {p['delta_bic']:.1f} | "
-                 f"{100 * p['explained_fraction_of_excess']:.0f} % | {'yes' if p['accepted'] else 'no'} |")
+        L.append(f"| {p['step']} | {', '.join(p['added'])} | {p['rms_x_noise']:.3f} | {p['delta_bic']:.1f} | "
+                 f"{100 * p['explained_fraction_of_excess']:.0f} % | "
+                 f"{_pct(p.get('heldout_gain_fraction_of_excess'))} | {_pct(p.get('selected_in_fraction_of_refits'))} | "
+                 f"{'yes' if p['accepted'] else 'no'} |")
     L += ["", "## Ranking of single candidates at the base model (linearised)", "",
-          "| candidate | RMSE | BIC | held-out RMSE (LODO) |", "|---|---|---|---|"]
+          "| candidate | RMS [x noise] | BIC | held-out RMS (LODO) [x noise] |", "|---|---|---|---|"]
     for r in ranking_table(f):
-        L.append(f"| {r['name']} | {r['rmse_linearised_deg_s']:.4f} | {r['bic_linearised']:.1f} | "
-                 f"{_fmt(r['heldout_rmse_linearised_deg_s'])} |")
+        L.append(f"| {r['name']} | {r['rms_linearised_x_noise']:.4f} | {r['bic_linearised']:.1f} | "
+                 f"{_fmt(r['heldout_rms_linearised_x_noise'])} |")
     L += ["", "## Windows where the base model's residual exceeds the noise", "",
+          "An axle is named only where an axle was excited there.", "",
           "| drive | signal | from [s] | to [s] | RMS | x noise | dominant f [Hz] | most active axle |",
           "|---|---|---|---|---|---|---|---|"]
     for w in f.windows_:
-        L.append(f"| {w['drive']} | {w['signal']} | {w['start_s']:.2f} | {w['end_s']:.2f} | {w['rms_deg_s']:.3f} | "
-                 f"{w['ratio_to_noise']:.1f} | {w['dominant_frequency_hz']:.1f} | {w.get('axle', '')} |")
+        L.append(f"| {w['drive']} | {w['signal']} | {w['start_s']:.2f} | {w['end_s']:.2f} | {w['rms']:.3g} {w['unit']} | "
+                 f"{w['ratio_to_noise']:.1f} | {w['dominant_frequency_hz']:.1f} | {w.get('axle', '-')} |")
     L += ["", "## Files", ""] + [f"- {k}: `{v}`" for k, v in paths.items() if isinstance(v, str)]
     if "variant" in paths:
         run = f"susp_sim_node --ros-args -p friction_variant:={Path(paths['variant']).resolve()}"
@@ -455,6 +550,10 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
 def rep_ci(t, k):
     c = t["ci95"].get(k, [None, None])
     return c if isinstance(c, list) else [None, None]
+
+
+def _pct(x):
+    return "n/a" if x is None else f"{100 * x:.0f} %"
 
 
 def _fmt(x):

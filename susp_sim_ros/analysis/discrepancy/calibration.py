@@ -1,0 +1,220 @@
+"""Calibration before discovery: re-estimate the base model's uncertain parameters from the drives.
+
+Every parameter the vehicle file marks ``calibrate: true`` (with its plausible ``range``, the prior;
+:class:`~susp_sim_ros.model.params.Prior`) and that the base variant uses becomes one calibration
+parameter per value (per axle where the file gives front and rear). The prior is a normal distribution
+centred on the file's value with the range as its +-2 sigma band; the estimate is the maximum a
+posteriori over all drives jointly (scipy ``least_squares`` on the whitened residuals of every signal
+plus the prior residuals, each drive's samples weighted as one independent sample per
+:data:`~susp_sim_ros.analysis.discrepancy.fit.T_CORR_S`). Hard bounds are the range widened by its own
+width on both sides, so a value can leave its range: that is a finding ("sprung mass 1400 -> 1530 kg,
+outside its documented range: loaded car or wrong parameter set?").
+
+Identifiability: in prior-scaled coordinates the data's Fisher information ``F = Js^T Js`` (``Js`` the
+Jacobian of the weighted residuals times the prior standard deviations) is compared with the prior's
+(the identity). A parameter is *informed* when the data shrink its posterior standard deviation to at
+most :data:`INFORMED_SHRINK` of the prior's; an eigen-direction of ``F`` with eigenvalue above
+:data:`INFORMED_EIGEN` that no single parameter carries is reported as an informed *combination*. The
+parameters the drives do not inform are held at their prior value and reported as not informed.
+
+The calibration enters the model through one path: the calibrated values replace the vehicle's
+(:meth:`VehicleParams.replace`), and :meth:`~susp_sim_ros.model.vehicle.Model.params` builds the
+kernel's parameter vector from them, as for any vehicle file.
+"""
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from ...model import Model
+from ...model.params import AXLES, FrictionVariant, VehicleParams
+from .candidates import CALIBRATION, CandParam, Candidate
+
+INFORMED_SHRINK = 0.5   # posterior sd / prior sd at most this: informed
+INFORMED_EIGEN = 3.0    # data information above 3x the prior's along a direction: informed combination
+STEP_OF_SD = 0.1        # finite-difference step, in prior standard deviations
+
+#: Parameters a variant without the scaling does not use (calibrating them would be meaningless).
+NEEDS_SWITCH = {"sv_plateau": "velocity_scaling", "sv_speed": "velocity_scaling",
+                "damper_friction_empty": "oil_scaling", "damper_measured_empty": "oil_scaling",
+                "sh_longitudinal": "horizontal_scaling", "sh_lateral": "horizontal_scaling"}
+#: Fields that can never be negative or zero (their hard lower bound stays above zero).
+POSITIVE = {"sprung_mass", "unsprung_mass", "cg_height", "roll_inertia", "pitch_inertia", "yaw_inertia",
+            "wheel_rate", "tyre_stiffness", "cornering_stiffness", "relaxation_length", "steering_ratio",
+            "damper_friction_intact", "sv_speed", "damper_measured_intact", "damper_measured_empty"}
+
+
+@dataclass(frozen=True)
+class CalParam:
+    """One calibrated value: a :class:`VehicleParams` field, at one axle (``axle`` 0/1) or for the whole
+    car (``axle`` None); ``scale``: a factor on a damper table instead of a value."""
+
+    field: str
+    key: str
+    where: str
+    axle: int | None
+    unit: str
+    prior: float
+    lo: float
+    hi: float
+    reason: str
+    scale: bool = False
+
+    @property
+    def name(self) -> str:
+        return self.field if self.axle is None else f"{self.field}_{AXLES[self.axle]}"
+
+    @property
+    def sd(self) -> float:
+        return max((self.hi - self.lo) / 4.0, 1e-9 * max(abs(self.prior), 1.0))
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        w = self.hi - self.lo
+        lo, hi = self.lo - w, self.hi + w
+        if self.field in POSITIVE:
+            lo = max(lo, 0.25 * self.lo if self.lo > 0 else 1e-6)
+        elif lo < 0 <= self.lo:
+            lo = 0.0
+        return lo, hi
+
+
+def calibration_params(vp: VehicleParams, variant: FrictionVariant,
+                       only: Sequence[str] | None = None) -> list[CalParam]:
+    """The calibration parameters of vehicle ``vp`` under ``variant`` (optionally only the ``names``)."""
+    out = []
+    for fld, pr in vp.priors.items():
+        if not pr.calibrate:
+            continue
+        sw = NEEDS_SWITCH.get(fld)
+        if sw and not getattr(variant, sw):
+            continue
+        if pr.shape == "table":
+            for a in range(2):
+                out.append(CalParam(fld, pr.key, AXLES[a], a, pr.unit, 1.0, pr.lo[0], pr.hi[0], pr.reason, True))
+        elif pr.shape == "axle":
+            val = getattr(vp, fld)
+            for a in range(2):
+                out.append(CalParam(fld, pr.key, AXLES[a], a, pr.unit, float(val[a]), pr.lo[a], pr.hi[a],
+                                    pr.reason))
+        else:
+            out.append(CalParam(fld, pr.key, "all", None, pr.unit, float(getattr(vp, fld)), pr.lo[0], pr.hi[0],
+                                pr.reason))
+    if only is not None:
+        out = [p for p in out if p.name in set(only)]
+    return out
+
+
+def vehicle_at(vp: VehicleParams, params: Sequence[CalParam], theta: Sequence[float]) -> VehicleParams:
+    """``vp`` with the calibration ``params`` at values ``theta``."""
+    changes: dict[str, object] = {}
+    for p, v in zip(params, theta):
+        cur = changes.get(p.field, getattr(vp, p.field))
+        v = float(v)
+        if p.scale:
+            base = getattr(vp, p.field)
+            rows = list(cur)
+            rows[p.axle] = tuple(float(x) * v for x in base[p.axle])
+            changes[p.field] = tuple(rows)
+        elif p.axle is None:
+            changes[p.field] = v
+        else:
+            pair = list(cur)
+            pair[p.axle] = v
+            changes[p.field] = tuple(pair)
+    return dataclasses.replace(vp, **changes) if changes else vp
+
+
+def calibration_candidate(model: Model, params: Sequence[CalParam]) -> Candidate:
+    """The calibration as one candidate of the fitting machinery: its ``apply`` rebuilds each drive's
+    parameter row from the vehicle at the calibrated values (the model's own path from a vehicle to the
+    kernel's parameter vector), keeping the row's oil levels and the extended model's terms."""
+    from ...model.layout import P_INDEX
+    from .candidates import neutral_base
+    vp0 = model.vehicle
+    cache: dict[bytes, Model] = {}
+
+    def apply(P, P0, x, _model):
+        key = np.asarray(x, float).tobytes()
+        m = cache.get(key)
+        if m is None:
+            if len(cache) > 64:
+                cache.clear()
+            m = copy.copy(model)  # the same terms and kernel; only the vehicle differs
+            m.vehicle = vehicle_at(vp0, params, x)
+            cache[key] = m
+        k = P_INDEX["OIL"]
+        rows = {}
+        for r in range(P.shape[0]):
+            oil = tuple(P0[r, k:k + 4])
+            if oil not in rows:
+                rows[oil] = m.params(oil)
+            P[r] = rows[oil]
+        P[:] = neutral_base(P)
+
+    cps = tuple(CandParam(p.name, p.unit, p.prior, *p.bounds, STEP_OF_SD * p.sd, p.reason, prior_sd=p.sd)
+                for p in params)
+    return Candidate(CALIBRATION, "calibration", "base-model parameters re-estimated within their priors",
+                     cps, apply, tuple(p.where if p.where != "all" else None for p in params),
+                     "drives that excite the parameter", "any")
+
+
+def identifiability(J: np.ndarray, params: Sequence[CalParam], weight: float) -> dict:
+    """Which calibration parameters (and combinations) the drives inform.
+
+    ``J``: Jacobian of the whitened data residuals w.r.t. the parameters (columns as ``params``);
+    ``weight``: the data's information weight (effective independent samples per sample). Returns the
+    posterior/prior sd ratio per parameter, the informed flags and the informed directions (eigenvectors
+    of the prior-scaled Fisher information with eigenvalue > :data:`INFORMED_EIGEN`)."""
+    sd = np.array([p.sd for p in params])
+    Js = J * sd[None, :]
+    F = weight * (Js.T @ Js)
+    post = np.linalg.inv(F + np.eye(len(params)))
+    shrink = np.sqrt(np.clip(np.diag(post), 0, None))
+    informed = shrink <= INFORMED_SHRINK
+    lam, vec = np.linalg.eigh(F)
+    combos = []
+    for i in np.argsort(lam)[::-1]:
+        if lam[i] < INFORMED_EIGEN:
+            break
+        v = vec[:, i] / np.max(np.abs(vec[:, i]))
+        big = [j for j in np.argsort(-np.abs(v)) if abs(v[j]) >= 0.3]
+        if len(big) >= 2 and not all(informed[j] for j in big):
+            combos.append({"weights": {params[j].name: float(v[j]) for j in big},
+                           "information_vs_prior": float(lam[i])})
+    return {"posterior_over_prior_sd": {p.name: float(s) for p, s in zip(params, shrink)},
+            "informed": [bool(x) for x in informed], "combinations": combos[:5],
+            "eigenvalues": [float(x) for x in np.sort(lam)[::-1]]}
+
+
+def calibration_entries(params: Sequence[CalParam], x: np.ndarray, ci_lo: np.ndarray, ci_hi: np.ndarray,
+                        informed: Sequence[bool]) -> list[dict]:
+    """The interface's ``calibration`` list (interface.md, JSON outputs)."""
+    out = []
+    for p, v, lo, hi, inf in zip(params, x, ci_lo, ci_hi, informed):
+        if not inf:
+            v, lo, hi = p.prior, p.prior - 1.96 * p.sd, p.prior + 1.96 * p.sd
+        out.append({"param": p.field, "where": p.where, "unit": p.unit, "prior": float(p.prior),
+                    "prior_range": [float(p.lo), float(p.hi)], "value": float(v),
+                    "ci95": [_finite(lo), _finite(hi)], "informed": bool(inf),
+                    "outside_prior": bool(inf and not (p.lo <= v <= p.hi)), "key": p.key,
+                    "range_source": p.reason})
+    return out
+
+
+def outside_statement(e: dict) -> str:
+    """Plain words for a calibrated value outside its documented range."""
+    where = "" if e["where"] == "all" else f" ({e['where']})"
+    return (f"{e['param']}{where} {e['prior']:.4g} -> {e['value']:.4g} {e['unit']}, outside its documented "
+            f"range {e['prior_range'][0]:.4g}-{e['prior_range'][1]:.4g} ({e['range_source'] or 'no reason given'}): "
+            f"a different load or car, or a wrong parameter set?")
+
+
+def _finite(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None

@@ -1,0 +1,637 @@
+"""An independent simulator of ``model-spec.md`` sections 1-4, for truth drives that are NOT our model.
+
+Written from the spec alone (it neither reads nor imports ``susp_sim_ros.model``'s kernel, vehicle,
+parameters, terms or linear model, nor ``analysis/synthetic.py``); it differs from our model in its
+integrator, damper-curve shape, friction scalings, every assumed value, and optional hidden physics. Every
+difference is listed in ``docs/independent_sim.md``.
+
+Public API::
+
+    TruthCar, TruthFriction, TruthHidden, TruthSensor, TruthManeuver   (dataclasses)
+    simulate(car, friction, hidden, maneuver, oil, step_s, y0) -> TruthResult   (noise-free truth)
+    make_drive(car, friction, hidden, maneuver, sensor, oil, seed, record_road, step_s) -> TestDrive
+    body_modes(car) -> {"bounce": Hz, "pitch": Hz, "roll": Hz}
+    write_drive(path, drive, overwrite=True)    (re-exported from susp_sim_ros.io.drive)
+"""
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+import yaml
+from numba import njit
+from scipy.interpolate import PchipInterpolator
+
+from ..io.drive import ImuSeries, Series, TestDrive, write_drive
+from ..model.road import RoadProfile
+from .independent_roads import TruthManeuver, iso8608_road, iso8608_psd  # noqa: F401 (re-export)
+
+VERSION = "1.0"
+SOURCE = f"synthetic:susp_sim_ros.analysis.independent_sim@{VERSION}"
+_CONFIG = Path(__file__).resolve().parents[2] / "config" / "vehicles" / "passat_b8_like.yaml"
+
+
+# ==== parameters ======================================================================================
+@dataclass
+class TruthCar:
+    """Every vehicle parameter of the truth car (SI). Pairs are (front, rear). Defaults: model-spec 3."""
+
+    sprung_mass: float = 1400.0
+    unsprung_mass: tuple = (45.0, 40.0)           # per wheel
+    a: float = 1.10                               # CG to front axle
+    b: float = 1.69                               # CG to rear axle
+    track: tuple = (1.58, 1.57)
+    cg_height: float = 0.55
+    roll_inertia: float = 500.0
+    pitch_inertia: float = 2200.0
+    yaw_inertia: float = 2500.0
+    roll_centre: tuple = (0.05, 0.10)             # the roll equation uses their mean (model-spec 3)
+    pitch_centre: float = 0.20
+    wheel_rate: tuple = (28000.0, 24000.0)
+    arb_rate: tuple = (15000.0, 5000.0)           # wheel to wheel: F_left = k (d_left - d_right)
+    bump_travel: tuple = (0.075, 0.085)           # to bump-stop contact
+    rebound_travel: tuple = (0.095, 0.105)        # to rebound-stop contact
+    stop_rate: float = 120000.0                   # stop force k (e + e^3 / e_c^2), e = stop compression
+    stop_cubic_m: float = 0.012
+    tyre_stiffness: float = 250000.0
+    tyre_damping: float = 100.0
+    cornering_stiffness: tuple = (75000.0, 80000.0)   # per wheel, N/rad
+    mu: float = 1.0
+    relaxation_length: float = 0.5
+    slip_fade_speed: float = 1.2                  # slip faded by a smoothstep below this speed
+    steering_ratio: float = 15.5
+    drive_front_share: float = 1.0
+    brake_front_share: float = 0.63
+    gravity: float = 9.81
+    factors: dict = field(default_factory=dict)   # perturbation factor per parameter (perturbed())
+
+    @property
+    def wheelbase(self) -> float:
+        return self.a + self.b
+
+    @property
+    def total_mass(self) -> float:
+        return self.sprung_mass + 2 * self.unsprung_mass[0] + 2 * self.unsprung_mass[1]
+
+    def perturbed(self, rng, lo: float = 0.05, hi: float = 0.15) -> "TruthCar":
+        """A car whose sprung mass, inertias, cornering stiffnesses, wheel rates and tyre stiffness differ
+        by a random factor 1 +- U(lo, hi) each (random sign); ``factors`` records them."""
+        rng = np.random.default_rng(rng)
+
+        def f():
+            return float(1.0 + rng.choice([-1.0, 1.0]) * rng.uniform(lo, hi))
+        fac = {}
+        kw = {}
+        for name in ("sprung_mass", "roll_inertia", "pitch_inertia", "yaw_inertia", "tyre_stiffness"):
+            fac[name] = f()
+            kw[name] = getattr(self, name) * fac[name]
+        for name in ("cornering_stiffness", "wheel_rate"):
+            ff, fr = f(), f()
+            fac[name] = [ff, fr]
+            v = getattr(self, name)
+            kw[name] = (v[0] * ff, v[1] * fr)
+        return replace(self, factors=fac, **kw)
+
+
+@dataclass
+class TruthFriction:
+    """Friction of the truth car (model-spec 1, own scalings). Levels in N at 1 mm/s; pairs (front, rear)."""
+
+    enabled: bool = True
+    axle_level: tuple = (39.5, 33.5)              # axle rig then reads 60.5 / 44.5 N (paper 60 / 43)
+    damper_intact: tuple = (21.0, 11.0)           # paper 22 / 10
+    damper_empty: tuple = (30.0, 19.0)            # paper 29 / 20
+    sigma: float = 1.2e5                          # Dahl stiffness N/m
+    sv_plateau: float = 2.0                       # s_v = 1 + (s_inf - 1) tanh((|v| - 1 mm/s)/v_s), >= 1
+    sv_speed: float = 0.03
+    sv_ref: float = 0.001
+    sh_fx_per_kN: tuple = (0.12, 0.0)             # s_h = 1 + kx |Fx| + ky |Fy|
+    sh_fy_per_kN: tuple = (0.28, 0.27)
+    velocity_scaling: bool = True
+    oil_scaling: bool = True
+    horizontal_scaling: bool = True
+    empty_viscous: tuple = (330.0, 260.0)         # oil-empty hydraulic slope N s/m
+
+    def perturbed(self, rng, dev_N: float = 2.0) -> "TruthFriction":
+        """Levels moved by U(-dev_N, dev_N) each (within the paper's rig tolerance)."""
+        rng = np.random.default_rng(rng)
+
+        def p(pair):
+            return tuple(float(x + rng.uniform(-dev_N, dev_N)) for x in pair)
+        return replace(self, axle_level=p(self.axle_level), damper_intact=p(self.damper_intact),
+                       damper_empty=p(self.damper_empty))
+
+
+@dataclass
+class TruthHidden:
+    """Physics the paper's model lacks (all off by default). Pairs (front, rear); quadruples FL, FR, RL, RR."""
+
+    amplitude_extra_N: tuple = (0.0, 0.0)         # extra axle-friction level extra * A^2 / (A^2 + A0^2)
+    amplitude_A0_m: float = 0.008
+    amplitude_tau_s: float = 0.8                  # envelope A = max(|d|, A decaying with this time constant)
+    gas_preload_N: tuple = (0.0, 0.0, 0.0, 0.0)   # damper gas force f0 + k d on the body (pushes up)
+    gas_rate_N_m: tuple = (0.0, 0.0, 0.0, 0.0)
+    extra_viscous: tuple = (0.0, 0.0)             # N s/m, c * deflection velocity
+
+
+@dataclass
+class TruthSensor:
+    """Measurement chain of the truth drive's IMU and inputs."""
+
+    imu_rate_hz: float = 200.0
+    jitter_s: float = 0.0                         # Gaussian timestamp jitter (stamps only), clipped +-0.4/rate
+    bandwidth_hz: float | None = None             # first-order low-pass on the true motion
+    gyro_noise_deg_s: tuple = (0.05, 0.05, 0.05)  # white, RMS per sample, per axis (roll, pitch, yaw)
+    accel_noise_m_s2: tuple = (0.02, 0.02, 0.02)
+    gyro_bias_deg_s: tuple = (0.0, 0.0, 0.0)
+    accel_bias_m_s2: tuple = (0.0, 0.0, 0.0)
+    time_offset_s: float = 0.0                    # IMU samples show the motion at t - tau
+    steering_offset_rad: float = 0.0              # recorded = true + offset, then quantised
+    steering_resolution_rad: float = 0.0          # 0 = no quantisation
+    input_rate_hz: float = 100.0                  # /vehicle/speed and /vehicle/steering_wheel_angle
+    exact_rms: bool = True                        # scale each noise channel to exactly its RMS
+
+
+# ==== damper curves ===================================================================================
+#: The hydropulser points as in config/vehicles/passat_b8_like.yaml when this was written; used only
+#: when that file is missing or its ``dampers`` section cannot be read (a warning says so).
+_FALLBACK_DAMPERS = {
+    "velocity": [-1.0, -0.5, -0.3, -0.2, -0.1, -0.052, -0.026, -0.01, -0.001, 0.0, 0.001, 0.01, 0.026, 0.052,
+                 0.1, 0.2, 0.3, 0.5, 1.0],
+    "front": [-2300.0, -1500.0, -1050.0, -850.0, -580.0, -400.0, -240.0, -110.0, -22.0, 0.0, 22.0, 80.0, 160.0,
+              250.0, 360.0, 520.0, 620.0, 800.0, 1150.0],
+    "rear": [-1610.0, -1050.0, -735.0, -595.0, -406.0, -280.0, -168.0, -77.0, -10.0, 0.0, 10.0, 56.0, 112.0,
+             175.0, 252.0, 364.0, 434.0, 560.0, 805.0]}
+
+
+def load_measured_dampers(path: str | Path = _CONFIG) -> dict:
+    """Measured damper points (incl. friction) from the vehicle YAML (``dampers``: ``velocity``,
+    ``measured_intact`` front/rear), read with plain yaml; the embedded copy if that cannot be read."""
+    try:
+        with open(path) as fh:
+            d = yaml.safe_load(fh)["dampers"]
+
+        def val(x):
+            return x["value"] if isinstance(x, dict) and "value" in x else x
+        out = {"velocity": np.asarray(val(d["velocity"]), float),
+               "front": np.asarray(val(d["measured_intact"])["front"], float),
+               "rear": np.asarray(val(d["measured_intact"])["rear"], float)}
+        v = out["velocity"]
+        if v.ndim != 1 or v.size < 4 or np.any(np.diff(v) <= 0) or out["front"].shape != v.shape \
+                or out["rear"].shape != v.shape:
+            raise ValueError("malformed damper table")
+        return out
+    except (OSError, KeyError, TypeError, ValueError, yaml.YAMLError) as exc:
+        warnings.warn(f"independent_sim: cannot read damper points from {path} ({exc}); "
+                      "using the embedded copy", stacklevel=2)
+        return {k: np.asarray(v, float) for k, v in _FALLBACK_DAMPERS.items()}
+
+
+def s_velocity(v, fr: TruthFriction):
+    """Own velocity scaling of damper friction: 1 + (s_inf - 1) tanh((|v| - v_ref)/v_s), clipped >= 1."""
+    x = (np.abs(v) - fr.sv_ref) / fr.sv_speed
+    return np.maximum(1.0, 1.0 + (fr.sv_plateau - 1.0) * np.tanh(x))
+
+
+def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
+    """Per axle: PCHIP through (measured - own damper friction), zero for |v| <= 1 mm/s.
+
+    Returns (X (2, n), C (2, 4, n-1), E (2, 4): [F_lo, slope_lo, F_hi, slope_hi]) and the interpolators.
+    """
+    m = measured or load_measured_dampers()
+    v = m["velocity"]
+    X, C, E, P = [], [], [], []
+    for k, axle in enumerate(("front", "rear")):
+        fsa = fr.damper_intact[k] * (s_velocity(v, fr) if fr.velocity_scaling else 1.0)
+        F = m[axle] - np.sign(v) * fsa
+        F = np.where(v > 0, np.maximum(F, 0.0), np.minimum(F, 0.0))
+        F[np.abs(v) <= fr.sv_ref + 1e-12] = 0.0
+        F = np.maximum.accumulate(F)          # monotone
+        p = PchipInterpolator(v, F, extrapolate=False)
+        dp = p.derivative()
+        X.append(v)
+        C.append(p.c)
+        E.append([F[0], float(dp(v[0])), F[-1], float(dp(v[-1]))])
+        P.append(p)
+    return np.array(X), np.ascontiguousarray(np.array(C)), np.array(E), P
+
+
+# ==== parameter arrays for the kernel =================================================================
+(G, MS, MT, IXX, IYY, IZZ, H, HRC, HPC, A_, B_, MU, RELAX, VFADE, RATIO, KT, CT, KSTOP, ESTOP, DSCALE,
+ SIGMA, SVINF, SVS, SVREF, FRIC, AMPA0, AMPTAU, DRIVEF, BRAKEF, SVON, NP) = range(31)
+(WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
+ WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, NW) = range(24)
+NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
+NOUT = 18        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]
+
+
+def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on: bool = True):
+    P = np.zeros(NP)
+    P[G], P[MS], P[MT] = car.gravity, car.sprung_mass, car.total_mass
+    P[IXX], P[IYY], P[IZZ] = car.roll_inertia, car.pitch_inertia, car.yaw_inertia
+    P[H], P[HRC], P[HPC] = car.cg_height, 0.5 * (car.roll_centre[0] + car.roll_centre[1]), car.pitch_centre
+    P[A_], P[B_], P[MU], P[RELAX], P[VFADE] = car.a, car.b, car.mu, car.relaxation_length, car.slip_fade_speed
+    P[RATIO], P[KT], P[CT] = car.steering_ratio, car.tyre_stiffness, car.tyre_damping
+    P[KSTOP], P[ESTOP], P[DSCALE] = car.stop_rate, car.stop_cubic_m, 1.0 if dampers_on else 0.0
+    P[SIGMA], P[SVINF], P[SVS], P[SVREF] = fr.sigma, fr.sv_plateau, fr.sv_speed, fr.sv_ref
+    P[SVON] = 1.0 if fr.velocity_scaling else 0.0
+    P[FRIC] = 1.0 if fr.enabled else 0.0
+    P[AMPA0], P[AMPTAU] = hid.amplitude_A0_m, hid.amplitude_tau_s
+    P[DRIVEF], P[BRAKEF] = car.drive_front_share, car.brake_front_share
+    W = np.zeros((4, NW))
+    L = car.wheelbase
+    for i in range(4):
+        k = 0 if i < 2 else 1
+        W[i, WX] = car.a if k == 0 else -car.b
+        W[i, WTRACK] = car.track[k]
+        W[i, WY] = 0.5 * car.track[k] * (1.0 if i % 2 == 0 else -1.0)
+        W[i, WK], W[i, WMU], W[i, WCA] = car.wheel_rate[k], car.unsprung_mass[k], car.cornering_stiffness[k]
+        share = car.b / L if k == 0 else car.a / L
+        W[i, WFZ0] = (0.5 * car.sprung_mass * share + car.unsprung_mass[k]) * car.gravity
+        W[i, WKARB], W[i, WBUMP], W[i, WREB] = car.arb_rate[k], car.bump_travel[k], car.rebound_travel[k]
+        W[i, WFCA], W[i, WFCS] = fr.axle_level[k], fr.damper_intact[k]
+        W[i, WSOIL] = (fr.damper_empty[k] / fr.damper_intact[k]) if fr.oil_scaling else 1.0
+        hs = 1.0 if fr.horizontal_scaling else 0.0
+        W[i, WKX], W[i, WKY] = hs * fr.sh_fx_per_kN[k] * 1e-3, hs * fr.sh_fy_per_kN[k] * 1e-3
+        W[i, WCEMPTY], W[i, WAXLE], W[i, WOIL] = fr.empty_viscous[k], k, float(oil[i])
+        W[i, WAMPX], W[i, WGF0], W[i, WGK] = hid.amplitude_extra_N[k], hid.gas_preload_N[i], hid.gas_rate_N_m[i]
+        W[i, WCV], W[i, WHRC] = hid.extra_viscous[k], car.roll_centre[k]
+    X, C, E, _ = hydraulic_curves(fr)
+    return P, W, X, C, E
+
+
+# ==== kernel ==========================================================================================
+@njit(cache=True)
+def _damper(v, ax, X, C, E):
+    n = X.shape[1]
+    if v <= X[ax, 0]:
+        return E[ax, 0] + E[ax, 1] * (v - X[ax, 0])
+    if v >= X[ax, n - 1]:
+        return E[ax, 2] + E[ax, 3] * (v - X[ax, n - 1])
+    lo, hi = 0, n - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if X[ax, mid] <= v:
+            lo = mid
+        else:
+            hi = mid
+    dx = v - X[ax, lo]
+    return ((C[ax, 0, lo] * dx + C[ax, 1, lo]) * dx + C[ax, 2, lo]) * dx + C[ax, 3, lo]
+
+
+@njit(cache=True)
+def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
+    """dy/dt of the mechanical states; aux[i] = (d, dd, Fz, Fs). Friction forces Ff held (splitting)."""
+    z, zd, phi, phid, th, thd, vy, r = y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7]
+    d = np.empty(4)
+    dd = np.empty(4)
+    for i in range(4):
+        d[i] = y[8 + i] - (z - W[i, WX] * th + W[i, WY] * phi)
+        dd[i] = y[12 + i] - (zd - W[i, WX] * thd + W[i, WY] * phid)
+    sumFy = y[16] + y[17] + y[18] + y[19]
+    ay = sumFy / P[MT]
+    sF = 0.0
+    sYF = 0.0
+    sXF = 0.0
+    for i in range(4):
+        o = i - 1 if i % 2 == 1 else i + 1            # partner wheel on the same axle
+        Fs = W[i, WK] * d[i] + W[i, WKARB] * (d[i] - d[o])
+        eb = d[i] - W[i, WBUMP]
+        er = -d[i] - W[i, WREB]
+        if eb > 0.0:
+            Fs += P[KSTOP] * (eb + eb * eb * eb / (P[ESTOP] * P[ESTOP]))
+        if er > 0.0:
+            Fs -= P[KSTOP] * (er + er * er * er / (P[ESTOP] * P[ESTOP]))
+        ia = int(W[i, WAXLE])
+        Fh = W[i, WOIL] * _damper(dd[i], ia, X, C, E) + (1.0 - W[i, WOIL]) * W[i, WCEMPTY] * dd[i]
+        Fs += P[DSCALE] * Fh + Ff[i] + W[i, WCV] * dd[i] + W[i, WGF0] + W[i, WGK] * d[i]
+        Ft = P[KT] * (ZR[i, j] - y[8 + i]) + P[CT] * (ZRD[i, j] - y[12 + i])
+        if W[i, WFZ0] + Ft < 0.0:
+            Ft = -W[i, WFZ0]                           # lift-off
+        dy[8 + i] = y[12 + i]
+        dy[12 + i] = (Ft - Fs) / W[i, WMU]
+        Fyax = y[16 + (i // 2) * 2] + y[17 + (i // 2) * 2]
+        dFz = -W[i, WY] / (0.5 * W[i, WTRACK]) * Fyax * W[i, WHRC] / W[i, WTRACK]   # left loses in +Fy
+        Fz = W[i, WFZ0] + Ft + dFz
+        if Fz < 0.0:
+            Fz = 0.0
+        aux[i, 0] = d[i]
+        aux[i, 1] = dd[i]
+        aux[i, 2] = Fz
+        aux[i, 3] = Fs
+        sF += Fs
+        sYF += W[i, WY] * Fs
+        sXF += W[i, WX] * Fs
+        # lateral tyre force with first-order relaxation
+        vv = abs(v)
+        x = vv / P[VFADE]
+        fade = 1.0 if x >= 1.0 else x * x * (3.0 - 2.0 * x)
+        veff = vv if vv > P[VFADE] else P[VFADE]
+        if i < 2:
+            alpha = dsw / P[RATIO] - (vy + P[A_] * r) / veff
+        else:
+            alpha = -(vy - P[B_] * r) / veff
+        alpha *= fade
+        muFz = P[MU] * Fz
+        Fss = muFz * math.tanh(W[i, WCA] * alpha / muFz) if muFz > 1e-6 else 0.0
+        vr = vv if vv > 0.5 else 0.5
+        dy[16 + i] = vr / P[RELAX] * (Fss - y[16 + i])
+    dy[0] = zd
+    dy[1] = sF / P[MS]
+    dy[2] = phid
+    dy[3] = (sYF + P[MS] * (P[H] - P[HRC]) * (ay + P[G] * phi)) / P[IXX]
+    dy[4] = thd
+    dy[5] = (-sXF + P[MS] * (P[H] - P[HPC]) * (P[G] * th - ax)) / P[IYY]
+    dy[6] = ay - v * r
+    dy[7] = (P[A_] * (y[16] + y[17]) - P[B_] * (y[18] + y[19])) / P[IZZ]
+
+
+@njit(cache=True)
+def _dahl(F, dx, Fc, sigma):
+    if Fc <= 0.0:
+        return 0.0
+    if F > Fc:
+        F = Fc
+    elif F < -Fc:
+        F = -Fc
+    if dx == 0.0:
+        return F
+    s = 1.0 if dx > 0.0 else -1.0
+    return s * Fc + (F - s * Fc) * math.exp(-sigma * abs(dx) / Fc)
+
+
+@njit(cache=True)
+def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
+    """RK4 on the mechanical states, Dahl states by their exact position-domain solution per step."""
+    y = y0.copy()
+    Fa = np.zeros(4)
+    Fd = np.zeros(4)
+    Aenv = np.zeros(4)
+    Ff = np.zeros(4)
+    k1 = np.zeros(NY)
+    k2 = np.zeros(NY)
+    k3 = np.zeros(NY)
+    k4 = np.zeros(NY)
+    yt = np.zeros(NY)
+    aux = np.zeros((4, 4))
+    aux2 = np.zeros((4, 4))
+    decay = math.exp(-h / P[AMPTAU])
+    for k in range(n + 1):
+        j = 2 * k
+        for i in range(4):
+            Ff[i] = P[FRIC] * (Fa[i] + Fd[i])
+        _deriv(y, V[j], AX[j], DSW[j], ZR, ZRD, j, Ff, P, W, X, C, E, k1, aux)
+        ay = (y[16] + y[17] + y[18] + y[19]) / P[MT]
+        out[k, 0] = y[3]
+        out[k, 1] = y[5]
+        out[k, 2] = y[7]
+        out[k, 3] = AX[j] - y[6] * y[7] - P[G] * math.sin(y[4])
+        out[k, 4] = ay + P[G] * math.sin(y[2]) * math.cos(y[4])
+        out[k, 5] = k1[1] + P[G] * math.cos(y[2]) * math.cos(y[4])
+        for i in range(4):
+            out[k, 6 + i] = aux[i, 0]
+            out[k, 10 + i] = Ff[i]
+            out[k, 14 + i] = aux[i, 2]
+        if k == n:
+            break
+        for m in range(NY):
+            yt[m] = y[m] + 0.5 * h * k1[m]
+        _deriv(yt, V[j + 1], AX[j + 1], DSW[j + 1], ZR, ZRD, j + 1, Ff, P, W, X, C, E, k2, aux2)
+        for m in range(NY):
+            yt[m] = y[m] + 0.5 * h * k2[m]
+        _deriv(yt, V[j + 1], AX[j + 1], DSW[j + 1], ZR, ZRD, j + 1, Ff, P, W, X, C, E, k3, aux2)
+        for m in range(NY):
+            yt[m] = y[m] + h * k3[m]
+        _deriv(yt, V[j + 2], AX[j + 2], DSW[j + 2], ZR, ZRD, j + 2, Ff, P, W, X, C, E, k4, aux2)
+        for m in range(NY):
+            yt[m] = y[m] + h / 6.0 * (k1[m] + 2.0 * k2[m] + 2.0 * k3[m] + k4[m])
+        # friction over the step's deflection increment; scalings from the step's start
+        share = P[DRIVEF] if AX[j] >= 0.0 else P[BRAKEF]
+        for i in range(4):
+            dn = yt[8 + i] - (yt[0] - W[i, WX] * yt[4] + W[i, WY] * yt[2])
+            dx = dn - aux[i, 0]
+            sh_share = share if i < 2 else 1.0 - share
+            Fx = 0.5 * P[MT] * AX[j] * sh_share - aux[i, 2] * SL[i, j]
+            sh = 1.0 + W[i, WKX] * abs(Fx) + W[i, WKY] * abs(y[16 + i])
+            a_prev = Aenv[i] * decay
+            Aenv[i] = abs(dn) if abs(dn) > a_prev else a_prev
+            A2 = Aenv[i] * Aenv[i]
+            Fca = (W[i, WFCA] + W[i, WAMPX] * A2 / (A2 + P[AMPA0] * P[AMPA0])) * sh
+            sv = 1.0
+            if P[SVON] > 0.0:
+                sv = 1.0 + (P[SVINF] - 1.0) * math.tanh((abs(dx) / h - P[SVREF]) / P[SVS])
+                if sv < 1.0:
+                    sv = 1.0
+            soil = 1.0 + (W[i, WSOIL] - 1.0) * (1.0 - W[i, WOIL])
+            Fcs = W[i, WFCS] * sv * soil * sh
+            Fa[i] = _dahl(Fa[i], dx, Fca, P[SIGMA])
+            Fd[i] = _dahl(Fd[i], dx, Fcs, P[SIGMA])
+        for m in range(NY):
+            y[m] = yt[m]
+    return y
+
+
+# ==== driver ==========================================================================================
+@dataclass
+class TruthResult:
+    """Noise-free truth at every step: t [s], gyro (n,3) rad/s, accel (n,3) specific force m/s^2,
+    deflection (n,4) m, friction (n,4) N, tyre load (n,4) N."""
+
+    t: np.ndarray
+    gyro: np.ndarray
+    accel: np.ndarray
+    deflection: np.ndarray
+    friction: np.ndarray
+    tyre_load: np.ndarray
+
+
+def _road_at(s_query, road):
+    """Road height and slope at path coordinates (flat outside the profile, linear inside)."""
+    if road is None:
+        z = np.zeros_like(s_query)
+        return z, z.copy()
+    s, zp = road
+    z = np.interp(s_query, s, zp, left=0.0, right=0.0)
+    seg = np.diff(zp) / np.diff(s)
+    idx = np.searchsorted(s, s_query, side="right") - 1
+    inside = (idx >= 0) & (idx < s.size - 1)
+    slope = np.zeros_like(s_query)
+    slope[inside] = seg[idx[inside]]
+    return z, slope
+
+
+def _static_offset(P, W, X, C, E):
+    """Static equilibrium (z, phi, theta, zw) when a gas preload shifts it (Newton on the accelerations)."""
+    y = np.zeros(NY)
+    if not (np.any(W[:, WGF0] != 0.0) or np.any(W[:, WGK] != 0.0)):
+        return y
+    idx = [0, 2, 4, 8, 9, 10, 11]
+    acc = [1, 3, 5, 12, 13, 14, 15]
+    ZR = np.zeros((4, 1))
+    dy = np.zeros(NY)
+    aux = np.zeros((4, 4))
+    Ff = np.zeros(4)
+
+    def res(yy):
+        _deriv(yy, 0.0, 0.0, 0.0, ZR, ZR, 0, Ff, P, W, X, C, E, dy, aux)
+        return dy[acc].copy()
+    for _ in range(20):
+        r0 = res(y)
+        J = np.zeros((7, 7))
+        for c, k in enumerate(idx):
+            yp = y.copy()
+            yp[k] += 1e-6
+            J[:, c] = (res(yp) - r0) / 1e-6
+        step = np.linalg.solve(J, -r0)
+        y[idx] += step
+        if np.max(np.abs(step)) < 1e-12:
+            break
+    return y
+
+
+def simulate(car: TruthCar | None = None, friction: TruthFriction | None = None,
+             hidden: TruthHidden | None = None, maneuver: TruthManeuver | None = None,
+             oil=(1.0, 1.0, 1.0, 1.0), step_s: float = 2e-4, y0=None, dampers: bool = True) -> TruthResult:
+    """Run the truth model; noise-free outputs at every step (t = 0 .. duration)."""
+    car = car or TruthCar()
+    friction = friction or TruthFriction()
+    hidden = hidden or TruthHidden()
+    maneuver = maneuver or TruthManeuver.rest()
+    P, W, X, C, E = _arrays(car, friction, hidden, oil, dampers)
+    n = int(round(maneuver.duration_s / step_s))
+    th = np.arange(2 * n + 3) * (0.5 * step_s)
+    V = maneuver.speed(th)
+    AX = maneuver.accel(th)
+    DSW = maneuver.steering(th)
+    s_front = np.concatenate([[0.0], np.cumsum(0.5 * (V[1:] + V[:-1]) * np.diff(th))])
+    road = maneuver.road(car.wheelbase)
+    ZR = np.zeros((4, th.size))
+    SL = np.zeros((4, th.size))
+    for i in range(4):
+        sw = s_front - (0.0 if i < 2 else car.wheelbase)
+        prof = None if road is None else (road[0], road[1] if i % 2 == 0 else road[2])
+        ZR[i], SL[i] = _road_at(sw, prof)
+    ZRD = SL * V[None, :]
+    y = _static_offset(P, W, X, C, E) if y0 is None else np.asarray(y0, float).copy()
+    out = np.zeros((n + 1, NOUT))
+    _run(y, n, step_s, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out)
+    return TruthResult(np.arange(n + 1) * step_s, out[:, 0:3], out[:, 3:6], out[:, 6:10], out[:, 10:14],
+                       out[:, 14:18])
+
+
+def body_modes(car: TruthCar | None = None) -> dict:
+    """Bounce, pitch and roll natural frequencies [Hz] of this model's own linearisation at rest with
+    dampers and friction off (numerical Jacobian of the kernel's derivative, eigen-analysis)."""
+    car = car or TruthCar()
+    P, W, X, C, E = _arrays(car, TruthFriction(enabled=False), TruthHidden(), (1, 1, 1, 1), dampers_on=False)
+    P[CT] = 0.0
+    st = [0, 2, 4, 8, 9, 10, 11, 1, 3, 5, 12, 13, 14, 15]
+    ZR = np.zeros((4, 1))
+    Ff = np.zeros(4)
+    aux = np.zeros((4, 4))
+
+    def f(x):
+        y = np.zeros(NY)
+        y[st] = x
+        dy = np.zeros(NY)
+        _deriv(y, 0.0, 0.0, 0.0, ZR, ZR, 0, Ff, P, W, X, C, E, dy, aux)
+        return dy[st]
+    J = np.zeros((14, 14))
+    for c in range(14):
+        e = np.zeros(14)
+        e[c] = 1e-6
+        J[:, c] = (f(e) - f(-e)) / 2e-6
+    lam, vec = np.linalg.eig(J)
+    res = {}
+    for k in np.nonzero(lam.imag > 0)[0]:
+        fhz = abs(lam[k]) / (2 * np.pi)
+        if fhz > 5.0:
+            continue                      # wheel hop
+        w = np.abs(vec[:3, k]) * np.array([1.0, 0.5 * car.track[0], car.a])
+        res[("bounce", "roll", "pitch")[int(np.argmax(w))]] = float(fhz)
+    return res
+
+
+def _white(rng, n, rms, exact):
+    x = rng.standard_normal(n)
+    if exact and rms > 0 and n > 1:
+        x = (x - x.mean()) / np.sqrt(np.mean((x - x.mean()) ** 2))
+    return x * rms
+
+
+def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = None,
+               hidden: TruthHidden | None = None, maneuver: TruthManeuver | None = None,
+               sensor: TruthSensor | None = None, oil=(1.0, 1.0, 1.0, 1.0), seed: int = 0,
+               record_road: bool = True, step_s: float = 2e-4, t0_ns: int = 0,
+               return_truth: bool = False):
+    """A truth test drive (``TestDrive``; with ``return_truth`` also the :class:`TruthResult`)."""
+    car = car or TruthCar()
+    friction = friction or TruthFriction()
+    hidden = hidden or TruthHidden()
+    maneuver = maneuver or TruthManeuver.rest()
+    sensor = sensor or TruthSensor()
+    oil = tuple(float(o) for o in oil)
+    truth = simulate(car, friction, hidden, maneuver, oil, step_s)
+    rng = np.random.default_rng(seed)
+    T = maneuver.duration_s
+    # IMU: sampled at nominal instants, showing the (band-limited) motion at t - tau; stamps jittered
+    sig = np.hstack([truth.gyro, truth.accel])
+    if sensor.bandwidth_hz:
+        from scipy.signal import lfilter
+        al = math.exp(-2 * math.pi * sensor.bandwidth_hz * step_s)
+        sig = np.column_stack([lfilter([1 - al], [1, -al], c, zi=[al * c[0]])[0] for c in sig.T])
+    ti = np.arange(0.0, T + 1e-12, 1.0 / sensor.imu_rate_hz)
+    tq = np.clip(ti - sensor.time_offset_s, 0.0, truth.t[-1])
+    samp = np.column_stack([np.interp(tq, truth.t, c) for c in sig.T])
+    n = ti.size
+    noise = np.column_stack([_white(rng, n, math.radians(sensor.gyro_noise_deg_s[k]), sensor.exact_rms)
+                             for k in range(3)] +
+                            [_white(rng, n, sensor.accel_noise_m_s2[k], sensor.exact_rms) for k in range(3)])
+    bias = np.concatenate([np.radians(sensor.gyro_bias_deg_s), np.asarray(sensor.accel_bias_m_s2, float)])
+    meas = samp + noise + bias[None, :]
+    jit = np.zeros(n)
+    if sensor.jitter_s > 0:
+        jit = np.clip(rng.normal(0.0, sensor.jitter_s, n), -0.4 / sensor.imu_rate_hz, 0.4 / sensor.imu_rate_hz)
+    imu_t = t0_ns + np.round((ti + jit) * 1e9).astype(np.int64)
+    imu = ImuSeries(imu_t, meas[:, :3], meas[:, 3:])
+    # inputs
+    tin = np.arange(0.0, T + 1e-12, 1.0 / sensor.input_rate_hz)
+    tin_ns = t0_ns + np.round(tin * 1e9).astype(np.int64)
+    steer = maneuver.steering(tin) + sensor.steering_offset_rad
+    if sensor.steering_resolution_rad > 0:
+        steer = np.round(steer / sensor.steering_resolution_rad) * sensor.steering_resolution_rad
+    speed = Series(tin_ns, maneuver.speed(tin))
+    road = None
+    rd = maneuver.road(car.wheelbase)
+    if record_road:
+        if rd is None:
+            road = RoadProfile(np.array([0.0, maneuver.speed_mps * T + car.wheelbase + 10.0]),
+                               np.zeros(2), np.zeros(2))
+        else:
+            road = RoadProfile(*rd)
+    truth_meta = {
+        "generator": SOURCE, "seed": seed, "step_s": step_s, "oil": list(oil),
+        "car": asdict(car), "friction": asdict(friction), "hidden": asdict(hidden),
+        "sensor": asdict(sensor), "maneuver": maneuver.to_dict(),
+        "damper_measured_points": {k: v.tolist() for k, v in load_measured_dampers().items()},
+        "road_class": maneuver.road_class, "road_recorded": bool(record_road),
+        "noise_rms_realised": {"gyro_rad_s": np.sqrt(np.mean(noise[:, :3] ** 2, axis=0)).tolist(),
+                               "accel_m_s2": np.sqrt(np.mean(noise[:, 3:] ** 2, axis=0)).tolist()},
+        "gyro_noise_rad_s": [math.radians(x) for x in sensor.gyro_noise_deg_s],
+        "gyro_bias_rad_s": [math.radians(x) for x in sensor.gyro_bias_deg_s],
+        "time_offset_s": sensor.time_offset_s, "steering_offset_rad": sensor.steering_offset_rad,
+    }
+    meta = {"vehicle": "independent", "maneuver": maneuver.text(),
+            "damper_oil_level": ",".join(f"{o:g}" for o in oil), "source": SOURCE,
+            "truth": json.dumps(truth_meta, default=lambda o: o.tolist() if hasattr(o, "tolist") else str(o))}
+    drive = TestDrive(meta, speed, Series(tin_ns, steer), road, None, imu)
+    return (drive, truth) if return_truth else drive
+
+
+__all__ = ["TruthCar", "TruthFriction", "TruthHidden", "TruthSensor", "TruthManeuver", "TruthResult",
+           "simulate", "make_drive", "body_modes", "hydraulic_curves", "s_velocity", "load_measured_dampers",
+           "write_drive", "iso8608_road", "iso8608_psd", "SOURCE"]
