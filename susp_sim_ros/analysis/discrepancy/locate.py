@@ -6,8 +6,10 @@ Noise floor: the white-noise RMS per sample of each IMU signal. The model error 
 (base simulation minus measurement over the whole recording), ``e[k+2] - 3 e[k+1] + 3 e[k] - e[k-1]``,
 is noise-dominated with variance ``20 sigma^2`` for white noise. Where a drive has a quiet lead-in (the
 base simulation still at rest, at least :data:`MIN_QUIET` samples), the spread of the measurement there is
-a second estimate; both can only overstate the noise (road or model content adds to them), so the smaller
-is taken: on a rough road sampled at 100 Hz the wheel-hop response reaches the differences. ``sigma`` is estimated robustly and
+a second estimate; both can only overstate the noise (road or model content adds to them). The lead-in's
+replaces the differences' only when that is :data:`CONTAMINATED` times higher (taking the smaller of two
+noisy estimates every time would bias the floor low): on a rough road sampled at 100 Hz the wheel-hop
+response reaches the differences. ``sigma`` is estimated robustly and
 efficiently: a first estimate from the median absolute deviation, then the standard deviation of the
 differences within +-3 of those sigmas, corrected for the truncation (a Gaussian truncated at 3 sigma
 keeps 97.3 % of its variance). The comparison is made at the measured sample times (no resampling), so
@@ -40,6 +42,7 @@ HOP_S = 0.25
 P_FALSE = 1e-3
 DIFF_ORDER = 3
 MIN_QUIET = 30            # samples of quiet lead-in that make its spread a noise estimate of its own
+CONTAMINATED = 1.3        # a difference estimate this far above the lead-in's is contaminated by content
 AXLE_EXCITED_M_S = 0.01   # RMS deflection velocity [m/s] above which an axle counts as excited there
 _TRUNC = 3.0
 _TRUNC_VAR = 1.0 - 2 * _TRUNC * stats.norm.pdf(_TRUNC) / (2 * stats.norm.cdf(_TRUNC) - 1)
@@ -75,8 +78,10 @@ def noise_floor(cases: Sequence[DriveCase], sims: Sequence[np.ndarray]) -> dict:
         for j, sig in enumerate(SIGNALS):
             e = np.interp(c.t_raw_s, t, y[:, j]) - c.y_raw[:, j]
             sd = noise_sigma(e)
-            if q.sum() >= MIN_QUIET:  # both are upper bounds of the noise: the smaller is the better one
-                sd = min(sd, float(np.std(c.y_raw[q, j], ddof=1)))
+            if q.sum() >= MIN_QUIET:  # both overstate the noise at worst; the lead-in replaces a clearly
+                sd_q = float(np.std(c.y_raw[q, j], ddof=1))  # contaminated difference estimate only
+                if sd > CONTAMINATED * sd_q:
+                    sd = sd_q
             per[c.name][sig] = sd
             if math.isfinite(sd):
                 pooled[sig].append((sd, e.size))
