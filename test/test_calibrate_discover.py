@@ -122,3 +122,17 @@ def test_a_rough_road_missing_from_the_recording_is_an_unmeasured_input(tmp_path
     assert "yaw_rate" in f.cases_[0].signals and "accel_z" not in f.cases_[0].signals
     # no axle is named on a drive whose road the model does not see
     assert all("axle" not in w for w in rep["windows"])
+
+
+def test_a_steering_sensor_offset_is_calibrated_not_named_as_physics(tmp_path):
+    """Recorded steering-wheel angle = true + 0.02 rad (1.1 deg): on a sine steer with a quiet lead-in the
+    finder's steering_offset (recorded minus true) recovers it; no physics is invented for it."""
+    sensor = TruthSensor(imu_rate_hz=200, gyro_noise_deg_s=(0.05,) * 3, steering_offset_rad=0.02)
+    paths = [_write(tmp_path, f"sine_{k}", make_drive(TruthCar(), TruthFriction(), TruthHidden(),
+                                                      TruthManeuver.sine(amplitude_deg=a), sensor, seed=k))
+             for k, a in enumerate((60.0, 30.0))]
+    rep = DiscrepancyFinder(variant="full", heldout=False).fit(paths).report()
+    off = [t for t in rep["terms"] if t["name"] == "steering_offset"]
+    assert off, [t["name"] for t in rep["terms"]]
+    assert off[0]["params"]["offset"] == pytest.approx(0.02, abs=0.004)
+    assert not [t for t in rep["terms"] if BY_NAME[t["name"]].kind == PHYSICS]

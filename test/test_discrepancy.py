@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parents[1]
 INTERFACE_TERMS = {"damper_friction_velocity", "damper_friction_oil", "friction_longitudinal_force",
                    "friction_lateral_force", "friction_amplitude", "damper_gas_preload", "extra_viscous_damping",
                    "mass_error", "inertia_error", "spring_rate_error", "tyre_relaxation_error", "sensor_bias",
-                   "time_offset"}
+                   "time_offset", "steering_offset"}
 NO_HIDDEN = HiddenPhysics.reference().replace(amplitude_extra=(0.0, 0.0), sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0,
                           wheel_rate=(1.0, 1.0))
 AMPLITUDE = HiddenPhysics.reference().replace(sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0, wheel_rate=(1.0, 1.0))

@@ -14,8 +14,11 @@ model (design choice, see also the package docstring):
   model at zero effect;
 - ``mass_error``, ``inertia_error``, ``spring_rate_error``, ``tyre_relaxation_error`` scale vehicle
   parameters;
+- ``steering_offset`` (measurement chain): the recorded steering-wheel angle carries a constant offset;
+  the model is driven with the recorded angle minus it;
 - ``sensor_bias`` and ``time_offset`` model the measurement chain, not the car: a constant gyro offset
   per drive and axis (estimated, like a standstill zeroing, from the drive's quiet lead-in before the
+  first excitation, or, for a drive without one, profiled out as the drive's mean residual; before the
   first excitation, so it needs no maneuver data) and one time shift of the IMU against the inputs.
 """
 from __future__ import annotations
@@ -203,8 +206,13 @@ LIBRARY: tuple[Candidate, ...] = (
               "the IMU signal lags the inputs (sensor bandwidth, timestamping)",
               (CandParam("lag", "s", 0.0, -0.05, 0.05, 0.001, "measured minus model time (positive: IMU late)"),),
               _nothing, (None,), "any drive with fast body motion", "any"),
+    Candidate("steering_offset", MEASUREMENT,
+              "the steering-angle sensor is not zeroed: recorded steering-wheel angle minus the true one",
+              (CandParam("offset", "rad", 0.0, -0.05, 0.05, 0.001,
+                         "recorded minus true steering-wheel angle (one value for all drives of the car)"),),
+              _nothing, (None,), "a drive with steering (a straight stretch with a yaw-rate offset)", "lateral"),
     Candidate("sensor_bias", MEASUREMENT,
-              "constant gyro offset per drive and axis (estimated from the quiet lead-in of each drive)",
+              "constant sensor offset per drive and signal (from each drive's quiet lead-in, else its mean)",
               (), _nothing, (), "a drive with a quiet lead-in before the maneuver", "any"),
 )
 

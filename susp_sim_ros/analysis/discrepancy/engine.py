@@ -13,10 +13,12 @@ from typing import Sequence
 import numpy as np
 
 from ...model import Model, simulate_batch
+from ...model.layout import U_INDEX
 from .candidates import BY_NAME, Candidate, neutral_base
 from .data import SIGNAL_OUTPUT, SIGNAL_UNIT, DriveCase
 
 RATES = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")
+MIN_QUIET_BIAS = 20  # quiet lead-in samples for a standstill-style bias estimate
 _TO_REPORT_UNITS = np.array([np.degrees(1.0) if u == "deg/s" else 1.0 for u in SIGNAL_UNIT])
 
 
@@ -52,6 +54,10 @@ class Structure:
 
     def lag(self, x: np.ndarray) -> float:
         return float(self.part(x, "time_offset")[0]) if "time_offset" in self.names else 0.0
+
+    def steer_offset(self, x: np.ndarray) -> float:
+        """Recorded minus true steering-wheel angle [rad] (0 without the ``steering_offset`` term)."""
+        return float(self.part(x, "steering_offset")[0]) if "steering_offset" in self.names else 0.0
 
     @property
     def bias(self) -> bool:
@@ -131,9 +137,15 @@ class Evaluator:
         M, R = X.shape[0], len(idx)
         P = np.concatenate([self.rows(st, x, idx) for x in X])
         u_row = np.tile(np.array(idx), M)
-        _, Y, done = simulate_batch(self.model, P, self.U, dt=self.dt, roads=self.roads, u_row=u_row,
-                                    road_row=u_row, outputs=SIGNAL_OUTPUT)
-        bad = done < self.U.shape[1]
+        U = self.U
+        if "steering_offset" in st.names:  # the inputs differ per parameter set: one input row each
+            U = np.repeat(self.U[idx][None], M, axis=0).reshape((M * R,) + self.U.shape[1:])
+            for m, x in enumerate(X):
+                U[m * R:(m + 1) * R, :, U_INDEX["SWA"]] -= st.steer_offset(x)
+            u_row = np.arange(M * R)
+        _, Y, done = simulate_batch(self.model, P, U, dt=self.dt, roads=self.roads, u_row=u_row,
+                                    road_row=np.tile(np.array(idx), M), outputs=SIGNAL_OUTPUT)
+        bad = done < U.shape[1]
         Y[bad] = 1e3  # a diverged run: a huge residual, never a crash
         self.vehicle_seconds += M * R * self.n_max * self.dt
         if self.progress is not None:
@@ -149,18 +161,24 @@ class Evaluator:
         tq = c.t_grid_s - lag
         sim = np.column_stack([np.interp(tq, t, rates[:, a]) for a in c.axes])
         e = sim - c.y_meas
-        if bias and c.quiet is not None and c.quiet.sum() >= 5:
-            e = e - e[c.quiet].mean(axis=0)
+        if bias:
+            e = e - e[self.bias_rows(r)].mean(axis=0)
         return e
+
+    def bias_rows(self, r: int) -> np.ndarray:
+        """Comparison samples the sensor-bias estimate of drive ``r`` uses: its quiet lead-in (a
+        standstill-style zeroing) when it has one of :data:`MIN_QUIET_BIAS` samples; else every compared
+        sample that counts in the fit (the bias profiled out as a constant offset of the whole drive)."""
+        c = self.cases[r]
+        if c.quiet is not None and c.quiet.sum() >= MIN_QUIET_BIAS:
+            return c.quiet
+        return self.weights[r][:, 0] > 0
 
     def bias_values(self, r: int, rates: np.ndarray, lag: float) -> np.ndarray:
         """Estimated gyro bias [deg/s] of drive ``r`` per compared signal (measured - simulated over the
         quiet lead-in), and its standard error."""
-        c = self.cases[r]
         e = -self.case_residual(r, rates, lag, False)
-        if c.quiet is None or c.quiet.sum() < 5:
-            return np.zeros(len(c.axes)), np.full(len(c.axes), np.nan)
-        q = e[c.quiet]
+        q = e[self.bias_rows(r)]
         return q.mean(axis=0), q.std(axis=0, ddof=1) / np.sqrt(len(q))
 
     def residuals(self, st: Structure, X: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:

@@ -34,6 +34,7 @@ import numpy as np
 
 from ...errors import SuspInputError
 from ...model import Model, load_variant, load_vehicle
+from ...model.layout import U_INDEX
 from ...model.params import TermSetting
 from ...model.terms import get_term
 from .calibration import (calibration_candidate, calibration_entries, calibration_params, identifiability,
@@ -249,13 +250,36 @@ class DiscrepancyFinder:
         self.ranking_ = ranking or []
         # 5. leave-one-drive-out of the whole result against the base model
         self.heldout_ = self._heldout(ev, cur) if self.heldout else None
+        self.jackknife_se_ = _jackknife_se(self.heldout_, len(cur.x))
+        if self.jackknife_se_ is not None:
+            self._set_calibration(cur)
         return self
+
+    def ci95_(self) -> tuple[np.ndarray, np.ndarray]:
+        """95 % intervals of the final parameters: the Gauss-Newton posterior's, widened to the
+        leave-one-drive-out (jackknife) spread of the refits where that is larger. The jackknife sees what
+        per-sample statistics cannot: drives that pull a parameter apart because the model's structure
+        differs from the car's."""
+        return self._ci95(self.result_)
+
+    def _ci95(self, fit: FitResult) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = fit.ci95()
+        jk = getattr(self, "jackknife_se_", None)
+        if jk is None or fit is not getattr(self, "result_", None) or len(jk) != len(fit.x):
+            return lo, hi
+        se = np.maximum((hi - lo) / (2 * 1.96), jk)
+        return fit.x - 1.96 * se, fit.x + 1.96 * se
 
     # -- signals ------------------------------------------------------------------------------------
     def _case_sigma(self, c: DriveCase) -> np.ndarray:
+        """Noise sigma of each of the drive's signals (plus, on a drive with an unmeasured road, the road's
+        share of its handling signals; :mod:`.unmeasured`)."""
         per = self.noise_["per_drive"][c.name]
         pooled = self.noise_["noise_floors"]
-        return np.array([per[s] if math.isfinite(per[s]) and per[s] > 0 else pooled[s] for s in c.signals])
+        extra = next((u.get("extra_noise_variance", {}) for u in getattr(self, "unmeasured_", [])
+                      if u["drive"] == c.name), {})
+        return np.array([math.sqrt((per[s] if math.isfinite(per[s]) and per[s] > 0 else pooled[s]) ** 2
+                                   + extra.get(s, 0.0)) for s in c.signals])
 
     def _choose_signals(self, cases: Sequence[DriveCase], sims: np.ndarray) -> list[dict]:
         """Narrow every drive to the signals it excites (measured spread above :data:`EXCITED_RATIO` x
@@ -285,7 +309,10 @@ class DiscrepancyFinder:
         """MAP calibration of the base model with the measurement chain; identifiability; the
         measurement-chain terms kept only where the criterion wants them. Sets ``calibration_``."""
         allidx = tuple(range(len(ev.cases)))
+        steering = any(float(np.max(np.abs(c.U[:, U_INDEX["SWA"]]))) > math.radians(10) for c in ev.cases)
         meas = [n for n in ("sensor_bias", "time_offset") if n in self.candidates]
+        if steering and "steering_offset" in self.candidates:
+            meas.append("steering_offset")
         params = calibration_params(model.vehicle, model.variant) if self.calibrate else []
         self.calibration_params_ = params
         self.calibrated_vehicle_, self.calibrated_fields_, self.informed_ = model.vehicle, [], []
@@ -331,7 +358,7 @@ class DiscrepancyFinder:
         if informed and CALIBRATION in fit.structure.names:
             k = fit.structure.names.index(CALIBRATION)
             a = fit.structure.offsets[k]
-            lo, hi = fit.ci95()
+            lo, hi = self._ci95(fit)
             vals = {p.name: (fit.x[a + j], lo[a + j], hi[a + j]) for j, p in enumerate(informed)}
         x_all = np.array([vals.get(p.name, (p.prior,))[0] for p in params])
         lo_all = np.array([vals.get(p.name, (0, -math.inf))[1] for p in params])
@@ -410,6 +437,8 @@ class DiscrepancyFinder:
         """Leave-one-drive-out: the final structure (calibration included) refitted without each drive
         predicts it; against the base model. Per signal and for the primary gyro signals [deg/s]."""
         R = len(ev.cases)
+        if R == 1:
+            return self._heldout_halves(ev, final)
         folds = []
         before_sig: dict[str, list] = {}
         after_sig: dict[str, list] = {}
@@ -445,6 +474,34 @@ class DiscrepancyFinder:
         return {"before_deg_s": math.sqrt(prim_b / prim_n) if prim_n else math.nan,
                 "after_deg_s": math.sqrt(prim_a / prim_n) if prim_n else math.nan,
                 "by_signal": by_signal, "folds": folds}
+
+    def _heldout_halves(self, ev: Evaluator, final: FitResult) -> dict:
+        """A single drive: fitted on one half of its comparison samples (in time), it predicts the other,
+        and the other way round; figures pooled over both halves."""
+        c = ev.cases[0]
+        n = c.y_meas.shape[0]
+        w0 = ev.weights[0].copy()
+        e_before = self.base_residuals_[0]
+        e_after = np.zeros_like(e_before)
+        folds = []
+        for k, held in enumerate((np.arange(n) < n // 2, np.arange(n) >= n // 2)):
+            ev.weights[0] = w0 * (~held)[:, None]
+            try:
+                x = fit_structure(ev, final.structure, final.x, (0,), max_nfev=HELDOUT_NFEV).x \
+                    if final.structure.n_params else final.x
+                e = ev.case_residuals(final.structure, x, [0])[0]
+            finally:
+                ev.weights[0] = w0
+            e_after[held] = e[held]
+            folds.append({"drive": f"{c.name}:{'first' if k == 0 else 'second'}_half", "params": x.tolist(),
+                          "rmse_before_deg_s": _primary_rmse(c, e_before[held]),
+                          "rmse_after_deg_s": _primary_rmse(c, e[held])})
+        by_signal = {s: {"before": float(np.sqrt(np.mean(e_before[:, j] ** 2))),
+                         "after": float(np.sqrt(np.mean(e_after[:, j] ** 2)))} for j, s in enumerate(c.signals)}
+        fold = {"drive": c.name, "rmse_before_deg_s": _primary_rmse(c, e_before),
+                "rmse_after_deg_s": _primary_rmse(c, e_after), "by_signal": by_signal, "halves": folds}
+        return {"before_deg_s": fold["rmse_before_deg_s"], "after_deg_s": fold["rmse_after_deg_s"],
+                "by_signal": by_signal, "folds": [fold], "method": "held-out halves of the one drive"}
 
     # -- estimator API ------------------------------------------------------------------------------
     def predict(self, drive: int | str = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -482,6 +539,19 @@ def _warm(st: Structure, cur: FitResult, o) -> np.ndarray:
         x[cols] = x[cols] + o.delta
     lo, hi = st.bounds()
     return np.clip(x, lo, hi)
+
+
+def _jackknife_se(heldout: dict | None, k: int) -> np.ndarray | None:
+    """Jackknife standard errors of the final parameters from the leave-one-drive-out refits (at least
+    three drives), or None."""
+    if not heldout or k == 0:
+        return None
+    X = [f["params"] for f in heldout["folds"] if len(f.get("params", [])) == k]
+    if len(X) < 3:
+        return None
+    X = np.array(X)
+    R = len(X)
+    return np.sqrt((R - 1) / R * np.sum((X - X.mean(axis=0)) ** 2, axis=0))
 
 
 def _primary_rmse(c: DriveCase, e: np.ndarray) -> float:

@@ -42,7 +42,8 @@ def n_effective(ev: Evaluator, idx: Sequence[int]) -> float:
 
 
 def debias(ev: Evaluator, vec: np.ndarray, idx: Sequence[int]) -> np.ndarray:
-    """Subtract, per drive and signal, the mean over the quiet lead-in (the sensor-bias estimate) from
+    """Subtract, per drive and signal, the mean over the bias rows (:meth:`Evaluator.bias_rows`: the quiet
+    lead-in, else the whole drive; the sensor-bias estimate) from
     stacked residual vectors or Jacobian columns ``vec`` (n_res,) or (n_res, m)."""
     out = np.array(vec, float, copy=True)
     o = 0
@@ -50,8 +51,9 @@ def debias(ev: Evaluator, vec: np.ndarray, idx: Sequence[int]) -> np.ndarray:
         c = ev.cases[r]
         n, s = c.y_meas.shape
         blk = out[o:o + n * s].reshape((n, s) + out.shape[1:])
-        if c.quiet is not None and c.quiet.sum() >= 5:
-            blk -= blk[c.quiet].mean(axis=0, keepdims=True)
+        q = ev.bias_rows(r)
+        blk -= blk[q].mean(axis=0, keepdims=True)
+        blk[~q & ~(ev.weights[r][:, 0] > 0)] = 0.0  # rows held out of the fit stay out
         o += n * s
     return out
 
@@ -109,18 +111,18 @@ class FitResult:
     n_eff: float = 0.0
 
     def data_information_scale(self) -> float:
-        """1 / (residual variance x AR(1) inflation): how much one sample's squared Jacobian informs
-        (the inflation (1 + rho)/(1 - rho) from the residual's lag-1 autocorrelation)."""
+        """How much one sample's squared Jacobian informs: the effective independent share of a sample
+        (``n_eff / n``, as in the objective) over the residual variance (whitened units; above 1 when the
+        model misfits)."""
         k = len(self.x)
-        e = self.residual
-        rho = float(np.clip(np.dot(e[1:], e[:-1]) / max(np.dot(e, e), 1e-300), 0.0, 0.98))
-        infl = (1 + rho) / (1 - rho)
-        s2 = max(self.rss / max(self.n - k, 1), 1e-300)
-        return 1.0 / (s2 * infl)
+        s2 = max(self.rss / max(self.n - k, 1), 1.0)
+        ratio = self.n_eff / self.n if self.n_eff > 0 else 1.0
+        return ratio / s2
 
     def covariance(self) -> np.ndarray:
         """Posterior covariance: Gauss-Newton information of the data (scaled by
-        :meth:`data_information_scale`) plus the priors' (the calibration's parameters)."""
+        :meth:`data_information_scale`, the same weighting as the objective) plus the priors' (the
+        calibration's parameters)."""
         J = self.jac
         k = len(self.x)
         if J is None or k == 0:

@@ -38,7 +38,7 @@ def term_entries(f) -> list[dict]:
     """One entry per accepted term of the finder ``f``: name, where, params, ci95, evidence."""
     res = f.result_
     st = res.structure
-    lo, hi = res.ci95()
+    lo, hi = f.ci95_()
     out = []
     acc = {a["name"]: a for a in f.accepted_}
     for k, name in enumerate(st.names):

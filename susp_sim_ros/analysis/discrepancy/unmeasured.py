@@ -14,6 +14,11 @@ of class A (:func:`susp_sim_ros.model.iso8608.random_road`) at the drive's mean 
 power of the vertical specific force (or the pitch rate, when the accelerometer is not there) scales with
 the road's ``Gd(n0)``, so ``Gd(n0) = Gd_A(n0) * P_measured / P_model,A`` (band 0.5-20 Hz, the noise's
 share removed), and the class is the one whose band holds it.
+
+The drive's handling signals (yaw rate, lateral specific force) stay in the fit: the steering drives
+them. What the road adds to them in its band (from the body modes up; lateral tyre-force ripple, and roll
+through ``g phi`` in the lateral specific force) is counted as noise there (``extra_noise_variance``), so
+it does not pull the calibration.
 """
 from __future__ import annotations
 
@@ -29,6 +34,7 @@ from ...model.vehicle import make_inputs
 from .data import DriveCase
 
 VERTICAL = ("accel_z", "pitch_rate", "roll_rate")
+HANDLING = ("yaw_rate", "accel_y")  # kept in the fit; their road-band content counts as noise there
 BODY_BAND_HZ = (0.7, 3.0)
 WHEEL_BAND_HZ = (7.0, 20.0)
 CLASS_BAND_HZ = (0.5, 20.0)
@@ -71,10 +77,23 @@ def detect_unmeasured_road(case: DriveCase, resid: np.ndarray, noise: dict, mode
             powers[sig] = max(_band_power(f, p, (CLASS_BAND_HZ[0], hi)) - white * (hi - CLASS_BAND_HZ[0]), 0.0)
     if not hits:
         return None
+    # handling signals stay, but what the road puts into them (lateral force and roll through g*phi, in
+    # the road band) is not the model's to explain: it joins their noise
+    extra = {}
+    for sig in HANDLING:
+        if sig not in case.signals:
+            continue
+        e = resid[:, case.signals.index(sig)]
+        f, p = sps.welch(e - e.mean(), fs=fs, nperseg=int(min(e.size, round(4 * fs))))
+        hi = min(CLASS_BAND_HZ[1], 0.45 * fs)
+        white = 2.0 * noise[sig] ** 2 / fs
+        lo = BODY_BAND_HZ[0]
+        extra[sig] = max(_band_power(f, p, (lo, hi)) - white * (hi - lo), 0.0)
     ref_sig = next(s for s in VERTICAL if s in hits)
     speed = float(np.mean(case.U[:, U_INDEX["V"]]))
     klass, gd = _roughness_class(model, speed, fs, ref_sig, powers[ref_sig], case.oil)
     return {"kind": "road", "drive": case.name, "signals": hits, "iso8608_class": klass,
+            "extra_noise_variance": extra,
             "gd_n0_m3": gd, "class_from": ref_sig, "mean_speed_m_s": speed, "evidence": evidence,
             "statement": (f"{case.name}: no road in the recording, yet {', '.join(hits)} carry broadband "
                           f"power at the body and wheel modes far above their noise; the road is not in the "
