@@ -2,8 +2,9 @@
 
     susp diagnose bags/*.mcap --variant dahl_only [--out results/diagnose] [--name NAME] [--json]
 
-Locates where the measured gyro rates leave the base model's simulation by more than the sensor noise
-(estimated from the data), tests the candidate-term library, fits the chosen terms jointly across all
+Locates where the measured IMU signals leave the base model's simulation by more than the sensor noise
+(estimated from the data, per signal), calibrates the base model's uncertain parameters within their
+priors, tests the physics candidates on the calibrated model, fits the chosen terms jointly across all
 drives, proves the fit leave-one-drive-out, and writes the extended model (``NAME.yaml`` variant, plus
 ``NAME_vehicle.yaml`` when vehicle values were fitted), overlay plots, a JSON with every detail and a
 Markdown report into ``--out``. ``--json`` prints the interface object (interface.md, JSON outputs).
@@ -55,6 +56,7 @@ def check_drives(paths) -> list[dict]:
 
 def run(args) -> dict:
     from ..analysis.discrepancy import DiscrepancyFinder
+    from ..analysis.discrepancy.calibration import outside_statement
     from ..analysis.discrepancy.report import verdict, write_outputs
     checked = check_drives(args.drives)
     if args.dry_run:
@@ -74,8 +76,22 @@ def run(args) -> dict:
         return rep
     v, why = verdict(f)
     lines = [f"verdict: {v} ({why})",
-             f"noise floor {rep['noise_floor_deg_s']:.4f} deg/s; held-out RMSE {rep['heldout_rmse_before_deg_s']:.4f}"
+             f"noise floor {rep['noise_floor_deg_s']:.4f} deg/s; "
+             f"{'in-sample' if args.no_heldout else 'held-out'} RMSE {rep['heldout_rmse_before_deg_s']:.4f}"
              f" -> {rep['heldout_rmse_after_deg_s']:.4f} deg/s"]
+    informed = [c for c in rep["calibration"] if c["informed"]]
+    lines.append(f"calibration: {len(informed)} of {len(rep['calibration'])} base-model parameters informed by "
+                 f"the drives" + (": " + ", ".join(f"{c['param']}{'' if c['where'] == 'all' else '_' + c['where']} "
+                                                    f"{c['prior']:.4g} -> {c['value']:.4g} {c['unit']}"
+                                                    for c in informed[:6]) + (" ..." if len(informed) > 6 else "")
+                                   if informed else ""))
+    for c in rep["calibration"]:
+        if c["outside_prior"]:
+            lines.append(f"  finding: {outside_statement(c)}")
+    if rep.get("unmeasured_input"):
+        u = rep["unmeasured_input"]
+        lines.append(f"unmeasured input ({u['kind']}) drives {', '.join(u['signals'])}; ISO 8608 class "
+                     f"{u['iso8608_class'] or 'unknown'}")
     for t in rep["terms"]:
         lines.append(f"  {t['name']} ({t['where']}): {t['evidence'].get('statement', '')}")
     for s in rep["not_identifiable"]:

@@ -52,6 +52,8 @@ FLOOR_STOP = 1.05          # stop when the in-sample RMS is within 5 % of the no
 UNEXPLAINED_RATIO = 1.5    # held-out after above this x noise floor and little explained -> unexplained
 EXCITED_RATIO = 4.0        # a signal is compared when its measured spread exceeds this x its noise floor
 MIN_HELDOUT_GAIN = 0.02    # a term must lower the held-out residual above noise by at least 2 %
+TRIALS = 3                 # best-screened candidates (and pairs) refitted nonlinearly at each step
+TRIAL_NFEV = 10            # iterations of such a trial fit (warm start; the accepted model is polished)
 HELDOUT_NFEV = 6           # least-squares iterations of each final leave-one-drive-out refit (warm start)
 MIN_STABLE = 0.5           # ... and be selected (train-set BIC test) in at least half the refits
 TERM_MODULES = {"friction_amplitude": "susp_sim_ros.analysis.synthetic",
@@ -214,9 +216,9 @@ class DiscrepancyFinder:
             excess = max(cur.rss - n, 1e-12)
             best, best_fit, ok, checks = None, None, False, {}
             for size in (1, 2):  # singles first; a pair only when no single term alone passes
-                for o in [o for o in opts if len(o.add) == size][:3]:
+                for o in [o for o in opts if len(o.add) == size][:TRIALS]:
                     st = cur.structure.with_(*o.add)
-                    f = fit_structure(ev, st, _warm(st, cur, o), allidx, max_nfev=20)
+                    f = fit_structure(ev, st, _warm(st, cur, o), allidx, max_nfev=TRIAL_NFEV)
                     if best_fit is None or f.bic < best_fit.bic:
                         best, best_fit = o, f
                 gain = cur.rss - best_fit.rss

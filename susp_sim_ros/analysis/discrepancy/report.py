@@ -89,7 +89,8 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
         s += (f"; on drives held out from its fit it removes {100 * ev['heldout_gain_fraction_of_excess']:.0f} % "
               f"of the residual above noise and is selected in {100 * ev['selected_in_fraction_of_refits']:.0f} % "
               f"of the leave-one-drive-out refits")
-    s += "; no recalibration of the base model within its priors explains it (fitted jointly with them)"
+    if cand.kind == PHYSICS:
+        s += "; no recalibration of the base model within its priors explains it (fitted jointly with them)"
     return s
 
 
