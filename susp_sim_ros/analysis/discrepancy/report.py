@@ -95,9 +95,10 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
 
 
 def verdict(f) -> tuple[str, str]:
-    """The verdict and its reason in plain words. All figures in whitened units (x noise) pooled over
-    every compared signal, so a yaw-rate or acceleration residual counts like a pitch-rate one."""
-    before, after = _pooled_noise_ratio(f)
+    """The verdict and its reason in plain words. Judged on the worst signal: its held-out RMS after the
+    fit in units of its own noise floor (a shake in the pitch rate is not diluted by clean yaw and
+    acceleration signals), and the share of its excess over noise the fit removed."""
+    sig, before, after = _worst_signal(f)
     phys = [n for n in f.result_.structure.names if n in BY_NAME and BY_NAME[n].kind == PHYSICS]
     significant = bool(f.windows_)
     excess_before = max(before ** 2 - 1.0, 0.0)
@@ -109,32 +110,36 @@ def verdict(f) -> tuple[str, str]:
     if not phys and after <= UNEXPLAINED_RATIO:
         if not significant:
             return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
-        return "no_significant_discrepancy", (f"the calibrated base model (and measurement chain) leaves "
-                                              f"{after:.2f} x the noise held-out; nothing is missing")
+        return "no_significant_discrepancy", (f"the calibrated base model (and measurement chain) leaves at most "
+                                              f"{after:.2f} x the noise held-out ({sig}); nothing is missing")
     if after > UNEXPLAINED_RATIO and explained < 0.5:
-        return "unexplained_residual", (f"a residual of {after:.2f} x the noise floor remains held-out after "
-                                        f"calibration; the candidate library explains "
-                                        f"{100 * max(explained, 0):.0f} % of the base model's excess")
+        return "unexplained_residual", (f"a residual of {after:.2f} x its noise floor remains in {sig} held-out "
+                                        f"after calibration; the candidate library explains "
+                                        f"{100 * max(explained, 0):.0f} % of the base model's excess there")
     if not phys:
         return "no_significant_discrepancy", "calibration of the known physics explains the residual"
-    return "missing_physics", f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out residual above noise"
+    return "missing_physics", (f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out residual above "
+                               f"noise in {sig}, the worst signal")
 
 
-def _pooled_noise_ratio(f) -> tuple[float, float]:
-    """Held-out RMS of the whitened residual (x noise) of the base model and of the final model (the
-    in-sample fit when held-out was switched off)."""
+def _worst_signal(f) -> tuple[str, float, float]:
+    """(signal, before, after): the compared signal with the largest held-out RMS after the fit in units of
+    its noise floor (in-sample when held-out was switched off), and its base-model figure."""
+    floors = f.noise_["noise_floors"]
     ho = f.heldout_
     if ho and ho.get("by_signal"):
-        b = a = n = 0.0
-        for fo, c in zip(ho["folds"], f.cases_):
-            sig = f.evaluator_.weights[f.cases_.index(c)][0]
+        per = {s: (v["before"] / floors[s], v["after"] / floors[s]) for s, v in ho["by_signal"].items()}
+    else:
+        base = f.evaluator_.case_residuals(f.base_fit_.structure, f.base_fit_.x)
+        fin = f.evaluator_.case_residuals(f.result_.structure, f.result_.x)
+        acc: dict[str, list] = {}
+        for r, c in enumerate(f.cases_):
             for j, s in enumerate(c.signals):
-                m = c.y_meas.shape[0]
-                b += (fo["by_signal"][s]["before"] * sig[j]) ** 2 * m
-                a += (fo["by_signal"][s]["after"] * sig[j]) ** 2 * m
-                n += m
-        return math.sqrt(b / n), math.sqrt(a / n)
-    return math.sqrt(f.base_fit_.rss / f.base_fit_.n), math.sqrt(f.result_.rss / f.result_.n)
+                acc.setdefault(s, []).append((np.sum(base[r][:, j] ** 2), np.sum(fin[r][:, j] ** 2), base[r].shape[0]))
+        per = {s: (math.sqrt(sum(a for a, _, _ in v) / sum(n for _, _, n in v)) / floors[s],
+                   math.sqrt(sum(b for _, b, _ in v) / sum(n for _, _, n in v)) / floors[s]) for s, v in acc.items()}
+    sig = max(per, key=lambda s: per[s][1])
+    return sig, per[sig][0], per[sig][1]
 
 
 UNEXPLAINED_RATIO = 1.5
