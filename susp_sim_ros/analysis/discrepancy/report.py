@@ -95,31 +95,52 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
 
 
 def verdict(f) -> tuple[str, str]:
-    """The verdict and its reason in plain words. Judged on the worst signal: its held-out RMS after the
-    fit in units of its own noise floor (a shake in the pitch rate is not diluted by clean yaw and
-    acceleration signals), and the share of its excess over noise the fit removed."""
-    sig, before, after = _worst_signal(f)
+    """The verdict and its reason in plain words.
+
+    With accepted physics terms (each passed its held-out test): ``missing_physics`` when together they
+    remove at least half of the held-out residual above noise, pooled over every compared signal in
+    units of its noise floor; else ``unexplained_residual``. Without physics terms: judged on the worst
+    signal (its held-out RMS in units of its own noise floor), so a shake in one signal is not diluted by
+    clean ones: ``unexplained_residual`` above :data:`UNEXPLAINED_RATIO`, else
+    ``no_significant_discrepancy``; ``unmeasured_input`` first when a drive lacks its road."""
     phys = [n for n in f.result_.structure.names if n in BY_NAME and BY_NAME[n].kind == PHYSICS]
-    significant = bool(f.windows_)
-    excess_before = max(before ** 2 - 1.0, 0.0)
-    excess_after = max(after ** 2 - 1.0, 0.0)
-    explained = 1.0 - excess_after / excess_before if excess_before > 0 else 1.0
     unmeasured = getattr(f, "unmeasured_", [])
-    if unmeasured and not phys:
+    if phys:
+        before, after = _pooled(f)
+        eb, ea = max(before ** 2 - 1.0, 0.0), max(after ** 2 - 1.0, 0.0)
+        explained = 1.0 - ea / eb if eb > 0 else 1.0
+        if explained >= 0.5:
+            return "missing_physics", (f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out "
+                                       f"residual above noise")
+        return "unexplained_residual", (f"the accepted terms ({', '.join(phys)}) explain only "
+                                        f"{100 * max(explained, 0):.0f} % of the held-out residual above noise")
+    if unmeasured:
         return "unmeasured_input", "; ".join(u["statement"] for u in unmeasured)
-    if not phys and after <= UNEXPLAINED_RATIO:
-        if not significant:
-            return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
-        return "no_significant_discrepancy", (f"the calibrated base model (and measurement chain) leaves at most "
-                                              f"{after:.2f} x the noise held-out ({sig}); nothing is missing")
-    if after > UNEXPLAINED_RATIO and explained < 0.5:
+    sig, before, after = _worst_signal(f)
+    if after > UNEXPLAINED_RATIO:
         return "unexplained_residual", (f"a residual of {after:.2f} x its noise floor remains in {sig} held-out "
-                                        f"after calibration; the candidate library explains "
-                                        f"{100 * max(explained, 0):.0f} % of the base model's excess there")
-    if not phys:
-        return "no_significant_discrepancy", "calibration of the known physics explains the residual"
-    return "missing_physics", (f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out residual above "
-                               f"noise in {sig}, the worst signal")
+                                        f"after calibration; no candidate explains it")
+    if not f.windows_:
+        return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
+    return "no_significant_discrepancy", (f"the calibrated base model (and measurement chain) leaves at most "
+                                          f"{after:.2f} x the noise held-out ({sig}); nothing is missing")
+
+
+def _pooled(f) -> tuple[float, float]:
+    """Held-out RMS (x noise) of the base and the final model, pooled over every compared signal."""
+    floors = f.noise_["noise_floors"]
+    ho = f.heldout_
+    if ho and ho.get("by_signal"):
+        b = a = n = 0.0
+        for fo, c in zip(ho["folds"], f.cases_):
+            m = c.y_meas.shape[0]
+            for s in c.signals:
+                v = fo["by_signal"][s]
+                b += (v["before"] / floors[s]) ** 2 * m
+                a += (v["after"] / floors[s]) ** 2 * m
+                n += m
+        return math.sqrt(b / n), math.sqrt(a / n)
+    return math.sqrt(f.base_fit_.rss / f.base_fit_.n), math.sqrt(f.result_.rss / f.result_.n)
 
 
 def _worst_signal(f) -> tuple[str, float, float]:
