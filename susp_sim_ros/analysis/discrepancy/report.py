@@ -95,72 +95,46 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
 
 
 def verdict(f) -> tuple[str, str]:
-    """The verdict and its reason in plain words.
-
-    With accepted physics terms (each passed its held-out test): ``missing_physics`` when together they
-    remove at least half of the held-out residual above noise, pooled over every compared signal in
-    units of its noise floor; else ``unexplained_residual``. Without physics terms: judged on the worst
-    signal (its held-out RMS in units of its own noise floor), so a shake in one signal is not diluted by
-    clean ones: ``unexplained_residual`` above :data:`UNEXPLAINED_RATIO`, else
-    ``no_significant_discrepancy``; ``unmeasured_input`` first when a drive lacks its road."""
+    """The verdict and its reason in plain words. All figures in whitened units (x noise) pooled over
+    every compared signal, so a yaw-rate or acceleration residual counts like a pitch-rate one."""
+    before, after = _pooled_noise_ratio(f)
     phys = [n for n in f.result_.structure.names if n in BY_NAME and BY_NAME[n].kind == PHYSICS]
+    significant = bool(f.windows_)
+    excess_before = max(before ** 2 - 1.0, 0.0)
+    excess_after = max(after ** 2 - 1.0, 0.0)
+    explained = 1.0 - excess_after / excess_before if excess_before > 0 else 1.0
     unmeasured = getattr(f, "unmeasured_", [])
-    if phys:
-        before, after = _pooled(f)
-        eb, ea = max(before ** 2 - 1.0, 0.0), max(after ** 2 - 1.0, 0.0)
-        explained = 1.0 - ea / eb if eb > 0 else 1.0
-        if explained >= 0.5:
-            return "missing_physics", (f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out "
-                                       f"residual above noise")
-        return "unexplained_residual", (f"the accepted terms ({', '.join(phys)}) explain only "
-                                        f"{100 * max(explained, 0):.0f} % of the held-out residual above noise")
-    if unmeasured:
+    if unmeasured and not phys:
         return "unmeasured_input", "; ".join(u["statement"] for u in unmeasured)
-    sig, before, after = _worst_signal(f)
-    if after > UNEXPLAINED_RATIO:
-        return "unexplained_residual", (f"a residual of {after:.2f} x its noise floor remains in {sig} held-out "
-                                        f"after calibration; no candidate explains it")
-    if not f.windows_:
-        return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
-    return "no_significant_discrepancy", (f"the calibrated base model (and measurement chain) leaves at most "
-                                          f"{after:.2f} x the noise held-out ({sig}); nothing is missing")
+    if not phys and after <= UNEXPLAINED_RATIO:
+        if not significant:
+            return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
+        return "no_significant_discrepancy", (f"the calibrated base model (and measurement chain) leaves "
+                                              f"{after:.2f} x the noise held-out; nothing is missing")
+    if after > UNEXPLAINED_RATIO and explained < 0.5:
+        return "unexplained_residual", (f"a residual of {after:.2f} x the noise floor remains held-out after "
+                                        f"calibration; the candidate library explains "
+                                        f"{100 * max(explained, 0):.0f} % of the base model's excess")
+    if not phys:
+        return "no_significant_discrepancy", "calibration of the known physics explains the residual"
+    return "missing_physics", f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out residual above noise"
 
 
-def _pooled(f) -> tuple[float, float]:
-    """Held-out RMS (x noise) of the base and the final model, pooled over every compared signal."""
-    floors = f.noise_["noise_floors"]
+def _pooled_noise_ratio(f) -> tuple[float, float]:
+    """Held-out RMS of the whitened residual (x noise) of the base model and of the final model (the
+    in-sample fit when held-out was switched off)."""
     ho = f.heldout_
     if ho and ho.get("by_signal"):
         b = a = n = 0.0
         for fo, c in zip(ho["folds"], f.cases_):
-            m = c.y_meas.shape[0]
-            for s in c.signals:
-                v = fo["by_signal"][s]
-                b += (v["before"] / floors[s]) ** 2 * m
-                a += (v["after"] / floors[s]) ** 2 * m
+            sig = f.evaluator_.weights[f.cases_.index(c)][0]
+            for j, s in enumerate(c.signals):
+                m = c.y_meas.shape[0]
+                b += (fo["by_signal"][s]["before"] * sig[j]) ** 2 * m
+                a += (fo["by_signal"][s]["after"] * sig[j]) ** 2 * m
                 n += m
         return math.sqrt(b / n), math.sqrt(a / n)
     return math.sqrt(f.base_fit_.rss / f.base_fit_.n), math.sqrt(f.result_.rss / f.result_.n)
-
-
-def _worst_signal(f) -> tuple[str, float, float]:
-    """(signal, before, after): the compared signal with the largest held-out RMS after the fit in units of
-    its noise floor (in-sample when held-out was switched off), and its base-model figure."""
-    floors = f.noise_["noise_floors"]
-    ho = f.heldout_
-    if ho and ho.get("by_signal"):
-        per = {s: (v["before"] / floors[s], v["after"] / floors[s]) for s, v in ho["by_signal"].items()}
-    else:
-        base = f.evaluator_.case_residuals(f.base_fit_.structure, f.base_fit_.x)
-        fin = f.evaluator_.case_residuals(f.result_.structure, f.result_.x)
-        acc: dict[str, list] = {}
-        for r, c in enumerate(f.cases_):
-            for j, s in enumerate(c.signals):
-                acc.setdefault(s, []).append((np.sum(base[r][:, j] ** 2), np.sum(fin[r][:, j] ** 2), base[r].shape[0]))
-        per = {s: (math.sqrt(sum(a for a, _, _ in v) / sum(n for _, _, n in v)) / floors[s],
-                   math.sqrt(sum(b for _, b, _ in v) / sum(n for _, _, n in v)) / floors[s]) for s, v in acc.items()}
-    sig = max(per, key=lambda s: per[s][1])
-    return sig, per[sig][0], per[sig][1]
 
 
 UNEXPLAINED_RATIO = 1.5
