@@ -107,7 +107,6 @@ class Evaluator:
         self.dt = self.cases[0].dt
         self.vehicle_seconds = 0.0
         self.progress = progress
-        self.n_res = [c.y_meas.size for c in self.cases]
         # residual weights (n_grid, n_sig): 1 / noise sigma of each drive's signal once known
         self.weights = [np.ones_like(c.y_meas) for c in self.cases]
 
@@ -116,7 +115,11 @@ class Evaluator:
         whitened (divided by it) wherever they are stacked for fitting."""
         self.weights = [np.broadcast_to(1.0 / np.maximum(np.asarray(s, float), 1e-12), c.y_meas.shape).copy()
                         for s, c in zip(sigma, self.cases)]
-        self.n_res = [c.y_meas.size for c in self.cases]
+
+    @property
+    def n_res(self) -> list[int]:
+        """Compared values per drive (samples x signals; drives may be narrowed to fewer signals)."""
+        return [c.y_meas.size for c in self.cases]
 
     # -- parameters ---------------------------------------------------------------------------------
     def rows(self, st: Structure, x: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:

@@ -39,10 +39,10 @@ from ...model.params import TermSetting
 from ...model.terms import get_term
 from .calibration import (calibration_candidate, calibration_entries, calibration_params, identifiability,
                           vehicle_at)
-from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PARAMETER, PHYSICS, SWITCH_OF
+from .candidates import BY_NAME, CALIBRATION, LIBRARY, PHYSICS, SWITCH_OF
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .engine import Evaluator, Structure
-from .fit import FitResult, fit_structure, screen
+from .fit import FitResult, fit_structure, prior_rows, screen
 from .locate import base_outputs, locate, noise_floor
 from .unmeasured import detect_unmeasured_road
 
@@ -50,6 +50,7 @@ MIN_DELTA_BIC = 10.0
 MIN_EXPLAINED = 0.05
 FLOOR_STOP = 1.05          # stop when the in-sample RMS is within 5 % of the noise floor
 UNEXPLAINED_RATIO = 1.5    # held-out after above this x noise floor and little explained -> unexplained
+STEERING_RAD = math.radians(10)  # steering-wheel angle that makes lateral wheel forces of note
 EXCITED_RATIO = 4.0        # a signal is compared when its measured spread exceeds this x its noise floor
 MIN_HELDOUT_GAIN = 0.02    # a term must lower the held-out residual above noise by at least 2 %
 TRIALS = 3                 # best-screened candidates (and pairs) refitted nonlinearly at each step
@@ -109,10 +110,7 @@ class DiscrepancyFinder:
     def _testable(self, cases: Sequence[DriveCase], base_variant) -> tuple[list[str], list[dict], list[str]]:
         """Candidates to test; the not-identifiable ones with the maneuver that would reveal them; the
         ones already in the base model."""
-        empty = {ax: any(c.oil[k] < 0.999 or c.oil[k + 1] < 0.999 for c in cases)
-                 for ax, k in (("front", 0), ("rear", 2))}
-        lateral = any(c.maneuver == "sine_steer" or float(np.max(np.abs(c.U[:, 2]))) > math.radians(10)
-                      for c in cases)
+        lateral = any(c.maneuver == "sine_steer" for c in cases) or _steers(cases)
         bump = any(c.road is not None and len(c.road) >= 2 for c in cases) or \
             any(np.any(c.U[:, 3:7] != 0) for c in cases)
         in_base, out, skip = [], [], []
@@ -172,14 +170,15 @@ class DiscrepancyFinder:
             mark_quiet(c, sims[r][:, :3])
         self.noise_ = noise_floor(cases, list(sims))
         # 2. which signals each drive excites; unmeasured road input
-        self.unmeasured_ = self._choose_signals(cases, sims)
-        ev.set_noise([self._case_sigma(c) for c in cases])
+        self.unmeasured_ = self._choose_signals(ev, sims)
+        sigmas = [self._case_sigma(c) for c in cases]
+        ev.set_noise(sigmas)
         self.noise_floor_ = self.noise_["noise_floor_deg_s"]
         base_res = [ev.case_residual(r, sims[r], 0.0, False) for r in allidx]
         self.base_residuals_ = base_res
         outs = [base_outputs(model, c, ev.Pn[r]) for r, c in enumerate(cases)]
         self.base_outputs_ = outs
-        self.windows_ = locate(cases, base_res, [self._case_sigma(c) for c in cases], outs)
+        self.windows_ = locate(cases, base_res, sigmas, outs)
         testable, skipped, in_base = self._testable(cases, self.base_variant_)
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
         base_fit = fit_structure(ev, Structure([]))
@@ -283,11 +282,11 @@ class DiscrepancyFinder:
         return np.array([math.sqrt((per[s] if math.isfinite(per[s]) and per[s] > 0 else pooled[s]) ** 2
                                    + extra.get(s, 0.0)) for s in c.signals])
 
-    def _choose_signals(self, cases: Sequence[DriveCase], sims: np.ndarray) -> list[dict]:
+    def _choose_signals(self, ev: Evaluator, sims: np.ndarray) -> list[dict]:
         """Narrow every drive to the signals it excites (measured spread above :data:`EXCITED_RATIO` x
         noise; the maneuver's primary gyro signal always); drop the signals an unmeasured road drives."""
         found = []
-        for r, c in enumerate(cases):
+        for r, c in enumerate(ev.cases):
             per = self.noise_["per_drive"][c.name]
             keep = []
             for j, sig in enumerate(c.signals):
@@ -295,9 +294,7 @@ class DiscrepancyFinder:
                 if sig in primary_signals(c.maneuver) or spread > EXCITED_RATIO * per.get(sig, math.inf):
                     keep.append(sig)
             if not has_road_input(c):
-                t = c.dt * np.arange(1, sims.shape[1] + 1)
-                sim_on_grid = np.column_stack([np.interp(c.t_grid_s, t, sims[r][:, a]) for a in c.axes])
-                hit = detect_unmeasured_road(c, sim_on_grid - c.y_meas, per, self.model_)
+                hit = detect_unmeasured_road(c, ev.case_residual(r, sims[r], 0.0, False), per, self.model_)
                 if hit is not None:
                     found.append(hit)
                     keep = [s for s in keep if s not in hit["signals"]]
@@ -311,9 +308,8 @@ class DiscrepancyFinder:
         """MAP calibration of the base model with the measurement chain; identifiability; the
         measurement-chain terms kept only where the criterion wants them. Sets ``calibration_``."""
         allidx = tuple(range(len(ev.cases)))
-        steering = any(float(np.max(np.abs(c.U[:, U_INDEX["SWA"]]))) > math.radians(10) for c in ev.cases)
         meas = [n for n in ("sensor_bias", "time_offset") if n in self.candidates]
-        if steering and "steering_offset" in self.candidates:
+        if _steers(ev.cases) and "steering_offset" in self.candidates:
             meas.append("steering_offset")
         params = calibration_params(model.vehicle, model.variant) if self.calibrate else []
         self.calibration_params_ = params
@@ -407,14 +403,9 @@ class DiscrepancyFinder:
                 base = r + J @ d0
                 A = J[tr][:, free]
                 b = -base[tr]
-                rows = [(free.index(j), m, sd) for j, m, sd in zip(pidx, pmu, psd) if j in free]
-                if rows:
-                    Ap = np.zeros((len(rows), len(free)))
-                    bp = np.zeros(len(rows))
-                    for q, (c, m, sd) in enumerate(rows):
-                        Ap[q, c] = pw / sd
-                        bp[q] = -pw * (x[free[c]] + d0[free[c]] - m) / sd
-                    A, b = np.vstack([A, Ap]), np.concatenate([b, bp])
+                pr = prior_rows(free, x + d0, pidx, pmu, psd, pw)
+                if pr is not None:
+                    A, b = np.vstack([A, pr[0]]), np.concatenate([b, pr[1]])
                 d, *_ = np.linalg.lstsq(A, b, rcond=None)
                 e = base + J[:, free] @ d
                 out[tag] = (float(e[held] @ e[held]), float(e[tr] @ e[tr]))
@@ -541,6 +532,11 @@ def _warm(st: Structure, cur: FitResult, o) -> np.ndarray:
         x[cols] = x[cols] + o.delta
     lo, hi = st.bounds()
     return np.clip(x, lo, hi)
+
+
+def _steers(cases: Sequence[DriveCase]) -> bool:
+    """Whether any drive steers by more than :data:`STEERING_RAD` (steering-wheel angle)."""
+    return any(float(np.max(np.abs(c.U[:, U_INDEX["SWA"]]))) > STEERING_RAD for c in cases)
 
 
 def _jackknife_se(heldout: dict | None, k: int) -> np.ndarray | None:

@@ -198,6 +198,22 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
                      int(sol.nfev), r, J, idx, ne)
 
 
+def prior_rows(free: Sequence[int], at: np.ndarray, pidx, pmu, psd, pw: float):
+    """Rows ``(A, b)`` that add the normal priors of the parameters among the columns ``free`` to a
+    linearised least-squares step taken at ``at`` (the step ``d`` then minimises ``|A d - b|`` with them);
+    ``None`` when none of ``free`` has a prior."""
+    free = list(free)
+    rows = [(free.index(j), m, sd) for j, m, sd in zip(pidx, pmu, psd) if j in free]
+    if not rows:
+        return None
+    A = np.zeros((len(rows), len(free)))
+    b = np.zeros(len(rows))
+    for q, (c, m, sd) in enumerate(rows):
+        A[q, c] = pw / sd
+        b[q] = -pw * (at[free[c]] - m) / sd
+    return A, b
+
+
 @dataclass
 class Option:
     add: tuple[str, ...]
@@ -236,15 +252,10 @@ def screen(ev: Evaluator, current: FitResult, remaining: Sequence[str], *, pairs
             r, Js = debias(ev, r0, idx), debias(ev, Js, idx)
         if Js.shape[1]:
             # prior rows of the calibration's parameters keep the linearised step within reason
-            pc = [(cols.index(j), m, sd) for j, m, sd in zip(pidx, pmu, psd) if j in cols]
             A, b = Js, -r
-            if pc:
-                Ap = np.zeros((len(pc), len(cols)))
-                bp = np.zeros(len(pc))
-                for q, (c, m, sd) in enumerate(pc):
-                    Ap[q, c] = pw / sd
-                    bp[q] = -pw * (x[cols[c]] - m) / sd
-                A, b = np.vstack([Js, Ap]), np.concatenate([-r, bp])
+            pr = prior_rows(cols, x, pidx, pmu, psd, pw)
+            if pr is not None:
+                A, b = np.vstack([Js, pr[0]]), np.concatenate([-r, pr[1]])
             d, *_ = np.linalg.lstsq(A, b, rcond=None)
             d = np.clip(x[cols] + d, lo[cols], hi[cols]) - x[cols]
             e = r + Js @ d

@@ -209,7 +209,6 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
     tables are rewritten so the hydraulic curves the model derives from them stay the ones the fit used
     (:func:`_keep_hydraulic_curves`).
     """
-    from ...model.params import load_vehicle
     res = f.result_
     st, x = res.structure, res.x
     base = f.base_variant_
@@ -491,13 +490,13 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
     ident = getattr(f, "identifiability_", None)
     if ident and ident.get("combinations"):
         L += ["", "Informed only as combinations (weights of one informed direction):"]
-        L += [f"- " + ", ".join(f"{k} {w:+.2f}" for k, w in c["weights"].items()) for c in ident["combinations"]]
+        L += ["- " + ", ".join(f"{k} {w:+.2f}" for k, w in c["weights"].items()) for c in ident["combinations"]]
     for u in getattr(f, "unmeasured_", []):
         L += ["", f"**Unmeasured input:** {u['statement']}."]
     L += ["", "## Findings (missing physics)", ""]
     for t in rep["terms"]:
         L.append(f"- **{t['name']}** ({t['where']}): {t['evidence'].get('statement', '')}.")
-        L.append(f"  - parameters: " + ", ".join(
+        L.append("  - parameters: " + ", ".join(
             f"{k} = {_fmt(val)} [{_fmt(rep_ci(t, k)[0])}, {_fmt(rep_ci(t, k)[1])}]"
             for k, val in t["params"].items() if not isinstance(val, dict)))
     if not rep["terms"]:

@@ -48,6 +48,11 @@ def _band_power(f: np.ndarray, p: np.ndarray, band: tuple[float, float]) -> floa
     return float(np.trapezoid(p[m], f[m])) if m.sum() >= 2 else math.nan
 
 
+def _psd(e: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """One-sided Welch PSD of a residual column (4 s segments, or the whole record)."""
+    return sps.welch(e - e.mean(), fs=fs, nperseg=int(min(e.size, round(4 * fs))))
+
+
 def detect_unmeasured_road(case: DriveCase, resid: np.ndarray, noise: dict, model) -> dict | None:
     """The ``unmeasured_input`` finding of a drive without road input, or None.
 
@@ -61,8 +66,7 @@ def detect_unmeasured_road(case: DriveCase, resid: np.ndarray, noise: dict, mode
     for sig in VERTICAL:
         if sig not in case.signals or not math.isfinite(noise.get(sig, math.nan)):
             continue
-        e = resid[:, case.signals.index(sig)]
-        f, p = sps.welch(e - e.mean(), fs=fs, nperseg=int(min(e.size, round(4 * fs))))
+        f, p = _psd(resid[:, case.signals.index(sig)], fs)
         white = 2.0 * noise[sig] ** 2 / fs
         ratios = {}
         for name, band in (("body", BODY_BAND_HZ), ("wheel", WHEEL_BAND_HZ)):
@@ -83,8 +87,7 @@ def detect_unmeasured_road(case: DriveCase, resid: np.ndarray, noise: dict, mode
     for sig in HANDLING:
         if sig not in case.signals:
             continue
-        e = resid[:, case.signals.index(sig)]
-        f, p = sps.welch(e - e.mean(), fs=fs, nperseg=int(min(e.size, round(4 * fs))))
+        f, p = _psd(resid[:, case.signals.index(sig)], fs)
         hi = min(CLASS_BAND_HZ[1], 0.45 * fs)
         white = 2.0 * noise[sig] ** 2 / fs
         lo = BODY_BAND_HZ[0]
@@ -110,7 +113,7 @@ def _roughness_class(model, speed: float, fs: float, sig: str, p_meas: float, oi
     res = simulate(model, make_inputs(n, speed, 0.0), dt=dt, road=road, oil=oil, outputs=[_OUTPUT[sig]])
     y = res.y[:, 0] * _TO_UNITS[sig]
     y = y[int(3.0 / dt):]  # settle
-    f, p = sps.welch(y - y.mean(), fs=1.0 / dt, nperseg=int(4.0 / dt))
+    f, p = _psd(y, 1.0 / dt)
     hi = min(CLASS_BAND_HZ[1], 0.45 * fs)
     p_model = _band_power(f, p, (CLASS_BAND_HZ[0], hi))
     if not p_model > 0:
