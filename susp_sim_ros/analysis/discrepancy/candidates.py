@@ -62,6 +62,8 @@ class Candidate:
     axle_of: tuple[str | None, ...] = ()
     reveal_with: str = ""
     needs: str = ""  # what the drives must contain to identify it: oil_empty, lateral, bump, any
+    term_module: str = ""  # physics terms: the module whose import registers the kernel term (written
+    #                        into a variant's ``terms:`` so the node can import it)
 
     @property
     def n_params(self) -> int:
@@ -176,18 +178,19 @@ LIBRARY: tuple[Candidate, ...] = (
               (CandParam("extra_front", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, front"),
                CandParam("extra_rear", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, rear")),
               _term_axles("friction_amplitude", "extra_level"), ("front", "rear"),
-              "a bump crossing (strokes of several cm), best with oil-empty dampers", "bump"),
+              "a bump crossing (strokes of several cm), best with oil-empty dampers", "bump",
+              "susp_sim_ros.analysis.synthetic"),
     Candidate("damper_gas_preload", PHYSICS,
               "gas-spring force of a pressurised damper: preload change plus gas stiffness",
               (CandParam("f0", "N", 0.0, -500.0, 500.0, 20.0, "force change at static deflection"),
                CandParam("k", "N/m", 0.0, -20000.0, 20000.0, 1000.0, "gas stiffness")),
-              _gas, (None, None), "a bump crossing (large deflection)", "bump"),
+              _gas, (None, None), "a bump crossing (large deflection)", "bump", "susp_sim_ros.model.extra_terms"),
     Candidate("extra_viscous_damping", PHYSICS,
               "additional linear damping c*v in parallel with the damper (bushings, residual oil)",
               (CandParam("c_front", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, front"),
                CandParam("c_rear", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, rear")),
               _term_axles("extra_viscous_damping", "c"), ("front", "rear"), "any drive with body motion",
-              "any"),
+              "any", "susp_sim_ros.model.extra_terms"),
     Candidate("mass_error", PARAMETER, "sprung mass differs from the parameter set (loading, tolerance)",
               (CandParam("scale", "1", 1.0, 0.8, 1.2, 0.01, "sprung mass factor"),),
               _mass, (None,), "a bump crossing (heave/pitch frequencies)", "any"),

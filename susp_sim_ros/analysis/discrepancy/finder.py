@@ -25,6 +25,7 @@ calibration explains.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import math
 import time
 from pathlib import Path
@@ -57,14 +58,12 @@ TRIALS = 3                 # best-screened candidates (and pairs) refitted nonli
 TRIAL_NFEV = 10            # iterations of such a trial fit (warm start; the accepted model is polished)
 HELDOUT_NFEV = 6           # least-squares iterations of each final leave-one-drive-out refit (warm start)
 MIN_STABLE = 0.5           # ... and be selected (train-set BIC test) in at least half the refits
-TERM_MODULES = {"friction_amplitude": "susp_sim_ros.analysis.synthetic",
-                "extra_viscous_damping": "susp_sim_ros.model.extra_terms",
-                "damper_gas_preload": "susp_sim_ros.model.extra_terms"}
+TERM_CANDIDATES = tuple(c for c in LIBRARY if c.term_module)  # candidates that are kernel terms
 
 
 def _ensure_terms_registered():
-    from .. import synthetic  # noqa: F401  (registers friction_amplitude)
-    from ...model import extra_terms  # noqa: F401
+    for c in TERM_CANDIDATES:
+        importlib.import_module(c.term_module)
 
 
 def extended_model(vehicle, variant) -> Model:
@@ -74,7 +73,7 @@ def extended_model(vehicle, variant) -> Model:
     var = variant if not isinstance(variant, (str, Path)) else load_variant(variant)
     have = {s.term.name for s in var.terms}
     extra = []
-    for name in TERM_MODULES:
+    for name in (c.name for c in TERM_CANDIDATES):
         if name not in have:
             t = get_term(name)
             vals = {p.name: (p.default,) * 4 for p in t.params}

@@ -221,18 +221,17 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
     for s in base.terms:
         var["terms"].append({"name": s.term.name, "params": {k: {"FL": v[0], "FR": v[1], "RL": v[2], "RR": v[3]}
                                                               for k, v in s.values.items()}})
-    from .finder import TERM_MODULES
     if "friction_amplitude" in st.names:
         p = st.part(x, "friction_amplitude")
-        var["terms"].append({"name": "friction_amplitude", "module": TERM_MODULES["friction_amplitude"],
+        var["terms"].append({"name": "friction_amplitude", "module": BY_NAME["friction_amplitude"].term_module,
                              "params": {"extra_level": _axle_map(p[0], p[1])}})
     if "extra_viscous_damping" in st.names:
         p = st.part(x, "extra_viscous_damping")
-        var["terms"].append({"name": "extra_viscous_damping", "module": TERM_MODULES["extra_viscous_damping"],
+        var["terms"].append({"name": "extra_viscous_damping", "module": BY_NAME["extra_viscous_damping"].term_module,
                              "params": {"c": _axle_map(p[0], p[1])}})
     if "damper_gas_preload" in st.names:
         p = st.part(x, "damper_gas_preload")
-        var["terms"].append({"name": "damper_gas_preload", "module": TERM_MODULES["damper_gas_preload"],
+        var["terms"].append({"name": "damper_gas_preload", "module": BY_NAME["damper_gas_preload"].term_module,
                              "params": {"f0": float(p[0]), "k": float(p[1])}})
     vp = getattr(f, "calibrated_vehicle_", f.model_.vehicle)
     src = Path(vp.source_file) if vp.source_file else None
