@@ -136,3 +136,29 @@ def test_a_steering_sensor_offset_is_calibrated_not_named_as_physics(tmp_path):
     assert off, [t["name"] for t in rep["terms"]]
     assert off[0]["params"]["offset"] == pytest.approx(0.02, abs=0.004)
     assert not [t for t in rep["terms"] if BY_NAME[t["name"]].kind == PHYSICS]
+
+
+def _verdict_of(names, base_rms, final_rms, windows=True):
+    """The verdict of a finder whose final structure holds ``names``, with base and final whitened RMS
+    (in-sample figures: no held-out)."""
+    from types import SimpleNamespace
+
+    from susp_sim_ros.analysis.discrepancy.report import verdict
+    n = 1000
+    f = SimpleNamespace(result_=SimpleNamespace(structure=SimpleNamespace(names=tuple(names)),
+                                                rss=final_rms ** 2 * n, n=n),
+                        base_fit_=SimpleNamespace(rss=base_rms ** 2 * n, n=n),
+                        windows_=[{}] if windows else [], heldout_=None, unmeasured_=[])
+    return verdict(f)
+
+
+def test_accepted_physics_is_named_even_when_a_residual_remains():
+    """Terms that passed their held-out and stability tests are not hidden by a large remainder: the
+    verdict names them and states what remains; without accepted physics a large remainder stays
+    unexplained, and a small one is no discrepancy."""
+    v, why = _verdict_of(["calibration", "friction_amplitude"], base_rms=6.0, final_rms=5.0)
+    assert v == "missing_physics" and "friction_amplitude" in why and "5.00 x the noise floor remains" in why
+    v, why = _verdict_of(["calibration", "friction_amplitude"], base_rms=6.0, final_rms=1.1)
+    assert v == "missing_physics" and "remains" not in why
+    assert _verdict_of(["calibration", "sensor_bias"], 6.0, 5.0)[0] == "unexplained_residual"
+    assert _verdict_of(["calibration"], 1.3, 1.1)[0] == "no_significant_discrepancy"
