@@ -162,3 +162,23 @@ def test_accepted_physics_is_named_even_when_a_residual_remains():
     assert v == "missing_physics" and "remains" not in why
     assert _verdict_of(["calibration", "sensor_bias"], 6.0, 5.0)[0] == "unexplained_residual"
     assert _verdict_of(["calibration"], 1.3, 1.1)[0] == "no_significant_discrepancy"
+
+
+def test_consider_parameters_widen_intervals_by_the_marginal_posterior():
+    """y = (a + b) x: with b uncertain (prior sd 0.1) a is known no better than b, whatever the data;
+    the estimate's variance is the Gaussian posterior of (a, b) with b marginalised out, exactly."""
+    from susp_sim_ros.analysis.discrepancy.calibration import consider_covariance, consider_params
+    x = np.random.default_rng(0).normal(size=(200, 1))
+    S = float(x[:, 0] @ x[:, 0])
+    H = np.array([[S + 1.0]])  # data plus a's prior (sd 1)
+    extra = consider_covariance(x, H, x, np.array([0.1]), 1.0)
+    marginal = (S + 100.0) / ((S + 1.0) * (S + 100.0) - S ** 2)
+    assert 1.0 / H[0, 0] + extra[0, 0] == pytest.approx(marginal, rel=1e-9)
+    assert marginal > 0.01  # no better than b's own prior variance
+    # a parameter the data do not touch adds nothing
+    assert consider_covariance(x, H, np.zeros_like(x), np.array([0.1]), 1.0)[0, 0] == pytest.approx(0, abs=1e-12)
+    # the consider set: ranged values calibration may not move; never a definition such as the 1 mm/s
+    # friction reference speed, never a calibrated value
+    names = {p.name for p in consider_params(load_vehicle("passat_b8_like"), load_variant("full"))}
+    assert {"dahl_stiffness", "tyre_damping", "unsprung_mass_front"} <= names
+    assert "sv_reference" not in names and "sprung_mass" not in names

@@ -17,6 +17,12 @@ most :data:`INFORMED_SHRINK` of the prior's; an eigen-direction of ``F`` with ei
 :data:`INFORMED_EIGEN` that no single parameter carries is reported as an informed *combination*. The
 parameters the drives do not inform are held at their prior value and reported as not informed.
 
+Intervals: the values the vehicle file gives a range but does not calibrate (the Dahl pre-sliding
+stiffness, tyre damping, unsprung masses, ...; :func:`consider_params`) stay at their file value, but
+the calibrated values' intervals are those of the joint posterior with them marginalised out
+(:func:`consider_covariance`), so an estimate that leans on an assumed value carries that value's
+uncertainty.
+
 The calibration enters the model through one path: the calibrated values replace the vehicle's
 (:meth:`VehicleParams.replace`), and :meth:`~susp_sim_ros.model.vehicle.Model.params` builds the
 kernel's parameter vector from them, as for any vehicle file.
@@ -108,6 +114,54 @@ def calibration_params(vp: VehicleParams, variant: FrictionVariant,
     if only is not None:
         out = [p for p in out if p.name in set(only)]
     return out
+
+
+def consider_params(vp: VehicleParams, variant: FrictionVariant) -> list[CalParam]:
+    """The "consider" parameters: values the vehicle file gives a plausible range but does not let the
+    calibration move (``calibrate: false``, e.g. the Dahl pre-sliding stiffness, tyre damping, unsprung
+    mass, steering ratio). They stay at their file value, but their range is an uncertainty the
+    calibrated values inherit (:func:`consider_covariance`). Degenerate ranges (a definition, such as the
+    1 mm/s friction reference speed) and damper tables are not uncertain in this sense."""
+    out = []
+    for fld, pr in vp.priors.items():
+        if pr.calibrate or pr.shape == "table":
+            continue
+        sw = NEEDS_SWITCH.get(fld)
+        if sw and not getattr(variant, sw):
+            continue
+        val = getattr(vp, fld)
+        axles = range(2) if pr.shape == "axle" else (None,)
+        for a in axles:
+            lo, hi = (pr.lo[a], pr.hi[a]) if a is not None else (pr.lo[0], pr.hi[0])
+            v = float(val[a]) if a is not None else float(val)
+            if hi - lo <= 1e-12 * max(abs(v), 1.0):
+                continue
+            out.append(CalParam(fld, pr.key, AXLES[a] if a is not None else "all", a, pr.unit, v, lo, hi,
+                                pr.reason))
+    return out
+
+
+def consider_covariance(J_est: np.ndarray, H: np.ndarray, J_con: np.ndarray, sd_con: np.ndarray,
+                        weight: float) -> np.ndarray:
+    """Covariance the estimated parameters gain when the consider parameters are not taken as exact
+    but as uncertain within their priors: the linearised posterior of the estimated and the consider
+    parameters jointly, with the consider parameters marginalised out, minus the posterior at fixed
+    consider values (compare the "consider covariance" of orbit determination, Tapley, Schutz & Born,
+    Statistical Orbit Determination, 2004, sec. 6.3, which omits what the data tell about the consider
+    parameters and so can exceed the prior). The point estimate keeps the consider parameters at their
+    file values; only the intervals widen.
+
+    ``J_est``/``J_con``: Jacobians of the whitened residual w.r.t. the estimated and the consider
+    parameters; ``H``: the posterior information of the estimated parameters (data and priors);
+    ``sd_con``: the consider parameters' prior standard deviations; ``weight``: the data's information
+    weight per sample (as in :meth:`~.fit.FitResult.information`)."""
+    k = J_est.shape[1]
+    if J_con.shape[1] == 0 or k == 0:
+        return np.zeros((k, k))
+    Hec = weight * (J_est.T @ J_con)
+    Hcc = weight * (J_con.T @ J_con) + np.diag(1.0 / sd_con ** 2)
+    joint = np.block([[H, Hec], [Hec.T, Hcc]])
+    return np.linalg.pinv(joint)[:k, :k] - np.linalg.pinv(H)
 
 
 def vehicle_at(vp: VehicleParams, params: Sequence[CalParam], theta: Sequence[float]) -> VehicleParams:

@@ -38,12 +38,13 @@ from ...model import Model, load_variant, load_vehicle
 from ...model.layout import U_INDEX
 from ...model.params import TermSetting
 from ...model.terms import get_term
-from .calibration import (calibration_candidate, calibration_entries, calibration_params, identifiability,
+from .calibration import (STEP_OF_SD, calibration_candidate, calibration_entries, calibration_params,
+                          consider_covariance, consider_params, identifiability,
                           vehicle_at)
 from .candidates import BY_NAME, CALIBRATION, LIBRARY, PHYSICS, SWITCH_OF
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .engine import Evaluator, Structure
-from .fit import FitResult, fit_structure, prior_rows, screen
+from .fit import FitResult, debias, fit_structure, prior_rows, raw_residuals, screen
 from .locate import base_outputs, locate, noise_floor
 from .unmeasured import detect_unmeasured_road
 
@@ -248,11 +249,11 @@ class DiscrepancyFinder:
             self._set_calibration(cur)
         self.result_, self.path_, self.accepted_ = cur, path, accepted
         self.ranking_ = ranking or []
+        self.consider_se_ = self._consider_se(ev, cur)
         # 5. leave-one-drive-out of the whole result against the base model
         self.heldout_ = self._heldout(ev, cur) if self.heldout else None
         self.jackknife_se_ = _jackknife_se(self.heldout_, len(cur.x))
-        if self.jackknife_se_ is not None:
-            self._set_calibration(cur)
+        self._set_calibration(cur)
         return self
 
     def ci95_(self) -> tuple[np.ndarray, np.ndarray]:
@@ -264,11 +265,47 @@ class DiscrepancyFinder:
 
     def _ci95(self, fit: FitResult) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = fit.ci95()
-        jk = getattr(self, "jackknife_se_", None)
-        if jk is None or fit is not getattr(self, "result_", None) or len(jk) != len(fit.x):
+        if fit is not getattr(self, "result_", None):
             return lo, hi
-        se = np.maximum((hi - lo) / (2 * 1.96), jk)
+        se = (hi - lo) / (2 * 1.96)
+        cons = getattr(self, "consider_se_", None)
+        if cons is not None and len(cons) == len(fit.x):
+            se = np.sqrt(se ** 2 + cons ** 2)
+        jk = getattr(self, "jackknife_se_", None)
+        if jk is not None and len(jk) == len(fit.x):
+            se = np.maximum(se, jk)
         return fit.x - 1.96 * se, fit.x + 1.96 * se
+
+    def _consider_se(self, ev: Evaluator, fit: FitResult) -> np.ndarray | None:
+        """Standard errors the final parameters inherit from the vehicle file's uncalibrated ranges
+        (:func:`~.calibration.consider_params`, :func:`~.calibration.consider_covariance`): one batch of
+        simulations with each consider parameter stepped by a tenth of its standard deviation. This is
+        what lets a calibrated value's interval include the truth when the data pin it only through an
+        assumed value (the Dahl pre-sliding stiffness, the tyre damping, ...)."""
+        if not self.calibrate or fit.jac is None or not len(fit.x):
+            return None
+        cons = consider_params(self.model_.vehicle, self.model_.variant)
+        if not cons:
+            return None
+        st = fit.structure
+        cal = calibration_candidate(self.model_, list(self.informed_) + cons)
+        has_cal = CALIBRATION in st.names
+        st2 = Structure([cal if c.name == CALIBRATION else c for c in st.cands] if has_cal
+                        else [cal, *st.cands])
+        x2 = np.concatenate([np.concatenate([st.part(fit.x, CALIBRATION) if has_cal else np.zeros(0),
+                                             [p.prior for p in cons]]) if n == CALIBRATION else st.part(fit.x, n)
+                             for n in st2.names])
+        at = int(st2.offsets[st2.names.index(CALIBRATION)]) + len(self.informed_)
+        sd = np.array([p.sd for p in cons])
+        h = STEP_OF_SD * sd
+        X = np.repeat(x2[None], len(cons) + 1, axis=0)
+        X[1 + np.arange(len(cons)), at + np.arange(len(cons))] += h
+        R = raw_residuals(ev, st2, X, fit.idx)
+        Jc = ((R[1:] - R[0]) / h[:, None]).T
+        if st.bias:
+            Jc = debias(ev, Jc, fit.idx)
+        C = consider_covariance(fit.jac, fit.information(), Jc, sd, fit.data_information_scale())
+        return np.sqrt(np.clip(np.diag(C), 0, None))
 
     # -- signals ------------------------------------------------------------------------------------
     def _case_sigma(self, c: DriveCase) -> np.ndarray:

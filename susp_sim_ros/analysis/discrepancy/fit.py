@@ -119,8 +119,8 @@ class FitResult:
         ratio = self.n_eff / self.n if self.n_eff > 0 else 1.0
         return ratio / s2
 
-    def covariance(self) -> np.ndarray:
-        """Posterior covariance: Gauss-Newton information of the data (scaled by
+    def information(self) -> np.ndarray:
+        """Posterior information: Gauss-Newton information of the data (scaled by
         :meth:`data_information_scale`, the same weighting as the objective) plus the priors' (the
         calibration's parameters)."""
         J = self.jac
@@ -130,6 +130,14 @@ class FitResult:
         H = (J.T @ J) * self.data_information_scale()
         pidx, _, psd = self.structure.prior()
         H[pidx, pidx] += 1.0 / psd ** 2
+        return H
+
+    def covariance(self) -> np.ndarray:
+        """Posterior covariance, the inverse of :meth:`information`."""
+        k = len(self.x)
+        if self.jac is None or k == 0:
+            return np.zeros((k, k))
+        H = self.information()
         try:
             cov = np.linalg.pinv(H)
         except np.linalg.LinAlgError:
