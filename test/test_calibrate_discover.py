@@ -182,3 +182,31 @@ def test_consider_parameters_widen_intervals_by_the_marginal_posterior():
     names = {p.name for p in consider_params(load_vehicle("passat_b8_like"), load_variant("full"))}
     assert {"dahl_stiffness", "tyre_damping", "unsprung_mass_front"} <= names
     assert "sv_reference" not in names and "sprung_mass" not in names
+
+
+def test_backward_elimination_drops_a_term_a_later_one_made_redundant(monkeypatch):
+    """Forward selection took extra_viscous_damping first, then friction_amplitude; if the model without
+    the first is as good (BIC within 10), the first goes; a term that still pays stays."""
+    from types import SimpleNamespace
+
+    from susp_sim_ros.analysis.discrepancy import finder as fm
+    from susp_sim_ros.analysis.discrepancy.engine import Structure
+
+    def run(bic_without):
+        st = Structure(["extra_viscous_damping", "friction_amplitude"])
+        cur = SimpleNamespace(structure=st, x=st.neutral(), bic=100.0, rss=50.0)
+
+        def fake_fit(ev, s, x0, idx, max_nfev):
+            missing = set(st.names) - set(s.names)
+            return SimpleNamespace(structure=s, x=x0, bic=bic_without[missing.pop()], rss=60.0)
+
+        monkeypatch.setattr(fm, "fit_structure", fake_fit)
+        path, accepted = [{}], [{"name": n} for n in st.names]
+        out = fm.DiscrepancyFinder()._backward(SimpleNamespace(cases=[0, 1]), cur, path, accepted)
+        return out.structure.names, [a["name"] for a in accepted], path
+
+    names, acc, path = run({"extra_viscous_damping": 105.0, "friction_amplitude": 180.0})
+    assert names == ("friction_amplitude",) and acc == ["friction_amplitude"]
+    assert path[-1]["removed"] == "extra_viscous_damping"
+    names, acc, path = run({"extra_viscous_damping": 130.0, "friction_amplitude": 180.0})
+    assert names == ("extra_viscous_damping", "friction_amplitude") and len(path) == 1

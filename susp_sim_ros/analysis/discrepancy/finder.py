@@ -58,6 +58,8 @@ MIN_HELDOUT_GAIN = 0.02    # a term must lower the held-out residual above noise
 TRIALS = 3                 # best-screened candidates (and pairs) refitted nonlinearly at each step
 TRIAL_NFEV = 10            # iterations of such a trial fit (warm start; the accepted model is polished)
 HELDOUT_NFEV = 6           # least-squares iterations of each final leave-one-drive-out refit (warm start)
+DATA_WEIGHTS = (1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01)  # candidate weights of the data against the priors
+WEIGHT_TOLERANCE = 0.005   # ... the largest within 0.5 % of the best held-out residual is taken
 MIN_STABLE = 0.5           # ... and be selected (train-set BIC test) in at least half the refits
 TERM_CANDIDATES = tuple(c for c in LIBRARY if c.term_module)  # candidates that are kernel terms
 
@@ -215,16 +217,22 @@ class DiscrepancyFinder:
             excess = max(cur.rss - n, 1e-12)
             best, best_fit, ok, checks = None, None, False, {}
             for size in (1, 2):  # singles first; a pair only when no single term alone passes
+                trials = []
                 for o in [o for o in opts if len(o.add) == size][:TRIALS]:
                     st = cur.structure.with_(*o.add)
-                    f = fit_structure(ev, st, _warm(st, cur, o), allidx, max_nfev=TRIAL_NFEV)
+                    trials.append((o, fit_structure(ev, st, _warm(st, cur, o), allidx, max_nfev=TRIAL_NFEV)))
+                # every trial in BIC order until one passes: the best-BIC term failing its held-out test
+                # must not hide a runner-up that passes
+                for o, f in sorted(trials, key=lambda t: t[1].bic):
                     if best_fit is None or f.bic < best_fit.bic:
                         best, best_fit = o, f
-                gain = cur.rss - best_fit.rss
-                ok = (cur.bic - best_fit.bic) >= MIN_DELTA_BIC and gain >= MIN_EXPLAINED * excess
-                if ok:
-                    checks = self._heldout_check(ev, cur, best_fit)
-                    ok = checks["passed"]
+                    ok = (cur.bic - f.bic) >= MIN_DELTA_BIC and cur.rss - f.rss >= MIN_EXPLAINED * excess
+                    if ok:
+                        checks = self._heldout_check(ev, cur, f)
+                        ok = checks["passed"]
+                    if ok:
+                        best, best_fit = o, f
+                        break
                 if ok:
                     break
             gain = cur.rss - best_fit.rss
@@ -244,6 +252,7 @@ class DiscrepancyFinder:
                                  "per_drive_rmse_before": per_before,
                                  "per_drive_rmse_after": per_after, "with": list(best.add), **checks})
             cur = best_fit
+        cur = self._backward(ev, cur, path, accepted)
         if any(c.kind == PHYSICS for c in cur.structure.cands):  # final polish, calibration jointly
             cur = fit_structure(ev, cur.structure, cur.x, allidx, max_nfev=30)
             self._set_calibration(cur)
@@ -255,6 +264,26 @@ class DiscrepancyFinder:
         self.jackknife_se_ = _jackknife_se(self.heldout_, len(cur.x))
         self._set_calibration(cur)
         return self
+
+    def _backward(self, ev: Evaluator, cur: FitResult, path: list, accepted: list) -> FitResult:
+        """Backward elimination after the forward steps: an accepted physics term that a later one made
+        redundant (removing it costs less than :data:`MIN_DELTA_BIC`) is dropped, latest-accepted last,
+        and the drop is recorded in the selection path."""
+        allidx = tuple(range(len(ev.cases)))
+        phys = [c.name for c in cur.structure.cands if c.kind == PHYSICS]
+        if len(phys) < 2:
+            return cur
+        for name in phys:
+            st_wo = cur.structure.without(name)
+            f_wo = fit_structure(ev, st_wo, st_wo.embed(cur.structure, cur.x), allidx, max_nfev=TRIAL_NFEV)
+            if f_wo.bic - cur.bic < MIN_DELTA_BIC:
+                path.append({"step": len(path), "removed": name, "structure": list(st_wo.names),
+                             "rss": f_wo.rss, "bic": f_wo.bic, "delta_bic": cur.bic - f_wo.bic,
+                             "why": "redundant once the later terms are in (removing it costs less than "
+                                    f"{MIN_DELTA_BIC:.0f} BIC)"})
+                accepted[:] = [a for a in accepted if a["name"] != name]
+                cur = f_wo
+        return cur
 
     def ci95_(self) -> tuple[np.ndarray, np.ndarray]:
         """95 % intervals of the final parameters: the Gauss-Newton posterior's, widened to the
@@ -291,7 +320,7 @@ class DiscrepancyFinder:
         cal = calibration_candidate(self.model_, list(self.informed_) + cons)
         has_cal = CALIBRATION in st.names
         st2 = Structure([cal if c.name == CALIBRATION else c for c in st.cands] if has_cal
-                        else [cal, *st.cands])
+                        else [cal, *st.cands], st.data_weight)
         x2 = np.concatenate([np.concatenate([st.part(fit.x, CALIBRATION) if has_cal else np.zeros(0),
                                              [p.prior for p in cons]]) if n == CALIBRATION else st.part(fit.x, n)
                              for n in st2.names])
@@ -372,6 +401,14 @@ class DiscrepancyFinder:
             if st.part(fit1.x, name).size:
                 st2.part(x0, name)[:] = st.part(fit1.x, name)
         cur = fit_structure(ev, st2, x0, allidx, max_nfev=20)
+        if cand2 and len(ev.cases) >= 2:
+            w, scores = self._data_weight(cur)
+            if ident is not None:
+                ident["data_weight"] = w
+                ident["data_weight_heldout_rss"] = scores
+            if w < 1.0:
+                st2 = Structure(st2.cands, w)
+                cur = fit_structure(ev, st2, cur.x, allidx, max_nfev=20)
         # measurement-chain terms only where they pay for themselves
         for name in meas:
             if name not in cur.structure.names:
@@ -383,6 +420,43 @@ class DiscrepancyFinder:
         self.informed_ = informed
         self._set_calibration(cur)
         return cur
+
+    def _data_weight(self, fit: FitResult) -> tuple[float, dict]:
+        """How much the drives may pull the calibration away from its priors, chosen by leave-one-drive-
+        out (empirical Bayes by cross-validation): for each weight of the data against the priors in
+        :data:`DATA_WEIGHTS` the calibration is refitted without each drive (Gauss-Newton step at
+        ``fit``, no further simulation) and predicts it. The largest weight within
+        :data:`WEIGHT_TOLERANCE` of the best held-out residual wins. Weight 1 trusts the data as their
+        noise says; a smaller weight means the calibration followed structure the model lacks (a missing
+        friction term absorbed by mass, stiffness or damper factors), which then stays in the residual
+        for the discovery stage. Intervals widen with it (the data count less)."""
+        J, r, x = fit.jac, fit.residual, fit.x
+        st = fit.structure
+        pidx, pmu, psd = st.prior()
+        lo, hi = st.bounds()
+        edges = np.cumsum([0] + [self.evaluator_.n_res[q] for q in fit.idx])
+        free = list(range(len(x)))
+        scores = {}
+        for w in DATA_WEIGHTS:
+            sq = 0.0
+            for h in range(len(fit.idx)):
+                held = np.zeros(len(r), bool)
+                held[edges[h]:edges[h + 1]] = True
+                tr = ~held
+                ne_t = max(fit.n_eff * tr.sum() / len(r), 1.0)
+                pw = math.sqrt(tr.sum() / ne_t / w)
+                A, b = J[tr], -r[tr]
+                pr = prior_rows(free, x, pidx, pmu, psd, pw)
+                if pr is not None:
+                    A, b = np.vstack([A, pr[0]]), np.concatenate([b, pr[1]])
+                d, *_ = np.linalg.lstsq(A, b, rcond=None)
+                d = np.clip(x + d, lo, hi) - x
+                e = r[held] + J[held] @ d
+                sq += float(e @ e)
+            scores[w] = sq
+        best = min(scores.values())
+        w = next(w for w in DATA_WEIGHTS if scores[w] <= best * (1.0 + WEIGHT_TOLERANCE))
+        return w, {str(k): v for k, v in scores.items()}
 
     def _set_calibration(self, fit: FitResult) -> None:
         """The calibration table and calibrated vehicle from ``fit`` (the calibration stage, and again
@@ -430,7 +504,7 @@ class DiscrepancyFinder:
             held[edges[h]:edges[h + 1]] = True
             tr = ~held
             ne_t = max(new.n_eff * tr.sum() / len(r), 1.0)
-            pw = math.sqrt(tr.sum() / ne_t)
+            pw = math.sqrt(tr.sum() / ne_t) * st.prior_gain
             out = {}
             for tag, free in (("new", list(range(len(x)))), ("old", old_cols)):
                 d0 = np.zeros(len(x))

@@ -117,7 +117,7 @@ class FitResult:
         k = len(self.x)
         s2 = max(self.rss / max(self.n - k, 1), 1.0)
         ratio = self.n_eff / self.n if self.n_eff > 0 else 1.0
-        return ratio / s2
+        return ratio / s2 * self.structure.data_weight
 
     def information(self) -> np.ndarray:
         """Posterior information: Gauss-Newton information of the data (scaled by
@@ -184,7 +184,7 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
         return FitResult(st, np.zeros(0), rss, n, k, bic(rss, n, k, ne), True, "no free parameters", 1, r,
                          None, idx, ne)
     pidx, pmu, psd = st.prior()
-    pw = math.sqrt(n / ne)
+    pw = math.sqrt(n / ne) * st.prior_gain
     prior_jac = np.zeros((len(pidx), st.n_params))
     prior_jac[np.arange(len(pidx)), pidx] = pw / psd
 
@@ -244,7 +244,7 @@ def screen(ev: Evaluator, current: FitResult, remaining: Sequence[str], *, pairs
     n = len(r0)
     ne = n_effective(ev, idx)
     pidx, pmu, psd = st.prior()
-    pw = math.sqrt(n / ne)
+    pw = math.sqrt(n / ne) * st.prior_gain
     options = list(itertools.combinations(remaining, 1))
     if pairs:
         options += list(itertools.combinations(remaining, 2))

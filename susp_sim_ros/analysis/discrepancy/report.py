@@ -520,10 +520,14 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
     for fo in (f.heldout_ or {}).get("folds", []):
         L.append(f"| {fo['drive']} | {fo['rmse_before_deg_s']:.4f} | {fo['rmse_after_deg_s']:.4f} |")
     L.append(f"| **pooled** | **{rep['heldout_rmse_before_deg_s']:.4f}** | **{rep['heldout_rmse_after_deg_s']:.4f}** |")
-    L += ["", "## Forward selection on the calibrated model", "",
+    L += ["", "## Selection on the calibrated model (forward, then backward)", "",
           "| step | added | RMS in-sample [x noise] | delta BIC | explained of excess | held-out gain | "
           "selected in refits | accepted |", "|---|---|---|---|---|---|---|---|"]
     for p in f.path_[1:]:
+        if "removed" in p:
+            L.append(f"| {p['step']} | removed {p['removed']} | {math.sqrt(p['rss'] / f.result_.n):.3f} | "
+                     f"{p['delta_bic']:.1f} | | | | {p['why']} |")
+            continue
         L.append(f"| {p['step']} | {', '.join(p['added'])} | {p['rms_x_noise']:.3f} | {p['delta_bic']:.1f} | "
                  f"{100 * p['explained_fraction_of_excess']:.0f} % | "
                  f"{_pct(p.get('heldout_gain_fraction_of_excess'))} | {_pct(p.get('selected_in_fraction_of_refits'))} | "
