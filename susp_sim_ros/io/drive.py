@@ -384,6 +384,29 @@ def drive_messages(drive: TestDrive, *, imu_topic: str = IMU) -> list[tuple[int,
     return out
 
 
+def recording_from_drive(drive: TestDrive, path: str | os.PathLike, *, imu_topic: str = IMU) -> Recording:
+    """An in-memory :class:`~susp_sim_ros.io.reader.Recording` of ``drive`` in the interface layout (what
+    :func:`write_drive` would write, CDR-encoded, road profile latched), e.g. to replay a drive read through
+    a topic map onto the interface's topics. ``path`` names it in messages."""
+    from pathlib import Path
+
+    from mcap.records import Channel, Schema
+
+    from .reader import RawMessage
+    from .recorder import qos_yaml
+    rec = Recording(Path(path), profile="ros2", finalised=True, truncated=bool(drive.extra.get("truncated")))
+    rec.metadata["test_drive"] = {str(k): str(v) for k, v in drive.metadata.items()}
+    ids: dict[str, int] = {}
+    for seq, (t, topic, mt, msg, latched) in enumerate(drive_messages(drive, imu_topic=imu_topic)):
+        if topic not in ids:
+            cid = ids[topic] = len(ids) + 1
+            rec.schemas[cid] = Schema(id=cid, name=mt, encoding="ros2msg", data=M.full_definition(mt).encode())
+            rec.channels[cid] = Channel(id=cid, schema_id=cid, topic=topic, message_encoding="cdr",
+                                        metadata={"offered_qos_profiles": qos_yaml(latched)})
+        rec.messages.append(RawMessage(topic, mt, t, t, seq, M.encode(mt, msg), ids[topic]))
+    return rec
+
+
 def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = False,
                 imu_topic: str = IMU) -> int:
     """Write ``drive`` in the interface format; returns the number of messages written."""
@@ -396,7 +419,7 @@ def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = 
     return len(msgs)
 
 
-__all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "read_imu", "parse_oil",
+__all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "recording_from_drive", "read_imu", "parse_oil",
            "drive_from_recording", "drive_messages", "road_from_msg", "imu_from_recording", "check_topic",
            "TOPIC_TYPES", "check_drive", "MAX_SPEED", "MAX_STEERING", "MAX_WHEEL_HEIGHT", "SPEED", "STEERING", "ROAD_PROFILE",
            "WHEEL_HEIGHTS", "IMU", "SIM_IMU"]
