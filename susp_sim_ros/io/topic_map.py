@@ -21,8 +21,8 @@ a mapping (or just the topic name as a string) with
   ``m/s^2``/``g``, fractions ``1``/``%``); the SI value is ``raw * scale * unit factor``;
 - ``scale``: a finite non-zero factor (e.g. ``-1`` for a steering angle recorded positive to the right);
 - ``type``: optional ``pkg/msg/Type`` the topic must carry (checked; the identity map sets it);
-- for ``imu`` only, ``frame``: the sensor axes: ``flu`` (x forward, y left, z up: REP-103, ISO 8855),
-  ``frd`` (x forward, y right, z down: SAE J670, aerospace IMUs) or ``{rpy_deg: [roll, pitch, yaw]}``, the
+- for ``imu`` only, ``frame``: the sensor axes: ``flu`` (x forward, y left, z up: REP-103; alias
+  ``iso8855``), ``frd`` (x forward, y right, z down: aerospace IMUs; alias ``sae_j670``) or ``{rpy_deg: [roll, pitch, yaw]}``, the
   sensor's mounting rotation relative to the vehicle body (REP-103 roll-pitch-yaw, Z-Y-X, in degrees:
   the rotation that turns the body axes onto the sensor axes). A vector measured in sensor axes is
   ``v_body = R(roll, pitch, yaw) @ v_sensor``, so ``frd`` is ``rpy_deg: [180, 0, 0]``. Rates and specific
@@ -120,8 +120,11 @@ def rotation_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
     return rz @ ry @ rx
 
 
-#: Named sensor frames and their rotation onto REP-103 body axes (v_body = R @ v_sensor).
-FRAMES: dict[str, np.ndarray] = {"flu": np.eye(3), "frd": np.diag([1.0, -1.0, -1.0])}
+#: Named sensor frames and their rotation onto REP-103 body axes (v_body = R @ v_sensor). ISO 8855 (and DIN
+#: 70000) vehicle axes are x forward, y left, z up: REP-103's; SAE J670 vehicle axes are x forward, y right,
+#: z down.
+FRAMES: dict[str, np.ndarray] = {"flu": np.eye(3), "frd": np.diag([1.0, -1.0, -1.0]),
+                                 "iso8855": np.eye(3), "sae_j670": np.diag([1.0, -1.0, -1.0])}
 
 
 @dataclass(frozen=True)
@@ -239,7 +242,7 @@ def parse_frame(frame: Any, where: str) -> tuple[np.ndarray, str]:
         key = frame.strip().lower()
         if key in FRAMES:
             return FRAMES[key], key
-        raise TopicMapError(f"{where}: frame: {frame!r} is not a frame (expected flu, frd or "
+        raise TopicMapError(f"{where}: frame: {frame!r} is not a frame (expected {', '.join(FRAMES)} or "
                             f"{{rpy_deg: [roll, pitch, yaw]}})")
     if isinstance(frame, Mapping) and set(frame) == {"rpy_deg"}:
         rpy = frame["rpy_deg"]
