@@ -280,3 +280,34 @@ def test_unknown_types_are_skipped_with_one_warning_per_channel(corpus, tmp_path
     m.write_text(CAR_MAP.read_text().replace("topic: /odom", "topic: /camera/a"))
     with pytest.raises(UnknownMessageTypeError, match="/camera/a"):
         read_drive(p, topic_map=m)
+
+
+def test_ros2idl_schemas_decode_with_the_ros2_definitions(tmp_path):
+    """rosbag2 stores an IDL schema when it found no .msg: such channels decode with this package's or
+    rosbags' Jazzy definitions (here a TwistStamped speed, a type this package does not embed)."""
+    from geometry_msgs.msg import TwistStamped
+    from mcap.writer import Writer
+    from rclpy.serialization import serialize_message
+    ref = read_drive(BUMP)
+    msgs = [m for m in car_messages(ref) if m[1] != "/odom"]
+    with open(tmp_path / "idl.mcap", "wb") as f:
+        w = Writer(f)
+        w.start(profile="ros2")
+        chans = {}
+        for t, topic, mt, data in msgs:
+            if topic not in chans:
+                sid = w.register_schema(mt, "ros2idl", b"module dummy { };")
+                chans[topic] = w.register_channel(topic, "cdr", sid)
+            w.add_message(chans[topic], log_time=t, publish_time=t, data=data)
+        sid = w.register_schema("geometry_msgs/msg/TwistStamped", "ros2idl", b"module geometry_msgs { };")
+        cid = w.register_channel("/vel", "cdr", sid)
+        for t, v in zip(ref.speed.t_ns.tolist(), ref.speed.values.tolist()):
+            m = TwistStamped()
+            m.twist.linear.x = v
+            w.add_message(cid, log_time=t, publish_time=t, data=serialize_message(m))
+        w.finish()
+    (tmp_path / "m.yaml").write_text(CAR_MAP.read_text().replace("{topic: /odom, field: twist.twist.linear.x",
+                                                                 "{topic: /vel, field: twist.linear.x"))
+    x = read_drive(tmp_path / "idl.mcap", topic_map=tmp_path / "m.yaml")
+    np.testing.assert_array_equal(x.speed.values, ref.speed.values)
+    np.testing.assert_array_equal(x.imu.gyro, ref.imu.gyro)

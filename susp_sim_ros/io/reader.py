@@ -70,6 +70,21 @@ class Recording:
         sc = self.schemas.get(ch.schema_id) if ch is not None else None
         return sc.data.decode(errors="replace") if sc is not None and sc.data else None
 
+    def decoding_schema(self, channel_id: int) -> str | None:
+        """The ``ros2msg`` text to decode a channel's messages with: its own schema when that is ``ros2msg``;
+        for ``ros2idl`` (or no text) None when this package embeds the type, else the ROS 2 Jazzy definition
+        from ``rosbags``' type store (None if unknown there too)."""
+        ch = self.channels.get(channel_id)
+        sc = self.schemas.get(ch.schema_id) if ch is not None else None
+        if sc is None:
+            return None
+        if sc.encoding == "ros2msg" and sc.data:
+            return sc.data.decode(errors="replace")
+        from .messages import MSG_DEFS
+        if sc.name in MSG_DEFS:
+            return None
+        return _jazzy_definition(sc.name) or None
+
     def topics(self) -> dict[str, str]:
         return {m.topic: m.msgtype for m in self.messages} | {
             c.topic: (self.schemas[c.schema_id].name if c.schema_id in self.schemas else "")
@@ -89,7 +104,7 @@ class Recording:
         out = []
         for m in sorted(self.by_topic(topic), key=lambda m: m.log_time_ns):
             try:
-                out.append((m.log_time_ns, m.decoded(self.schema_text(m.channel_id))))
+                out.append((m.log_time_ns, m.decoded(self.decoding_schema(m.channel_id))))
             except Exception as exc:  # mcap_ros2 raises assorted errors on malformed CDR/schema
                 raise RecordingError(f"{self.path}: topic {topic}: cannot decode a {m.msgtype} message "
                                      f"at log time {m.log_time_ns} ns: {type(exc).__name__}: {exc}") from None
@@ -251,6 +266,15 @@ def _read_directory(path: Path, allow_truncated: bool, allow_corrupt: bool) -> R
     return rec
 
 
+def _jazzy_definition(msgtype: str) -> str:
+    """Concatenated ``ros2msg`` definition of a ROS 2 Jazzy type from ``rosbags``' type store ("" if unknown)."""
+    try:
+        from rosbags.typesys import Stores, get_typestore
+        return get_typestore(Stores.ROS2_JAZZY).generate_msgdef(msgtype, ros_version=2)[0]
+    except Exception:  # rosbags missing, or a type it does not know
+        return ""
+
+
 def _msgdef_text(conn) -> tuple[str, str]:
     """(schema encoding, definition text) of a rosbags connection: the stored one, else this package's
     embedded definitions, else rosbags' ROS 2 Jazzy type store; ("", "") when the type is unknown."""
@@ -260,12 +284,8 @@ def _msgdef_text(conn) -> tuple[str, str]:
         return ("ros2msg" if fmt == "MSG" else "ros2idl"), conn.msgdef.data
     if conn.msgtype in MSG_DEFS:
         return "ros2msg", full_definition(conn.msgtype)
-    try:
-        from rosbags.typesys import Stores, get_typestore
-        text, _ = get_typestore(Stores.ROS2_JAZZY).generate_msgdef(conn.msgtype, ros_version=2)
-        return "ros2msg", text
-    except Exception:  # an unknown type: no definition (the channel is skipped or named when needed)
-        return "", ""
+    text = _jazzy_definition(conn.msgtype)  # "" for an unknown type: skipped, or named when needed
+    return ("ros2msg", text) if text else ("", "")
 
 
 def _read_rosbags(path: Path, name: Path) -> Recording:
