@@ -328,3 +328,26 @@ def test_replayed_messages_carry_the_converted_values(corpus):
     np.testing.assert_array_equal([[i.angular_velocity.x, i.angular_velocity.y, i.angular_velocity.z] for i in imu],
                                   ref.imu.gyro)
     assert rec.latched("/road/profile") and not rec.latched("/vehicle/speed")
+
+
+def test_bag_custom_data_and_a_mapped_oil_topic_give_the_damper_state(corpus, tmp_path):
+    d, paths, _, _ = corpus
+    bag = tmp_path / "bag"
+    shutil.copytree(paths["rosbags_db3"], bag)
+    meta = (bag / "metadata.yaml").read_text()
+    assert "custom_data" in meta
+    import yaml
+    info = yaml.safe_load(meta)
+    info["rosbag2_bagfile_information"]["custom_data"] = {"damper_oil_level": "1,1,0,0", "maneuver": "bump"}
+    (bag / "metadata.yaml").write_text(yaml.safe_dump(info))
+    assert read_drive(bag, topic_map=CAR_MAP).oil_levels() == (1.0, 1.0, 0.0, 0.0)
+    # a topic with the oil levels in percent, named by the map, overrides the metadata
+    from std_msgs.msg import Float64MultiArray
+    from rclpy.serialization import serialize_message
+    msgs = car_messages(read_drive(BUMP))
+    oil = Float64MultiArray(data=[100.0, 100.0, 50.0, 0.0])
+    p = _mcap(tmp_path / "oil.mcap", [(msgs[0][0], "/service/oil", M.FLOAT64_ARRAY, serialize_message(oil))] + msgs,
+              metadata={"damper_oil_level": "1,1,1,1"})
+    m = tmp_path / "oil.yaml"
+    m.write_text(CAR_MAP.read_text() + "damper_oil_level: {topic: /service/oil, field: data, unit: '%'}\n")
+    assert read_drive(p, topic_map=m).oil_levels() == (1.0, 1.0, 0.5, 0.0)

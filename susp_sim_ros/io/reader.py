@@ -159,6 +159,8 @@ def read_recording(path: str | os.PathLike, *, allow_truncated: bool = True,
     - a rosbag2 directory: ``metadata.yaml`` and its split files, MCAP (each read as above, in the order
       ``metadata.yaml`` lists them) or sqlite3 ``.db3`` (through ``rosbags``); a directory without
       ``metadata.yaml`` (a recorder killed before writing it) has its ``*.mcap``/``*.db3`` read in name order;
+      the bag's ``custom_data`` (``ros2 bag record --custom-data damper_oil_level=1,1,0,0``) is the
+      ``test_drive`` metadata when its files carry none;
     - a sqlite3 ``.db3`` file of rosbag2 (through ``rosbags``).
 
     A truncated tail is reported via ``truncated``/``error`` (RecordingError if not ``allow_truncated``),
@@ -230,6 +232,7 @@ def _merge(into: Recording, part: Recording) -> None:
 
 def _read_directory(path: Path, allow_truncated: bool, allow_corrupt: bool) -> Recording:
     meta_file = path / "metadata.yaml"
+    custom: dict[str, str] = {}
     if meta_file.is_file():
         import yaml
         try:
@@ -245,8 +248,13 @@ def _read_directory(path: Path, allow_truncated: bool, allow_corrupt: bool) -> R
                                  f"in metadata.yaml")
         if storage not in ("mcap", "sqlite3"):
             raise RecordingError(f"{path}: rosbag2 storage {storage!r} is not supported (mcap or sqlite3)")
+        custom = info.get("custom_data")  # `ros2 bag record --custom-data damper_oil_level=1,1,0,0 ...`
+        custom = {str(k): str(v) for k, v in custom.items()} if isinstance(custom, dict) else {}
         if storage == "sqlite3" or compression not in ("", "none"):
-            return _read_rosbags(path, path)
+            rec = _read_rosbags(path, path)
+            if custom:
+                rec.metadata.setdefault("test_drive", custom)
+            return rec
     else:
         files = sorted(list(path.glob("*.mcap")) + list(path.glob("*.db3")))
         if not files:
@@ -263,6 +271,8 @@ def _read_directory(path: Path, allow_truncated: bool, allow_corrupt: bool) -> R
             _require_ros2(part)
         rec.finalised &= part.finalised
         _merge(rec, part)
+    if custom:
+        rec.metadata.setdefault("test_drive", custom)
     return rec
 
 
