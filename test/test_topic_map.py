@@ -131,3 +131,37 @@ def test_yaml_text_fuzz(tmp_path_factory, text):
         load_topic_map(p)
     except TopicMapError as exc:
         assert str(p) in str(exc)
+
+
+_cmaps = st.one_of(_values, st.dictionaries(st.sampled_from(["speed", "steering_wheel_angle", "imu", "wheel_heights",
+                                                             "bogus"]), st.one_of(_values, st.dictionaries(
+    st.sampled_from(["channel", "unit", "scale", "frame", "gyro_x", "gyro_y", "gyro_z", "accel_x", "fl", "x"]),
+    _values, max_size=6)), max_size=5))
+
+
+@settings(max_examples=300, deadline=None)
+@given(_cmaps)
+def test_channel_map_parser_accepts_or_names_the_error(data):
+    """The MDF4 channel-map parser (susp import --channel-map): a map or a TopicMapError naming the source."""
+    from susp_sim_ros.analysis.measurement_import import parse_channel_map
+    try:
+        cm = parse_channel_map(data, "chan.yaml")
+    except TopicMapError as exc:
+        assert str(exc).startswith("chan.yaml")
+        return
+    assert {"speed", "steering_wheel_angle", "imu"} <= set(cm)
+    assert all(ax in cm["imu"] for ax in ("gyro_x", "gyro_y", "gyro_z"))
+
+
+def test_channel_map_example():
+    from susp_sim_ros.analysis.measurement_import import parse_channel_map
+    cm = parse_channel_map(yaml.safe_load("""
+speed: {channel: VehSpd, unit: km/h}
+steering_wheel_angle: {channel: SteerWhlAng, unit: deg, scale: -1}
+imu: {frame: sae_j670, gyro_x: GyroX, gyro_y: GyroY, gyro_z: {channel: GyroZ, unit: deg/s}}
+"""), "m.yaml")
+    assert cm["steering_wheel_angle"]["scale"] == -1.0 and cm["imu"]["gyro_z"]["unit"] == "deg/s"
+    np.testing.assert_array_equal(cm["imu"]["frame"][0], FRAMES["frd"])
+    with pytest.raises(TopicMapError, match="m.yaml: imu: accel_x, accel_y, accel_z come all together"):
+        parse_channel_map({"speed": "a", "steering_wheel_angle": "b",
+                           "imu": {"gyro_x": "x", "gyro_y": "y", "gyro_z": "z", "accel_x": "ax"}}, "m.yaml")
