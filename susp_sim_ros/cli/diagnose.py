@@ -21,7 +21,8 @@ from ..errors import RecordingError, SuspInputError
 
 
 def add_arguments(p) -> None:
-    p.add_argument("drives", nargs="+", metavar="DRIVE.mcap", help="recorded test drives")
+    p.add_argument("drives", nargs="+", metavar="DRIVE.mcap", help="recorded test drives (MCAP files, rosbag2 "
+                   "directories or .db3 files)")
     p.add_argument("--variant", default="full", help="base friction variant (name or YAML path)")
     p.add_argument("--config", default="passat_b8_like", help="vehicle parameter set (name or YAML path)")
     p.add_argument("--out", default="results/diagnose", help="output directory (default results/diagnose)")

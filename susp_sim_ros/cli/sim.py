@@ -26,7 +26,8 @@ from ..sim_core import DivergenceError
 def add_arguments(p) -> None:
     p.add_argument("--maneuver", choices=["bump", "sine", "bump_crossing", "sine_steer"], default=None,
                    help="paper maneuver (default bump when no --drive is given)")
-    p.add_argument("--drive", metavar="X.MCAP", help="recorded test drive to run in lockstep")
+    p.add_argument("--drive", metavar="X.MCAP", help="recorded test drive to run in lockstep (MCAP file, rosbag2 "
+                   "directory or .db3 file)")
     p.add_argument("--state", choices=STATES, default=None,
                    help="vehicle state (damper oil levels); default: intact for a maneuver, the drive's "
                         "damper_oil_level metadata for --drive")

@@ -24,7 +24,8 @@ from ..errors import RecordingError, SuspInputError
 
 
 def add_arguments(p) -> None:
-    p.add_argument("--measured", help="recorded test drive (MCAP) with the measured /imu/data")
+    p.add_argument("--measured", help="recorded test drive (MCAP, rosbag2 directory or .db3) with the measured "
+                   "/imu/data (or the IMU of --topic-map)")
     p.add_argument("--simulated", help="simulated recording (MCAP) with /sim/imu/data (or /imu/data)")
     p.add_argument("--simulated-topic", default="auto",
                    help="IMU topic of --simulated (default: /sim/imu/data if present, else /imu/data)")
