@@ -28,7 +28,6 @@ def car_messages(drive, *, mount_rpy_deg=None) -> list[tuple[int, str, str, byte
     """``(log_time_ns, topic, msgtype, CDR bytes)`` of ``drive`` in the car layout, serialised by rclpy.
     The IMU vectors are expressed in FRD axes, or in the axes of a sensor mounted at ``mount_rpy_deg``
     (v_sensor = R.T @ v_body)."""
-    from geometry_msgs.msg import Vector3  # noqa: F401 (rclpy message packages)
     from nav_msgs.msg import Odometry
     from rclpy.serialization import serialize_message
     from sensor_msgs.msg import Imu
