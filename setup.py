@@ -21,16 +21,19 @@ setup(
         ("share/" + package_name + "/config/vehicles", glob("config/vehicles/*.yaml")),
         ("share/" + package_name + "/config/variants", glob("config/variants/*.yaml")),
         ("share/" + package_name + "/config/studies", glob("config/studies/*.yaml")),
+        ("share/" + package_name + "/config/topic_maps", glob("config/topic_maps/*.yaml")),
     ],
     install_requires=["setuptools", "numpy", "scipy", "pyyaml", "matplotlib", "numba", "mcap",
-                      "mcap-ros2-support", "tqdm", "dask[distributed]"],
+                      "mcap-ros2-support", "tqdm", "dask[distributed]", "rosbags"],
     zip_safe=False,
     maintainer="susp_sim_ros developers",
     maintainer_email="dev@susp-sim-ros.invalid",
     description="Real-time five-mass vehicle model with phenomenological suspension friction for ROS 2",
     license="Apache-2.0",
     extras_require={
-        "test": ["pytest", "hypothesis", "rosbags"],
+        "test": ["pytest", "hypothesis", "rosbags", "asammdf", "pyopencrg"],
+        # susp import: ASAM MDF4 drives (asammdf) and OpenCRG roads (pyopencrg)
+        "import": ["asammdf", "pyopencrg"],
         "bench": ["commonroad-vehicle-models"],
     },
     entry_points={

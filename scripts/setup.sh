@@ -13,7 +13,7 @@ want=$(cat setup.py scripts/setup.sh | sha256sum | cut -c1-16)
 if [[ "$(cat "$stamp" 2>/dev/null)" != "$want" ]]; then
   .venv/bin/pip install -q --disable-pip-version-check \
     "ros-jazzy-rclpy[fastrtps]==7.1.6" ros-jazzy-common-interfaces==5.3.6 ros-jazzy-rmw-fastrtps-cpp==8.4.3
-  .venv/bin/pip install -q --disable-pip-version-check -e ".[test,bench]"
+  .venv/bin/pip install -q --disable-pip-version-check -e ".[test,bench,import]"
   echo "$want" >"$stamp"
 fi
 # Foxglove's own message parser and CDR reader for test/test_foxglove_schemas.py (pinned in

@@ -23,3 +23,20 @@ class RecordingExistsError(SuspInputError):
 
 class CsvImportError(SuspInputError):
     """A CSV measurement file is malformed (names file, line and column)."""
+
+
+class TopicMapError(ConfigError):
+    """A topic map (``--topic-map``) or channel map (``--channel-map``) is malformed: names the file, the key
+    and what was expected."""
+
+
+class NotRos2RecordingError(RecordingError):
+    """A recording that is not a ROS 2 recording (another MCAP profile, non-CDR messages, a ROS 1 bag)."""
+
+
+class UnknownMessageTypeError(RecordingError):
+    """A topic the command needs carries a message type that cannot be decoded (no schema, unknown type)."""
+
+
+class MeasurementImportError(SuspInputError):
+    """A measurement file (MDF4) or road file (OpenCRG) cannot be imported (names file, channel, cause)."""

@@ -288,3 +288,30 @@ def test_unknown_extra_topics_are_ignored_or_skipped(tmp_path):
     assert rc == 2 and "/camera/blob" in err and "unknown schema" in err
     rc, out, err = _run(["diagnose", str(p), "--dry-run"])
     assert rc == 0, err
+
+
+# ---- recordings that are not ROS 2, and damaged rosbag2 containers (issue 16) ---------------------------
+def test_not_ros2_and_damaged_rosbag2_containers_are_named_errors(tmp_path):
+    from mcap.writer import Writer
+    for profile, needle in (("ros1", "MCAP profile 'ros1' is not a ROS 2 recording"),
+                            ("", "not a ROS 2 recording: no profile and no cdr channel")):
+        p = tmp_path / f"profile_{profile or 'none'}.mcap"
+        with open(p, "wb") as f:
+            w = Writer(f)
+            w.start(profile=profile)
+            sid = w.register_schema("Speed", "jsonschema", b"{}")
+            cid = w.register_channel("/vehicle/speed", "json", sid)
+            w.add_message(cid, log_time=1, publish_time=1, data=b'{"data": 1}')
+            w.finish()
+        _all_entry_points_refuse(p, needle)
+    (tmp_path / "old.bag").write_bytes(b"#ROSBAG V2.0\n" + bytes(100))
+    _all_entry_points_refuse(tmp_path / "old.bag", "a ROS 1 bag")
+    (tmp_path / "junk.db3").write_bytes(b"SQLite format 3\x00" + b"\xa5" * 4000)
+    _all_entry_points_refuse(tmp_path / "junk.db3", "cannot read rosbag2 recording")
+    bag = tmp_path / "bagdir"
+    bag.mkdir()
+    (bag / "metadata.yaml").write_text("rosbag2_bagfile_information:\n  storage_identifier: mcap\n"
+                                       "  relative_file_paths: [bagdir_0.mcap]\n")
+    _all_entry_points_refuse(bag, "lacks the split file(s) bagdir_0.mcap")
+    write(bag / "bagdir_0.mcap", small_drive())  # now present: the directory reads as its one split
+    assert read_drive(bag).speed.values.size == small_drive().speed.values.size

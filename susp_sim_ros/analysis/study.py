@@ -102,8 +102,10 @@ def _find_drives(folder: Path) -> list[Path]:
     if not folder.is_dir():
         raise SuspInputError(f"--study {folder}: not a directory")
     drives = sorted(folder.glob("*.mcap"))
+    # rosbag2 as on disk too: sqlite3 files and bag directories (metadata.yaml), after the MCAP files
+    drives += sorted(folder.glob("*.db3")) + sorted(p.parent for p in folder.glob("*/metadata.yaml"))
     if not drives:
-        raise SuspInputError(f"--study {folder}: no recorded test drives (*.mcap) in it")
+        raise SuspInputError(f"--study {folder}: no recorded test drives (*.mcap, *.db3, rosbag2 directories) in it")
     return drives
 
 
@@ -314,8 +316,9 @@ def write_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: di
 
 # ---- the study -----------------------------------------------------------------------------------------
 def run_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: bool = True,
-              progress: bool = True) -> dict:
+              progress: bool = True, topic_map=None) -> dict:
     """Run the study over ``folder``; write plots, ``report.md`` and ``study.json`` into ``out_dir``.
+    ``topic_map`` (see :mod:`susp_sim_ros.io.topic_map`) is applied to every drive.
 
     Returns the JSON-ready dict (``tables``, ``elapsed_s``, ``findings``, ``drives``, ...)."""
     from ..io.drive import read_drive
@@ -335,7 +338,7 @@ def run_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: boo
     try:
         for p in paths:
             bar.set_postfix_str(p.name)
-            drive = read_drive(p)
+            drive = read_drive(p, topic_map=topic_map)
             results.append(simulate_and_validate(p, drive, variants, models, bar))
     finally:
         bar.close()

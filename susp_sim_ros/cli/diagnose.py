@@ -21,7 +21,8 @@ from ..errors import RecordingError, SuspInputError
 
 
 def add_arguments(p) -> None:
-    p.add_argument("drives", nargs="+", metavar="DRIVE.mcap", help="recorded test drives")
+    p.add_argument("drives", nargs="+", metavar="DRIVE.mcap", help="recorded test drives (MCAP files, rosbag2 "
+                   "directories or .db3 files)")
     p.add_argument("--variant", default="full", help="base friction variant (name or YAML path)")
     p.add_argument("--config", default="passat_b8_like", help="vehicle parameter set (name or YAML path)")
     p.add_argument("--out", default="results/diagnose", help="output directory (default results/diagnose)")
@@ -31,21 +32,24 @@ def add_arguments(p) -> None:
     p.add_argument("--no-heldout", action="store_true", help="skip leave-one-drive-out (faster)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--dry-run", action="store_true", help="read and check the drives only; no fitting")
+    from ..io.topic_map import add_topic_map_argument
+    add_topic_map_argument(p)
 
 
 MIN_IMU_SAMPLES = 10  # the finder needs this many measured samples per drive
 
 
-def check_drives(paths) -> list[dict]:
+def check_drives(paths, topic_map=None) -> list[dict]:
     """Read and check every drive (RecordingError/SuspInputError naming the file); one summary each."""
     from ..io.drive import check_drive, read_drive
     out = []
     for d in paths:
-        if not Path(d).is_file():
+        if not Path(d).exists():  # a file, or a rosbag2 directory
             raise SuspInputError(f"{d}: no such recorded test drive")
-        drive = check_drive(read_drive(d), d)
+        drive = check_drive(read_drive(d, topic_map=topic_map), d)
+        imu_topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
         if drive.imu is None or len(drive.imu) < MIN_IMU_SAMPLES:
-            raise RecordingError(f"{d}: fewer than {MIN_IMU_SAMPLES} measured IMU samples on /imu/data "
+            raise RecordingError(f"{d}: fewer than {MIN_IMU_SAMPLES} measured IMU samples on {imu_topic} "
                                  f"(got {0 if drive.imu is None else len(drive.imu)}): nothing to diagnose "
                                  f"against" + ("; file truncated" if drive.extra.get("truncated") else ""))
         out.append({"drive": str(d), "maneuver": drive.metadata.get("maneuver", ""),
@@ -58,7 +62,8 @@ def run(args) -> dict:
     from ..analysis.discrepancy import DiscrepancyFinder
     from ..analysis.discrepancy.calibration import outside_statement
     from ..analysis.discrepancy.report import verdict, write_outputs
-    checked = check_drives(args.drives)
+    topic_map = getattr(args, "topic_map", None)
+    checked = check_drives(args.drives, topic_map)
     if args.dry_run:
         return {"dry_run": True, "drives": checked,
                 "summary": "\n".join(f"{c['drive']}: {c['maneuver'] or 'drive'}, {c['duration_s']:.2f} s, "
@@ -67,7 +72,12 @@ def run(args) -> dict:
     cands = [c.strip() for c in args.candidates.split(",") if c.strip()] if args.candidates else None
     f = DiscrepancyFinder(vehicle=args.config, variant=args.variant, candidates=cands,
                           heldout=not args.no_heldout, progress=not args.no_progress)
-    f.fit(args.drives)
+    if topic_map is not None:  # read through the map; the finder gets the prepared cases
+        from ..analysis.discrepancy.data import load_cases
+        from ..model import load_vehicle
+        f.fit(load_cases(args.drives, wheelbase=load_vehicle(args.config).wheelbase, topic_map=topic_map))
+    else:
+        f.fit(args.drives)
     base = Path(args.variant).stem
     name = args.name or f"diagnosed_{base}"
     paths = write_outputs(f, args.out, name, plots=not args.no_plots)

@@ -25,11 +25,14 @@ SUBCOMMANDS = {
     "study": "a parameter study from config/studies/*.yaml on Dask",
     "generate": "write the synthetic reference test drives (bags/)",
     "import-csv": "convert a CSV measurement into a recorded test drive MCAP",
+    "import": "convert a measurement (ASAM MDF4 or CSV, road OpenCRG or CSV) into a recorded test drive MCAP",
 }
+#: subcommands whose module name is not the command name (``import`` is a Python keyword)
+MODULE_NAMES = {"import": "import_measurement"}
 
 
 def _module(name: str):
-    return importlib.import_module(f"susp_sim_ros.cli.{name.replace('-', '_')}")
+    return importlib.import_module(f"susp_sim_ros.cli.{MODULE_NAMES.get(name, name.replace('-', '_'))}")
 
 
 def build_parser(available: dict[str, object]) -> argparse.ArgumentParser:
@@ -48,7 +51,7 @@ def _available() -> dict[str, object]:
         try:
             out[name] = _module(name)
         except ModuleNotFoundError as exc:
-            if exc.name != f"susp_sim_ros.cli.{name.replace('-', '_')}":
+            if exc.name != f"susp_sim_ros.cli.{MODULE_NAMES.get(name, name.replace('-', '_'))}":
                 raise
     return out
 

@@ -14,6 +14,11 @@ default, topics of a type this ROS installation does not know are skipped with a
 bag play`` does); asking for one with ``--topics`` is an error, and so is an interface topic
 (``/vehicle/speed``, ``/imu/data``, ...) recorded with another type or encoding.
 ``--dry-run`` stops after that check and prints what would be played (no ROS node is created).
+
+The recording may be an MCAP file, a rosbag2 directory or a ``.db3`` file. With ``--topic-map`` the drive
+is read through the map (other topic names, fields, units, IMU frame) and its inputs are played on the
+interface's topics (``/vehicle/speed``, ``/imu/data``, ...) in SI units and REP-103 axes, as the node
+expects them; the recording's other topics are not played then.
 """
 from __future__ import annotations
 
@@ -32,7 +37,7 @@ OUTPUT_PREFIXES = ("/sim/", "/diagnostics", "/clock", "/rosout", "/parameter_eve
 
 
 def add_arguments(p) -> None:
-    p.add_argument("recording", help="MCAP test drive to play")
+    p.add_argument("recording", help="test drive to play (MCAP file, rosbag2 directory or .db3)")
     p.add_argument("--rate", type=float, default=1.0, help="playback speed factor (default 1.0)")
     p.add_argument("--loop", action="store_true", help="play again and again until interrupted")
     p.add_argument("--loops", type=int, default=0, help="with --loop: stop after this many plays (0: forever)")
@@ -45,6 +50,8 @@ def add_arguments(p) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--dry-run", action="store_true",
                    help="read and check the recording, print what would be played, publish nothing")
+    from ..io.topic_map import add_topic_map_argument
+    add_topic_map_argument(p)  # then the mapped inputs are played on the interface's topics, converted
 
 
 def _msg_class(msgtype: str, topic: str = ""):
@@ -86,7 +93,12 @@ def plan(args):
         raise SuspInputError(f"--rate: expected a factor > 0, got {args.rate}")
     if not (math.isfinite(args.clock_period) and args.clock_period > 0):
         raise SuspInputError(f"--clock-period: expected a period > 0 s, got {args.clock_period}")
-    rec = read_recording(args.recording)
+    if getattr(args, "topic_map", None) is not None:
+        # read the drive through the map and play its inputs on the interface's own topics (SI, REP-103)
+        from ..io.drive import read_drive, recording_from_drive
+        rec = recording_from_drive(read_drive(args.recording, topic_map=args.topic_map), args.recording)
+    else:
+        rec = read_recording(args.recording)
     topics = rec.topics()
     skipped: list[str] = []
     if args.topics:

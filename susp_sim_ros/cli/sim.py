@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import SuspInputError
 from ..io.drive import parse_oil, read_drive
+from ..io.topic_map import add_topic_map_argument
 from ..lockstep import maneuver_drive, run_lockstep
 from ..model import Model
 from ..model.maneuvers import STATES, paper_maneuver, vehicle_state
@@ -25,7 +26,8 @@ from ..sim_core import DivergenceError
 def add_arguments(p) -> None:
     p.add_argument("--maneuver", choices=["bump", "sine", "bump_crossing", "sine_steer"], default=None,
                    help="paper maneuver (default bump when no --drive is given)")
-    p.add_argument("--drive", metavar="X.MCAP", help="recorded test drive to run in lockstep")
+    p.add_argument("--drive", metavar="X.MCAP", help="recorded test drive to run in lockstep (MCAP file, rosbag2 "
+                   "directory or .db3 file)")
     p.add_argument("--state", choices=STATES, default=None,
                    help="vehicle state (damper oil levels); default: intact for a maneuver, the drive's "
                         "damper_oil_level metadata for --drive")
@@ -36,6 +38,7 @@ def add_arguments(p) -> None:
     p.add_argument("--rate", type=float, default=100.0, help="publish rate of the /sim topics [Hz]")
     p.add_argument("--out", metavar="SIM.MCAP", help="write the simulated MCAP here")
     p.add_argument("--overwrite", action="store_true", help="overwrite --out if it exists")
+    add_topic_map_argument(p)
 
 
 def run(args) -> dict:
@@ -51,7 +54,7 @@ def run(args) -> dict:
     if not (np.isfinite(args.step) and 0 < args.step <= 0.01):
         raise SuspInputError(f"--step: expected a step in (0, 0.01] s, got {args.step}")
     if args.drive:
-        drive = read_drive(args.drive)
+        drive = read_drive(args.drive, topic_map=args.topic_map)
         name = drive.metadata.get("maneuver", "") or str(args.drive)
     else:
         man = paper_maneuver(args.maneuver or "bump", model.vehicle.wheelbase)

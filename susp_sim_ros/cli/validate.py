@@ -24,7 +24,8 @@ from ..errors import RecordingError, SuspInputError
 
 
 def add_arguments(p) -> None:
-    p.add_argument("--measured", help="recorded test drive (MCAP) with the measured /imu/data")
+    p.add_argument("--measured", help="recorded test drive (MCAP, rosbag2 directory or .db3) with the measured "
+                   "/imu/data (or the IMU of --topic-map)")
     p.add_argument("--simulated", help="simulated recording (MCAP) with /sim/imu/data (or /imu/data)")
     p.add_argument("--simulated-topic", default="auto",
                    help="IMU topic of --simulated (default: /sim/imu/data if present, else /imu/data)")
@@ -36,6 +37,8 @@ def add_arguments(p) -> None:
                    help="comma-separated friction variants of the study")
     p.add_argument("--no-plots", action="store_true", help="study without PNG plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    from ..io.topic_map import add_topic_map_argument
+    add_topic_map_argument(p)  # applies to --measured and to the drives of --study
 
 
 def run(args) -> dict:
@@ -56,7 +59,7 @@ def _study(args) -> dict:
     if not variants:
         raise SuspInputError("--variants: give at least one friction variant")
     res = run_study(args.study, args.out, variants=variants, plots=not args.no_plots,
-                    progress=not args.no_progress)
+                    progress=not args.no_progress, topic_map=args.topic_map)
     res["summary"] = summary_text(res)
     return res
 
@@ -78,9 +81,10 @@ def _simulated_imu(path: str, topic: str):
 def _pair(args) -> dict:
     from ..io.drive import read_drive
     t_start = time.perf_counter()
-    drive = read_drive(args.measured)
+    drive = read_drive(args.measured, topic_map=args.topic_map)
+    imu_topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
     if drive.imu is None or len(drive.imu) < 2:
-        raise RecordingError(f"{args.measured}: no measured IMU samples on /imu/data (topics: "
+        raise RecordingError(f"{args.measured}: no measured IMU samples on {imu_topic} (topics: "
                              f"{', '.join(sorted(drive.extra.get('topics', {}))) or 'none'})")
     topic, sim = _simulated_imu(args.simulated, args.simulated_topic)
     if len(sim) < 2:
@@ -88,7 +92,7 @@ def _pair(args) -> dict:
     windows = va.analysis_windows(drive)
     try:
         res = va.validate(drive.imu.t_ns, drive.imu.gyro, sim.t_ns, sim.gyro, windows=windows,
-                          rate_hz=args.rate, names=(f"{args.measured} /imu/data", f"{args.simulated} {topic}"))
+                          rate_hz=args.rate, names=(f"{args.measured} {imu_topic}", f"{args.simulated} {topic}"))
     except RecordingError as exc:
         raise RecordingError(f"{args.measured} vs {args.simulated}: {exc}") from None
     if not res.metrics:

@@ -13,11 +13,12 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import RecordingError, SuspInputError
+from ..errors import RecordingError, SuspInputError, UnknownMessageTypeError
 from ..model.road import RoadProfile
 from . import messages as M
 from .reader import Recording, read_recording
 from .recorder import McapRecorder
+from .topic_map import MappedImu, TopicMap, get_field, load_topic_map
 
 log = logging.getLogger(__name__)
 
@@ -130,19 +131,21 @@ TOPIC_TYPES = {SPEED: M.FLOAT64, STEERING: M.FLOAT64, ROAD_PROFILE: M.FLOAT64_AR
 
 def check_topic(rec: Recording, topic: str, msgtype: str | None = None) -> None:
     """RecordingError naming the file and topic unless every channel of ``topic`` carries ``msgtype``
-    (default :data:`TOPIC_TYPES`) as a ``ros2msg`` schema with ``cdr`` messages."""
-    want = msgtype or TOPIC_TYPES[topic]
+    (default :data:`TOPIC_TYPES`; None there: any type) as a ``ros2msg`` schema with ``cdr`` messages."""
+    want = msgtype or TOPIC_TYPES.get(topic)
     for ch in rec.channels.values():
         if ch.topic != topic:
             continue
         sc = rec.schemas.get(ch.schema_id)
         name = sc.name if sc is not None else "(no schema)"
-        if name != want:
+        if want is not None and name != want:
             raise RecordingError(f"{rec.path}: topic {topic} has type {name}, expected {want}")
-        if sc.encoding not in ("ros2msg", "ros2idl") or ch.message_encoding != "cdr":
-            raise RecordingError(f"{rec.path}: topic {topic}: unsupported schema encoding "
-                                 f"{sc.encoding!r} / message encoding {ch.message_encoding!r} "
-                                 f"(expected ros2msg / cdr)")
+        if sc is None or sc.encoding not in ("ros2msg", "ros2idl") or ch.message_encoding != "cdr":
+            enc = sc.encoding if sc is not None else None
+            err = UnknownMessageTypeError if want is None else RecordingError
+            raise err(f"{rec.path}: topic {topic}: unsupported schema encoding "
+                      f"{enc!r} / message encoding {ch.message_encoding!r} "
+                      f"(expected ros2msg / cdr)")
 
 
 def _fields(rec: Recording, topic: str, extract, msgtype: str | None = None) -> list:
@@ -152,14 +155,25 @@ def _fields(rec: Recording, topic: str, extract, msgtype: str | None = None) -> 
     for t, m in rec.decode_topic(topic):
         try:
             out.append((t, extract(m)))
-        except (AttributeError, TypeError, ValueError, IndexError) as exc:
+        except (AttributeError, TypeError, ValueError, IndexError, KeyError) as exc:
             raise RecordingError(f"{rec.path}: topic {topic}: malformed message at log time {t} ns "
                                  f"({type(exc).__name__}: {exc})") from None
     return out
 
 
-def _scalar_series(rec: Recording, topic: str) -> Series:
-    items = _fields(rec, topic, lambda m: float(m.data))
+def _field_error(rec: Recording, mi, exc: Exception) -> RecordingError:
+    return RecordingError(f"{rec.path}: topic {mi.topic}: field {mi.field_text or '(message)'} "
+                          f"({mi.name}) not readable as a number: {type(exc).__name__}: {exc}")
+
+
+def _scalar_series(rec: Recording, mi) -> Series:
+    """A mapped scalar input (``MappedInput``) as a Series in SI."""
+    f = mi.factor
+    if mi.field == ("data",) and f == 1.0:
+        extract = lambda m: float(m.data)  # noqa: E731 - the interface layout: exactly as before
+    else:
+        extract = lambda m: float(get_field(m, mi.field)) * f  # noqa: E731
+    items = _fields(rec, mi.topic, extract, mi.msgtype)
     t = np.array([t for t, _ in items], dtype=np.int64)
     v = np.array([v for _, v in items], dtype=float)
     return Series(t, v)
@@ -186,14 +200,21 @@ def road_from_msg(msg: Any, where: str) -> RoadProfile:
         raise RecordingError(f"{where}: malformed road profile: {exc}") from None
 
 
-def _imu_series(rec: Recording, topic: str) -> ImuSeries:
-    items = _fields(rec, topic, lambda m: (
-        float(m.angular_velocity.x), float(m.angular_velocity.y), float(m.angular_velocity.z),
-        float(m.linear_acceleration.x), float(m.linear_acceleration.y), float(m.linear_acceleration.z)),
-        M.IMU)
+def _imu_series(rec: Recording, topic: str, mapping: MappedImu | None = None) -> ImuSeries:
+    mapping = mapping if mapping is not None and mapping.topic == topic else MappedImu(topic, msgtype=M.IMU)
+    if mapping.angular_velocity == ("angular_velocity",) and mapping.linear_acceleration == ("linear_acceleration",):
+        def extract(m):
+            return (float(m.angular_velocity.x), float(m.angular_velocity.y), float(m.angular_velocity.z),
+                    float(m.linear_acceleration.x), float(m.linear_acceleration.y), float(m.linear_acceleration.z))
+    else:
+        def extract(m):
+            g, a = get_field(m, mapping.angular_velocity), get_field(m, mapping.linear_acceleration)
+            return (float(g.x), float(g.y), float(g.z), float(a.x), float(a.y), float(a.z))
+    items = _fields(rec, topic, extract, mapping.msgtype)
     t = np.array([t for t, _ in items], dtype=np.int64)
     v = np.array([x for _, x in items], dtype=float).reshape(-1, 6)
-    return ImuSeries(t, v[:, :3], v[:, 3:])
+    gyro, accel = mapping.to_body(v[:, :3], v[:, 3:])
+    return ImuSeries(t, gyro, accel)
 
 
 def read_imu(path: str | os.PathLike, topic: str = IMU) -> ImuSeries:
@@ -201,43 +222,87 @@ def read_imu(path: str | os.PathLike, topic: str = IMU) -> ImuSeries:
     return imu_from_recording(read_recording(path), topic)
 
 
-def imu_from_recording(rec: Recording, topic: str = IMU) -> ImuSeries:
-    """The IMU samples of ``topic`` in an already read recording (RecordingError if none)."""
+def imu_from_recording(rec: Recording, topic: str = IMU, mapping: MappedImu | None = None) -> ImuSeries:
+    """The IMU samples of ``topic`` in an already read recording (RecordingError if none); ``mapping``
+    (a topic map's IMU entry for that topic) converts fields, units and frame."""
     if not rec.by_topic(topic):
         why = f"; file damaged: {rec.error}" if rec.truncated else ""
         raise RecordingError(f"{rec.path}: no messages on topic {topic} (topics: "
                              f"{', '.join(sorted(rec.topics())) or 'none'}{why})")
-    return _imu_series(rec, topic)
+    return _imu_series(rec, topic, mapping)
 
 
-def drive_from_recording(rec: Recording, *, imu_topic: str = IMU) -> TestDrive:
+def _warn_unreadable_channels(rec: Recording, needed: set[str]) -> None:
+    """One warning per channel that is not needed and whose messages could not be decoded here."""
+    for ch in rec.channels.values():
+        if ch.topic in needed:
+            continue
+        sc = rec.schemas.get(ch.schema_id)
+        name = sc.name if sc is not None else ""
+        if sc is None or ch.message_encoding != "cdr" or sc.encoding not in ("ros2msg", "ros2idl") or (
+                not sc.data and name not in M.MSG_DEFS):
+            log.warning("%s: skipping channel %s of unknown or undecodable type %r (encoding %r)", rec.path,
+                        ch.topic, name or "(no schema)", ch.message_encoding)
+
+
+def drive_from_recording(rec: Recording, *, imu_topic: str = IMU,
+                         topic_map: TopicMap | str | os.PathLike | None = None) -> TestDrive:
+    """The test drive in ``rec``; ``topic_map`` (module :mod:`~susp_sim_ros.io.topic_map`; None = the
+    interface's topics) says where each input is and how to convert it."""
     path = rec.path
+    mapped = topic_map is not None
+    tm = load_topic_map(topic_map)
+    if mapped and imu_topic == IMU:
+        imu_topic = tm.imu.topic
     if not rec.messages:
         why = f" (file damaged: {rec.error})" if rec.truncated else ""
         raise RecordingError(f"{path}: no readable messages{why}")
-    for topic in (SPEED, STEERING):
-        if not rec.by_topic(topic):
+    if mapped:
+        _warn_unreadable_channels(rec, tm.topics() | {SIM_IMU})
+    for mi in (tm.speed, tm.steering_wheel_angle):
+        if not rec.by_topic(mi.topic):
             why = f"; file damaged: {rec.error}" if rec.truncated else ""
-            raise RecordingError(f"{path}: missing topic {topic} (topics: "
+            via = f" (the {mi.name} of topic map {tm.source})" if mapped else ""
+            raise RecordingError(f"{path}: missing topic {mi.topic}{via} (topics: "
                                  f"{', '.join(sorted(rec.topics())) or 'none'}{why})")
-    speed = _scalar_series(rec, SPEED)
-    steering = _scalar_series(rec, STEERING)
+    speed = _scalar_series(rec, tm.speed)
+    steering = _scalar_series(rec, tm.steering_wheel_angle)
     road = None
-    check_topic(rec, ROAD_PROFILE)
-    prof = rec.decode_topic(ROAD_PROFILE)
+    rp = tm.road_profile
+    check_topic(rec, rp.topic, rp.msgtype)
+    prof = rec.decode_topic(rp.topic)
     if prof:
-        road = road_from_msg(prof[0][1], f"{path}: topic {ROAD_PROFILE}")
+        msg = prof[0][1]
+        if rp.field:
+            try:
+                msg = get_field(msg, rp.field)
+            except (AttributeError, TypeError, IndexError, KeyError) as exc:
+                raise _field_error(rec, rp, exc) from None
+        road = road_from_msg(msg, f"{path}: topic {rp.topic}")
+        if rp.factor != 1.0:
+            road = RoadProfile(road.s, road.zl * rp.factor, road.zr * rp.factor)
     wh = None
-    items = _fields(rec, WHEEL_HEIGHTS, lambda m: [float(x) for x in m.data])
+    whm = tm.wheel_heights
+    items = _fields(rec, whm.topic, lambda m: [float(x) * whm.factor if whm.factor != 1.0 else float(x)
+                                               for x in get_field(m, whm.field)], whm.msgtype)
     if items:
         vals = [v for _, v in items]
         if any(len(v) != 4 for v in vals):
-            raise RecordingError(f"{path}: topic {WHEEL_HEIGHTS}: expected 4 values [FL, FR, RL, RR] "
+            raise RecordingError(f"{path}: topic {whm.topic}: expected 4 values [FL, FR, RL, RR] "
                                  "per message")
         wh = Series(np.array([t for t, _ in items], dtype=np.int64), np.array(vals, dtype=float))
-    imu = _imu_series(rec, imu_topic) if rec.by_topic(imu_topic) else None
+    imu = _imu_series(rec, imu_topic, tm.imu) if rec.by_topic(imu_topic) else None
     metadata = dict(rec.metadata.get("test_drive", {}))
+    if tm.damper_oil_level is not None and rec.by_topic(tm.damper_oil_level.topic):
+        om = tm.damper_oil_level
+        oil = _fields(rec, om.topic, lambda m: [float(x) * om.factor for x in get_field(m, om.field)], om.msgtype)
+        metadata["damper_oil_level"] = ",".join(f"{x:.6g}" for x in oil[0][1])
     extra: dict[str, Any] = {"topics": rec.topics(), "truncated": rec.truncated}
+    if mapped:
+        extra["topic_map"] = tm.source
+        extra["input_topics"] = {"speed": tm.speed.topic, "steering": tm.steering_wheel_angle.topic,
+                                 "wheel_heights": whm.topic, "road_profile": rp.topic, "imu": imu_topic}
+        extra["conversions"] = tm.conversions()
     if imu_topic != SIM_IMU and rec.by_topic(SIM_IMU):
         extra["sim_imu"] = _imu_series(rec, SIM_IMU)
     drive = TestDrive(metadata, speed, steering, road, wh, imu, extra)
@@ -271,21 +336,26 @@ def check_drive(drive: TestDrive, where: str | os.PathLike) -> TestDrive:
             k = int(np.nonzero(bad)[0][0])
             raise RecordingError(f"{where}: topic {topic}: {why} at message {k} (t = {t[k]} ns): "
                                  f"{v[k].tolist()}")
-    series(SPEED, drive.speed.t_ns, drive.speed.values, 0.0, MAX_SPEED)
-    series(STEERING, drive.steering.t_ns, drive.steering.values, absmax=MAX_STEERING)
+    names = drive.extra.get("input_topics", {})  # a topic map's topics, if the drive was read through one
+    series(names.get("speed", SPEED), drive.speed.t_ns, drive.speed.values, 0.0, MAX_SPEED)
+    series(names.get("steering", STEERING), drive.steering.t_ns, drive.steering.values, absmax=MAX_STEERING)
     if drive.wheel_heights is not None:
-        series(WHEEL_HEIGHTS, drive.wheel_heights.t_ns, drive.wheel_heights.values, absmax=MAX_WHEEL_HEIGHT)
+        series(names.get("wheel_heights", WHEEL_HEIGHTS), drive.wheel_heights.t_ns, drive.wheel_heights.values, absmax=MAX_WHEEL_HEIGHT)
     if drive.road is not None and len(drive.road) and (
             np.abs(drive.road.zl).max() > MAX_WHEEL_HEIGHT or np.abs(drive.road.zr).max() > MAX_WHEEL_HEIGHT):
-        raise RecordingError(f"{where}: topic {ROAD_PROFILE}: elevation beyond +-{MAX_WHEEL_HEIGHT:g} m")
+        raise RecordingError(f"{where}: topic {names.get('road_profile', ROAD_PROFILE)}: elevation beyond +-{MAX_WHEEL_HEIGHT:g} m")
     if drive.imu is not None:
-        series(IMU, drive.imu.t_ns, np.hstack([drive.imu.gyro, drive.imu.accel]))
+        series(names.get("imu", IMU), drive.imu.t_ns, np.hstack([drive.imu.gyro, drive.imu.accel]))
     return drive
 
 
-def read_drive(path: str | os.PathLike, *, imu_topic: str = IMU) -> TestDrive:
-    """Read a recorded test drive; a truncated file gives its readable prefix (with a warning)."""
-    return drive_from_recording(read_recording(path), imu_topic=imu_topic)
+def read_drive(path: str | os.PathLike, *, imu_topic: str = IMU,
+               topic_map: TopicMap | str | os.PathLike | None = None) -> TestDrive:
+    """Read a recorded test drive (an MCAP file, a rosbag2 directory or a ``.db3`` file, see
+    :func:`~susp_sim_ros.io.reader.read_recording`); a truncated file gives its readable prefix (with a
+    warning). ``topic_map`` (a YAML path, a :class:`~susp_sim_ros.io.topic_map.TopicMap`, or None for the
+    interface's own topics) maps other topic names, fields, units and IMU frames onto the model's inputs."""
+    return drive_from_recording(read_recording(path), imu_topic=imu_topic, topic_map=topic_map)
 
 
 # ---- writing -------------------------------------------------------------------------------------
@@ -314,6 +384,29 @@ def drive_messages(drive: TestDrive, *, imu_topic: str = IMU) -> list[tuple[int,
     return out
 
 
+def recording_from_drive(drive: TestDrive, path: str | os.PathLike, *, imu_topic: str = IMU) -> Recording:
+    """An in-memory :class:`~susp_sim_ros.io.reader.Recording` of ``drive`` in the interface layout (what
+    :func:`write_drive` would write, CDR-encoded, road profile latched), e.g. to replay a drive read through
+    a topic map onto the interface's topics. ``path`` names it in messages."""
+    from pathlib import Path
+
+    from mcap.records import Channel, Schema
+
+    from .reader import RawMessage
+    from .recorder import qos_yaml
+    rec = Recording(Path(path), profile="ros2", finalised=True, truncated=bool(drive.extra.get("truncated")))
+    rec.metadata["test_drive"] = {str(k): str(v) for k, v in drive.metadata.items()}
+    ids: dict[str, int] = {}
+    for seq, (t, topic, mt, msg, latched) in enumerate(drive_messages(drive, imu_topic=imu_topic)):
+        if topic not in ids:
+            cid = ids[topic] = len(ids) + 1
+            rec.schemas[cid] = Schema(id=cid, name=mt, encoding="ros2msg", data=M.full_definition(mt).encode())
+            rec.channels[cid] = Channel(id=cid, schema_id=cid, topic=topic, message_encoding="cdr",
+                                        metadata={"offered_qos_profiles": qos_yaml(latched)})
+        rec.messages.append(RawMessage(topic, mt, t, t, seq, M.encode(mt, msg), ids[topic]))
+    return rec
+
+
 def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = False,
                 imu_topic: str = IMU) -> int:
     """Write ``drive`` in the interface format; returns the number of messages written."""
@@ -326,7 +419,7 @@ def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = 
     return len(msgs)
 
 
-__all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "read_imu", "parse_oil",
+__all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "recording_from_drive", "read_imu", "parse_oil",
            "drive_from_recording", "drive_messages", "road_from_msg", "imu_from_recording", "check_topic",
            "TOPIC_TYPES", "check_drive", "MAX_SPEED", "MAX_STEERING", "MAX_WHEEL_HEIGHT", "SPEED", "STEERING", "ROAD_PROFILE",
            "WHEEL_HEIGHTS", "IMU", "SIM_IMU"]

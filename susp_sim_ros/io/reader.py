@@ -26,7 +26,7 @@ from mcap.exceptions import EndOfFile
 from mcap.records import Channel, Chunk, Footer, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 
-from ..errors import RecordingError
+from ..errors import NotRos2RecordingError, RecordingError
 from .messages import decode
 
 log = logging.getLogger(__name__)
@@ -70,6 +70,21 @@ class Recording:
         sc = self.schemas.get(ch.schema_id) if ch is not None else None
         return sc.data.decode(errors="replace") if sc is not None and sc.data else None
 
+    def decoding_schema(self, channel_id: int) -> str | None:
+        """The ``ros2msg`` text to decode a channel's messages with: its own schema when that is ``ros2msg``;
+        for ``ros2idl`` (or no text) None when this package embeds the type, else the ROS 2 Jazzy definition
+        from ``rosbags``' type store (None if unknown there too)."""
+        ch = self.channels.get(channel_id)
+        sc = self.schemas.get(ch.schema_id) if ch is not None else None
+        if sc is None:
+            return None
+        if sc.encoding == "ros2msg" and sc.data:
+            return sc.data.decode(errors="replace")
+        from .messages import MSG_DEFS
+        if sc.name in MSG_DEFS:
+            return None
+        return _jazzy_definition(sc.name) or None
+
     def topics(self) -> dict[str, str]:
         return {m.topic: m.msgtype for m in self.messages} | {
             c.topic: (self.schemas[c.schema_id].name if c.schema_id in self.schemas else "")
@@ -89,7 +104,7 @@ class Recording:
         out = []
         for m in sorted(self.by_topic(topic), key=lambda m: m.log_time_ns):
             try:
-                out.append((m.log_time_ns, m.decoded(self.schema_text(m.channel_id))))
+                out.append((m.log_time_ns, m.decoded(self.decoding_schema(m.channel_id))))
             except Exception as exc:  # mcap_ros2 raises assorted errors on malformed CDR/schema
                 raise RecordingError(f"{self.path}: topic {topic}: cannot decode a {m.msgtype} message "
                                      f"at log time {m.log_time_ns} ns: {type(exc).__name__}: {exc}") from None
@@ -130,12 +145,192 @@ def _records(src: _ExactReader) -> Iterator[Any]:
             yield r
 
 
+ROS1_MAGIC = b"#ROSBAG V"
+SQLITE_MAGIC = b"SQLite format 3\x00"
+#: MCAP profiles of ROS 2 recordings ("" is what some writers leave; then the channels must be CDR).
+ROS2_PROFILES = ("ros2", "")
+
+
 def read_recording(path: str | os.PathLike, *, allow_truncated: bool = True,
                    allow_corrupt: bool = False) -> Recording:
-    """Every complete record of ``path`` (module docstring): a truncated tail is reported via
-    ``truncated``/``error`` (RecordingError if not ``allow_truncated``), corruption raises
-    :class:`RecordingError` (with ``allow_corrupt``: reported via ``corrupt``/``error``)."""
+    """Every complete record of the recording at ``path``, which may be
+
+    - an MCAP file (module docstring: streamed, no summary or index needed, zstd/lz4/uncompressed chunks);
+    - a rosbag2 directory: ``metadata.yaml`` and its split files, MCAP (each read as above, in the order
+      ``metadata.yaml`` lists them) or sqlite3 ``.db3`` (through ``rosbags``); a directory without
+      ``metadata.yaml`` (a recorder killed before writing it) has its ``*.mcap``/``*.db3`` read in name order;
+      the bag's ``custom_data`` (``ros2 bag record --custom-data damper_oil_level=1,1,0,0``) is the
+      ``test_drive`` metadata when its files carry none;
+    - a sqlite3 ``.db3`` file of rosbag2 (through ``rosbags``).
+
+    A truncated tail is reported via ``truncated``/``error`` (RecordingError if not ``allow_truncated``),
+    corruption raises :class:`RecordingError` (with ``allow_corrupt``: reported via ``corrupt``/``error``).
+    A recording that is not ROS 2 (another MCAP profile, no CDR channel, a ROS 1 bag) raises
+    :class:`~susp_sim_ros.errors.NotRos2RecordingError`."""
     path = Path(path)
+    if path.is_dir():
+        return _read_directory(path, allow_truncated, allow_corrupt)
+    try:
+        with open(path, "rb") as f:
+            head = f.read(16)
+    except OSError as exc:
+        raise RecordingError(f"{path}: cannot open recording: {exc.strerror or exc}") from None
+    if head.startswith(SQLITE_MAGIC):
+        return _read_rosbags(path, path)
+    if head.startswith(ROS1_MAGIC):
+        raise NotRos2RecordingError(f"{path}: a ROS 1 bag, not a ROS 2 recording (convert it first, e.g. with "
+                                    f"rosbags-convert)")
+    rec = _read_mcap(path, allow_truncated, allow_corrupt)
+    _require_ros2(rec)
+    return rec
+
+
+def _require_ros2(rec: Recording) -> None:
+    """NotRos2RecordingError unless ``rec`` is a ROS 2 recording: MCAP profile ``ros2`` (or none, with at
+    least one CDR channel)."""
+    if rec.profile not in ROS2_PROFILES:
+        raise NotRos2RecordingError(f"{rec.path}: MCAP profile {rec.profile!r} is not a ROS 2 recording (expected "
+                                    f"profile 'ros2' with ros2msg schemas and cdr messages)")
+    if rec.profile == "" and rec.channels and not any(c.message_encoding == "cdr" for c in rec.channels.values()):
+        encs = sorted({c.message_encoding for c in rec.channels.values()})
+        raise NotRos2RecordingError(f"{rec.path}: not a ROS 2 recording: no profile and no cdr channel (message "
+                                    f"encodings: {', '.join(map(repr, encs))})")
+
+
+def _merge(into: Recording, part: Recording) -> None:
+    """Append the records of one split file to ``into``, giving its schemas and channels ids unique in the
+    merged recording (split files number them independently)."""
+    smap: dict[int, int] = {}
+    for sid, sc in part.schemas.items():
+        key = (sc.name, sc.encoding, bytes(sc.data))
+        found = next((i for i, o in into.schemas.items() if (o.name, o.encoding, bytes(o.data)) == key), None)
+        if found is None:
+            found = len(into.schemas) + 1
+            into.schemas[found] = Schema(id=found, name=sc.name, encoding=sc.encoding, data=sc.data)
+        smap[sid] = found
+    cmap: dict[int, int] = {}
+    for cid, ch in part.channels.items():
+        sid = smap.get(ch.schema_id, 0)
+        found = next((i for i, o in into.channels.items() if (o.topic, o.schema_id, o.message_encoding) ==
+                      (ch.topic, sid, ch.message_encoding)), None)
+        if found is None:
+            found = len(into.channels) + 1
+            into.channels[found] = Channel(id=found, schema_id=sid, topic=ch.topic,
+                                            message_encoding=ch.message_encoding, metadata=dict(ch.metadata))
+        cmap[cid] = found
+    for m in part.messages:
+        m.channel_id = cmap.get(m.channel_id, m.channel_id)
+        into.messages.append(m)
+    for k, v in part.metadata.items():
+        into.metadata.setdefault(k, v)
+    into.profile = into.profile or part.profile
+    if part.truncated or part.corrupt:
+        into.truncated |= part.truncated
+        into.corrupt |= part.corrupt
+        into.error = f"{part.path.name}: {part.error}"
+
+
+def _read_directory(path: Path, allow_truncated: bool, allow_corrupt: bool) -> Recording:
+    meta_file = path / "metadata.yaml"
+    custom: dict[str, str] = {}
+    if meta_file.is_file():
+        import yaml
+        try:
+            info = yaml.safe_load(meta_file.read_text(encoding="utf-8"))["rosbag2_bagfile_information"]
+            storage = str(info.get("storage_identifier", ""))
+            files = [path / Path(str(f)).name for f in info["relative_file_paths"]]
+            compression = str(info.get("compression_mode", "") or "").lower()
+        except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, AttributeError) as exc:
+            raise RecordingError(f"{meta_file}: not a rosbag2 metadata file ({type(exc).__name__}: {exc})") from None
+        missing = [f.name for f in files if not f.is_file()]
+        if missing:
+            raise RecordingError(f"{path}: rosbag2 directory lacks the split file(s) {', '.join(missing)} listed "
+                                 f"in metadata.yaml")
+        if storage not in ("mcap", "sqlite3"):
+            raise RecordingError(f"{path}: rosbag2 storage {storage!r} is not supported (mcap or sqlite3)")
+        custom = info.get("custom_data")  # `ros2 bag record --custom-data damper_oil_level=1,1,0,0 ...`
+        custom = {str(k): str(v) for k, v in custom.items()} if isinstance(custom, dict) else {}
+        if storage == "sqlite3" or compression not in ("", "none"):
+            rec = _read_rosbags(path, path)
+            if custom:
+                rec.metadata.setdefault("test_drive", custom)
+            return rec
+    else:
+        files = sorted(list(path.glob("*.mcap")) + list(path.glob("*.db3")))
+        if not files:
+            raise RecordingError(f"{path}: a directory without metadata.yaml and without *.mcap or *.db3 files "
+                                 f"(expected a rosbag2 directory)")
+        log.warning("%s: no metadata.yaml (recorder killed?); reading %s in name order", path,
+                    ", ".join(f.name for f in files))
+    rec = Recording(path)
+    rec.finalised = True
+    for f in files:
+        part = (_read_rosbags(f, f) if f.suffix == ".db3"
+                else _read_mcap(f, allow_truncated, allow_corrupt))
+        if f.suffix != ".db3":
+            _require_ros2(part)
+        rec.finalised &= part.finalised
+        _merge(rec, part)
+    if custom:
+        rec.metadata.setdefault("test_drive", custom)
+    return rec
+
+
+def _jazzy_definition(msgtype: str) -> str:
+    """Concatenated ``ros2msg`` definition of a ROS 2 Jazzy type from ``rosbags``' type store ("" if unknown)."""
+    try:
+        from rosbags.typesys import Stores, get_typestore
+        return get_typestore(Stores.ROS2_JAZZY).generate_msgdef(msgtype, ros_version=2)[0]
+    except Exception:  # rosbags missing, or a type it does not know
+        return ""
+
+
+def _msgdef_text(conn) -> tuple[str, str]:
+    """(schema encoding, definition text) of a rosbags connection: the stored one, else this package's
+    embedded definitions, else rosbags' ROS 2 Jazzy type store; ("", "") when the type is unknown."""
+    from .messages import MSG_DEFS, full_definition
+    fmt = getattr(getattr(conn.msgdef, "format", None), "name", "NONE")
+    if fmt in ("MSG", "IDL") and conn.msgdef.data:
+        return ("ros2msg" if fmt == "MSG" else "ros2idl"), conn.msgdef.data
+    if conn.msgtype in MSG_DEFS:
+        return "ros2msg", full_definition(conn.msgtype)
+    text = _jazzy_definition(conn.msgtype)  # "" for an unknown type: skipped, or named when needed
+    return ("ros2msg", text) if text else ("", "")
+
+
+def _read_rosbags(path: Path, name: Path) -> Recording:
+    """A rosbag2 directory or ``.db3`` file through ``rosbags`` (sqlite3 storage, compressed bags)."""
+    from rosbags.rosbag2 import Reader
+    from .recorder import qos_yaml
+    rec = Recording(name)
+    rec.profile = "ros2"
+    rec.finalised = True
+    try:
+        with Reader(path) as r:
+            ids: dict[int, int] = {}
+            for conn in r.connections:
+                enc, text = _msgdef_text(conn)
+                sid = len(rec.schemas) + 1
+                rec.schemas[sid] = Schema(id=sid, name=conn.msgtype, encoding=enc, data=text.encode())
+                durab = [getattr(getattr(q, "durability", None), "name", "").lower()
+                         for q in conn.ext.offered_qos_profiles]
+                cid = len(rec.channels) + 1
+                latched = any("transient_local" in d for d in durab)
+                rec.channels[cid] = Channel(id=cid, schema_id=sid, topic=conn.topic,
+                                            message_encoding=conn.ext.serialization_format,
+                                            metadata={"offered_qos_profiles": qos_yaml(latched)})
+                ids[id(conn)] = cid
+            for seq, (conn, t, data) in enumerate(r.messages()):
+                rec.messages.append(RawMessage(conn.topic, conn.msgtype, int(t), int(t), seq, bytes(data),
+                                               ids[id(conn)]))
+    except RecordingError:
+        raise
+    except Exception as exc:  # rosbags raises ReaderError, apsw errors, KeyError on bad metadata, ...
+        raise RecordingError(f"{path}: cannot read rosbag2 recording: {type(exc).__name__}: {exc}") from None
+    return rec
+
+
+def _read_mcap(path: Path, allow_truncated: bool, allow_corrupt: bool) -> Recording:
     try:
         f = open(path, "rb")
         size = os.fstat(f.fileno()).st_size
@@ -186,4 +381,4 @@ def read_recording(path: str | os.PathLike, *, allow_truncated: bool = True,
     return rec
 
 
-__all__ = ["RawMessage", "Recording", "read_recording", "MCAP_MAGIC"]
+__all__ = ["RawMessage", "Recording", "read_recording", "MCAP_MAGIC", "ROS2_PROFILES"]

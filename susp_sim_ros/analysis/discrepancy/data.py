@@ -207,8 +207,10 @@ def has_road_input(case: DriveCase) -> bool:
     return (case.road is not None and len(case.road) >= 2) or bool(np.any(case.U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4] != 0))
 
 
-def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.001) -> list[DriveCase]:
-    """Read and prepare drives; :class:`SuspInputError` naming the file on unreadable input."""
+def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.001,
+               topic_map=None) -> list[DriveCase]:
+    """Read and prepare drives (through ``topic_map``, see :mod:`susp_sim_ros.io.topic_map`, if given);
+    :class:`SuspInputError` naming the file on unreadable input."""
     from ...io.drive import read_drive
     if not paths:
         raise SuspInputError("give at least one recorded test drive (MCAP)")
@@ -216,9 +218,9 @@ def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.0
     names = set()
     for p in paths:
         p = Path(p)
-        if not p.is_file():
+        if not p.exists():  # a file, or a rosbag2 directory
             raise SuspInputError(f"{p}: no such file")
-        case = prepare_case(p, read_drive(p), wheelbase=wheelbase, dt=dt)
+        case = prepare_case(p, read_drive(p, topic_map=topic_map), wheelbase=wheelbase, dt=dt)
         if case.name in names:
             case.name = f"{case.name}_{len(names)}"
         names.add(case.name)
