@@ -64,7 +64,8 @@ def test_hard_valve_damps_more_than_soft(model_full):
     for w in ("FL", "RL"):
         # several times the damper force per unit deflection velocity (the curves' ratio), and a
         # slower suspension stroke
-        ratio = lambda r: np.sum(np.abs(r[f"F_DAMPER_{w}"])) / np.sum(np.abs(r[f"DEFL_VEL_{w}"]))
+        def ratio(r, w=w):
+            return np.sum(np.abs(r[f"F_DAMPER_{w}"])) / np.sum(np.abs(r[f"DEFL_VEL_{w}"]))
         assert ratio(hard) > 3.0 * ratio(soft)
         assert np.max(np.abs(hard[f"DEFL_VEL_{w}"])) < np.max(np.abs(soft[f"DEFL_VEL_{w}"]))
 

@@ -36,11 +36,23 @@ def add_arguments(p) -> None:
     p.add_argument("--rate", type=float, default=100.0, help="publish rate of the /sim topics [Hz]")
     p.add_argument("--out", metavar="SIM.MCAP", help="write the simulated MCAP here")
     p.add_argument("--overwrite", action="store_true", help="overwrite --out if it exists")
+    ride = p.add_argument_group("ride on a random road (semi-active dampers; interface.md 'Semi-active and ride')")
+    ride.add_argument("--road", metavar="iso8608:CLASS", help="drive straight over a seeded ISO 8608 random road "
+                      "of this class (A-H) and report ride and road-holding metrics")
+    ride.add_argument("--speed", type=float, default=80.0, help="constant speed on --road [km/h] (default 80)")
+    ride.add_argument("--duration", type=float, default=20.0, help="length of the --road run [s] (default 20)")
+    ride.add_argument("--seed", type=int, default=0, help="seed of the --road profile (default 0)")
+    ride.add_argument("--controller", default="passive", help="damper controller on --road: passive (no "
+                      "command, default), skyhook, skyhook_onoff, groundhook, add, sh_add")
 
 
 def run(args) -> dict:
     if args.drive and args.maneuver:
         raise SuspInputError("give either --maneuver or --drive, not both")
+    if getattr(args, "road", None):
+        return run_ride_cli(args)
+    if getattr(args, "controller", "passive") != "passive":
+        raise SuspInputError("--controller needs --road (a recorded drive brings its own /vehicle/damper_command)")
     model = Model(args.config, args.variant)
     if args.oil:
         oil, state = parse_oil(args.oil, "--oil"), "custom"
@@ -82,4 +94,37 @@ def run(args) -> dict:
                       f"peak pitch rate {out['peak_pitch_rate_deg_s']:.2f} deg/s, roll rate "
                       f"{out['peak_roll_rate_deg_s']:.2f} deg/s, yaw rate {out['peak_yaw_rate_deg_s']:.2f} deg/s"
                       + (f"; wrote {args.out}" if args.out else ""))
+    return out
+
+
+def run_ride_cli(args) -> dict:
+    """``susp sim --road iso8608:C --speed 80 ...``: the ride metrics of one controller."""
+    from ..control.controllers import CONTROLLERS
+    from ..control.ride import RideSpec, parse_road, run_ride
+    if args.drive or args.maneuver:
+        raise SuspInputError("--road drives its own maneuver: give no --drive or --maneuver with it")
+    if args.controller not in CONTROLLERS:
+        raise SuspInputError(f"--controller: expected one of {', '.join(CONTROLLERS)}, got {args.controller!r}")
+    if args.out:
+        raise SuspInputError("--out is not available with --road (the ride run writes no recording)")
+    if not (np.isfinite(args.step) and 0 < args.step <= 0.002):
+        raise SuspInputError(f"--step: expected a step in (0, 0.002] s for a ride run, got {args.step}")
+    cls = parse_road(args.road)
+    model = Model(args.config, args.variant)
+    if args.oil:
+        oil, state = parse_oil(args.oil, "--oil"), "custom"
+    else:
+        state = args.state or "intact"
+        oil = vehicle_state(state)
+    spec = RideSpec(cls, args.speed / 3.6, args.duration, args.seed)
+    res = run_ride(model, spec, controller=args.controller, oil=oil, step_s=args.step)
+    out = {"maneuver": f"iso8608:{cls}", "road_class": cls, "speed_kmh": args.speed, "duration_s": args.duration,
+           "seed": args.seed, "controller": args.controller, "state": state, "variant": model.variant.name,
+           "vehicle": model.vehicle.name, "damper_oil_level": [float(x) for x in oil], **res}
+    dtl = sum(res["dynamic_tyre_load_rms_rel"].values()) / 4
+    out["summary"] = (f"iso8608:{cls} at {args.speed:g} km/h, {args.duration:g} s, seed {args.seed}, "
+                      f"{args.controller} ({state}, {model.variant.name}): Wk RMS "
+                      f"{res['comfort_wk_rms_m_s2']:.3f} m/s^2, dynamic tyre load RMS {dtl:.3f} (mean of wheels), "
+                      f"travel RMS {1000 * max(res['suspension_travel_rms_m'].values()):.1f} mm (max wheel), "
+                      f"stop contacts {sum(res['stop_contacts'].values())}")
     return out

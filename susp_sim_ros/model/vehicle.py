@@ -424,6 +424,7 @@ class Stepper:
         done = self.model.kernel.run_one(self.P, self.S, U, rs, rzl, rzr, rn, self._mode, self.dt, 1,
                                          self._sel, Y)
         self.steps += done
+        self.block = Y[:done]  # the outputs of every step of this call (OUTPUT_LABELS columns)
         self.y = Y[done - 1]
         if done < n_steps:
             self.healthy = False
