@@ -64,7 +64,7 @@ from .io import messages as M
 from .io.recorder import McapRecorder
 from .lockstep import simulated_metadata
 from .model.vehicle import Model, check_oil
-from .sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
+from .sim_core import DAMPER_COMMAND, DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
 
 NODE_NAME = "susp_sim_node"
 INPUT_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
@@ -339,7 +339,9 @@ class SuspSimNode(Node):
             self.create_subscription(Float64, "/vehicle/speed", self._on_speed, INPUT_QOS),
             self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self._on_steering, INPUT_QOS),
             self.create_subscription(Float64MultiArray, "/road/profile", self._on_profile, LATCHED_QOS),
-            self.create_subscription(Float64MultiArray, "/road/wheel_heights", self._on_heights, INPUT_QOS)]
+            self.create_subscription(Float64MultiArray, "/road/wheel_heights", self._on_heights, INPUT_QOS),
+            self.create_subscription(Float64MultiArray, DAMPER_COMMAND, self._on_damper_command, INPUT_QOS)]
+        self._semiactive = SemiActiveDiagnostics(model, self.core.period_ns)
         self.add_on_set_parameters_callback(self._on_params)
         self._stale: set[str] = set()
         self._wall0 = time.monotonic()
@@ -507,8 +509,22 @@ class SuspSimNode(Node):
         self._input("/road/wheel_heights", M.FLOAT64_ARRAY, msg,
                     lambda t: self.core.set_wheel_heights(t, msg.data, dims, off), info)
 
+    def _on_damper_command(self, msg: Float64MultiArray, info) -> None:
+        dims = [(d.label, d.size, d.stride) for d in msg.layout.dim]
+        off = msg.layout.data_offset
+        src = int(info["source_timestamp"]) if info else 0
+
+        def apply(t):
+            reason = self.core.set_damper_command(t, msg.data, dims, off)
+            if reason is None:
+                self._semiactive.command_applied(t, src)
+            return reason
+        self._input(DAMPER_COMMAND, M.FLOAT64_ARRAY, msg, apply, info)
+
     # -- stepping and publishing ----------------------------------------------------------------------
     def _publish_samples(self, samples) -> None:
+        if samples:
+            self._semiactive.published(samples)
         for s in samples:
             imu = fill(self._imu, M.imu_msg(s.t_ns, s.y))
             odom = fill(self._odom, M.odom_msg(s.t_ns, s.y))
@@ -679,6 +695,8 @@ class SuspSimNode(Node):
             model["level"] = 1
             model["message"] = "numerically healthy; recording " + (
                 f"stopped: {self.recorder.error}" if self.recorder.error else f"dropped {self.recorder.dropped} messages")
+        with self.lock:  # semi-active damper and ride metrics: added values of the model status
+            model["values"].update(self._semiactive.values(self.core))
         return [inputs, timing, model]
 
     def publish_diagnostics(self) -> None:
@@ -713,6 +731,63 @@ class SuspSimNode(Node):
     def destroy_node(self):
         self.close()
         return super().destroy_node()
+
+
+class SemiActiveDiagnostics:
+    """Semi-active damper and ride values of the model status on ``/diagnostics`` (issue 15): the damper
+    mode and command, command-to-force latency (from a command's DDS source timestamp to the publication of the first
+    ``/sim`` sample computed with it, wall clock; the valve lag comes on top) and the running ride
+    metrics (:class:`~susp_sim_ros.analysis.ride.RideMonitor`) over the published samples. Samples are
+    only queued on the publishing path; the metrics are computed when the diagnostics are built."""
+
+    def __init__(self, model: Model, period_ns: int):
+        from .analysis.ride import RideMonitor
+        vp = model.vehicle
+        corner = lambda pair: [pair[a] for a in (0, 0, 1, 1)]  # noqa: E731
+        self.monitor = RideMonitor(1e9 / period_ns, gravity=vp.gravity, static_loads=vp.static_wheel_loads(),
+                                   bump_travel=corner(vp.bump_stop_travel),
+                                   rebound_travel=corner(vp.rebound_stop_travel))
+        self._rows: list = []
+        self._pending: list[tuple[int, int]] = []   # (sim time applied, source timestamp) of commands
+        self.latency_ms: list[float] = []
+        self._restarts = 0
+
+    def command_applied(self, t_ns: int, src_ns: int) -> None:
+        if src_ns > 0:
+            self._pending.append((int(t_ns), src_ns))
+
+    def published(self, samples) -> None:
+        now = time.time_ns()
+        for smp in samples:
+            self._rows.append(smp.y)
+            while self._pending and self._pending[0][0] <= smp.t_ns:
+                self.latency_ms.append((now - self._pending.pop(0)[1]) * 1e-6)
+        del self.latency_ms[:-10000]
+
+    def values(self, core: SimCore) -> dict:
+        if core.restarts != self._restarts:
+            self._restarts = core.restarts
+            self.monitor.reset()
+        if self._rows:
+            self.monitor.update(np.asarray(self._rows))
+            self._rows.clear()
+        v = self.monitor.values()
+        lat = np.asarray(self.latency_ms)
+        cmd = core.damper_command
+        semi = core.stepper.semi_active
+        values = {"damper_mode": "semi_active" if semi else "passive",
+                  "damper_command": ",".join(f"{x:g}" for x in cmd) if cmd is not None else "",
+                  "valve_time_constant_ms": f"{core.model.dampers.valve_time_constant * 1e3:g}" if semi else "",
+                  "command_latency_p50_ms": f"{np.percentile(lat, 50):.3f}" if lat.size else "",
+                  "command_latency_p99_ms": f"{np.percentile(lat, 99):.3f}" if lat.size else "",
+                  "command_latency_max_ms": f"{lat.max():.3f}" if lat.size else "",
+                  "commands_applied": int(lat.size),
+                  "comfort_wk_rms_m_s2": f"{v['comfort_wk_rms_m_s2']:.6f}",
+                  **{f"dynamic_tyre_load_rms_rel_{w}": f"{x:.6f}" for w, x in v["dynamic_tyre_load_rms_rel"].items()},
+                  **{f"suspension_travel_rms_m_{w}": f"{x:.6f}" for w, x in v["suspension_travel_rms_m"].items()},
+                  **{f"stop_contacts_{w}": x for w, x in v["stop_contacts"].items()},
+                  "ride_samples": v["samples"]}
+        return values
 
 
 def main(args: list[str] | None = None) -> int:
