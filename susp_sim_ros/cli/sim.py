@@ -43,7 +43,8 @@ def add_arguments(p) -> None:
     ride.add_argument("--duration", type=float, default=20.0, help="length of the --road run [s] (default 20)")
     ride.add_argument("--seed", type=int, default=0, help="seed of the --road profile (default 0)")
     ride.add_argument("--controller", default="passive", help="damper controller on --road: passive (no "
-                      "command, default), skyhook, skyhook_onoff, groundhook, add, sh_add")
+                      "command, default), skyhook, skyhook_onoff, groundhook, add, sh_add; also in the loop of a "
+                      "--maneuver or --drive run, at the --rate samples")
 
 
 def run(args) -> dict:
@@ -51,8 +52,9 @@ def run(args) -> dict:
         raise SuspInputError("give either --maneuver or --drive, not both")
     if getattr(args, "road", None):
         return run_ride_cli(args)
-    if getattr(args, "controller", "passive") != "passive":
-        raise SuspInputError("--controller needs --road (a recorded drive brings its own /vehicle/damper_command)")
+    from ..control.controllers import CONTROLLERS
+    if args.controller not in CONTROLLERS:
+        raise SuspInputError(f"--controller: expected one of {', '.join(CONTROLLERS)}, got {args.controller!r}")
     model = Model(args.config, args.variant)
     if args.oil:
         oil, state = parse_oil(args.oil, "--oil"), "custom"
@@ -71,7 +73,8 @@ def run(args) -> dict:
         drive = maneuver_drive(man, oil, rate_hz=1.0 / args.step, vehicle=model.vehicle.name)
         name = man.name
     res = run_lockstep(drive, vehicle=args.config, variant=args.variant, oil=oil, step_s=args.step,
-                       publish_rate_hz=args.rate, out_path=args.out, overwrite=args.overwrite, model=model)
+                       publish_rate_hz=args.rate, out_path=args.out, overwrite=args.overwrite, model=model,
+                       controller=args.controller)
     if res.diverged:
         raise DivergenceError(f"{name}: {res.diverged} (variant {model.variant.name}, vehicle "
                               f"{model.vehicle.name}, step {args.step} s"
