@@ -15,7 +15,7 @@ from typing import Sequence
 import numpy as np
 
 from .io import messages as M
-from .io.drive import ROAD_PROFILE, SPEED, STEERING, WHEEL_HEIGHTS, ImuSeries, Series, TestDrive
+from .io.drive import DAMPER_COMMAND, ROAD_PROFILE, SPEED, STEERING, WHEEL_HEIGHTS, ImuSeries, Series, TestDrive
 from .io.recorder import McapRecorder
 from .model.layout import OUTPUT_LABELS, output_index
 from .model.maneuvers import Maneuver
@@ -25,7 +25,7 @@ from .sim_core import SimCore, sample_messages
 _GYRO = [output_index(k) for k in ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")]
 _ACC = [output_index(k) for k in ("AX_SF", "AY_SF", "AZ_SF")]
 
-_ROAD, _SPEED, _STEER, _WH = 0, 1, 2, 3
+_ROAD, _SPEED, _STEER, _WH, _CMD = 0, 1, 2, 3, 4
 
 
 @dataclass
@@ -64,7 +64,8 @@ def _events(drive: TestDrive) -> list[tuple[int, int, int]]:
     ev: list[tuple[int, int, int]] = []
     if drive.road is not None:
         ev.append((drive.t0_ns, _ROAD, 0))
-    for kind, s in ((_SPEED, drive.speed), (_STEER, drive.steering), (_WH, drive.wheel_heights)):
+    for kind, s in ((_SPEED, drive.speed), (_STEER, drive.steering), (_WH, drive.wheel_heights),
+                    (_CMD, drive.damper_command)):
         if s is not None:
             ev.extend(zip(s.t_ns.tolist(), [kind] * len(s), range(len(s))))
     ev.sort(key=lambda e: (e[0], e[1]))
@@ -74,8 +75,14 @@ def _events(drive: TestDrive) -> list[tuple[int, int, int]]:
 def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: str = "full",
                  oil: Sequence[float] | None = None, step_s: float = 0.001, publish_rate_hz: float = 100.0,
                  out_path: str | os.PathLike | None = None, overwrite: bool = False,
-                 input_timeout_s: float = 0.5, model: Model | None = None) -> LockstepResult:
+                 input_timeout_s: float = 0.5, model: Model | None = None,
+                 controller: str | None = None) -> LockstepResult:
     """Run ``drive`` through a :class:`SimCore` as fast as possible (see the module docstring).
+
+    ``controller``: a damper controller (:mod:`susp_sim_ros.control`) in the loop, as the
+    ``susp_damper_controller`` node would run it: on every output sample it computes a command that is
+    applied at that sample's time (and recorded as ``/vehicle/damper_command``); ``None`` or
+    ``"passive"``: the drive's own commands, if any.
 
     If the divergence guard stops the core, the result ends at the last good sample, ``healthy`` is
     False and ``diverged`` says why (the output file, if any, holds the samples up to there)."""
@@ -90,8 +97,17 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
     road_msg = None
     if drive.road is not None:
         road_msg = M.road_profile_msg(drive.road.s, drive.road.zl, drive.road.zr)
+    ctrl = None
+    if controller not in (None, "passive"):
+        import dataclasses
+
+        from .control.controllers import load_controller_params, make_controller, measurement_from_outputs
+        params = dataclasses.replace(load_controller_params(), sample_time=core.period_ns * 1e-9)
+        ctrl = make_controller(controller, model.vehicle, model.dampers, params)
+        out_index = {k: i for i, k in enumerate(OUTPUT_LABELS)}
     sp, st = drive.speed.values.tolist(), drive.steering.values.tolist()
     wh = drive.wheel_heights.values if drive.wheel_heights is not None else None
+    cmd = drive.damper_command.values if drive.damper_command is not None else None
     try:
         def emit(samples):
             for smp in samples:
@@ -100,6 +116,10 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
                 if rec is not None:
                     for topic, mt, msg in sample_messages(smp):
                         rec.write(topic, mt, smp.t_ns, msg)
+                if ctrl is not None:
+                    cmd = ctrl(measurement_from_outputs(smp.y, out_index))
+                    if cmd is not None and core.set_damper_command(smp.t_ns, cmd) is None and rec is not None:
+                        rec.write(DAMPER_COMMAND, M.FLOAT64_ARRAY, smp.t_ns, M.wheel_heights_msg(cmd))
 
         for t, kind, i in _events(drive):
             emit(core.advance_to(t))
@@ -115,6 +135,10 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
                 core.set_wheel_heights(t, wh[i])
                 if rec is not None:
                     rec.write(WHEEL_HEIGHTS, M.FLOAT64_ARRAY, t, M.wheel_heights_msg(wh[i]))
+            elif kind == _CMD:
+                core.set_damper_command(t, cmd[i])
+                if rec is not None:
+                    rec.write(DAMPER_COMMAND, M.FLOAT64_ARRAY, t, M.wheel_heights_msg(cmd[i]))
             else:
                 n = len(drive.road)
                 core.set_road_profile(t, road_msg["data"], [("channel", 3), ("sample", n)])

@@ -64,7 +64,8 @@ from .io import messages as M
 from .io.recorder import McapRecorder
 from .lockstep import simulated_metadata
 from .model.vehicle import Model, check_oil
-from .sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
+from .ride_diagnostics import SemiActiveDiagnostics
+from .sim_core import DAMPER_COMMAND, DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
 
 NODE_NAME = "susp_sim_node"
 INPUT_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
@@ -339,7 +340,9 @@ class SuspSimNode(Node):
             self.create_subscription(Float64, "/vehicle/speed", self._on_speed, INPUT_QOS),
             self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self._on_steering, INPUT_QOS),
             self.create_subscription(Float64MultiArray, "/road/profile", self._on_profile, LATCHED_QOS),
-            self.create_subscription(Float64MultiArray, "/road/wheel_heights", self._on_heights, INPUT_QOS)]
+            self.create_subscription(Float64MultiArray, "/road/wheel_heights", self._on_heights, INPUT_QOS),
+            self.create_subscription(Float64MultiArray, DAMPER_COMMAND, self._on_damper_command, INPUT_QOS)]
+        self._semiactive = SemiActiveDiagnostics(model, self.core.period_ns)
         self.add_on_set_parameters_callback(self._on_params)
         self._stale: set[str] = set()
         self._wall0 = time.monotonic()
@@ -507,8 +510,22 @@ class SuspSimNode(Node):
         self._input("/road/wheel_heights", M.FLOAT64_ARRAY, msg,
                     lambda t: self.core.set_wheel_heights(t, msg.data, dims, off), info)
 
+    def _on_damper_command(self, msg: Float64MultiArray, info) -> None:
+        dims = [(d.label, d.size, d.stride) for d in msg.layout.dim]
+        off = msg.layout.data_offset
+        src = int(info["source_timestamp"]) if info else 0
+
+        def apply(t):
+            reason = self.core.set_damper_command(t, msg.data, dims, off)
+            if reason is None:
+                self._semiactive.command_applied(t, src)
+            return reason
+        self._input(DAMPER_COMMAND, M.FLOAT64_ARRAY, msg, apply, info)
+
     # -- stepping and publishing ----------------------------------------------------------------------
     def _publish_samples(self, samples) -> None:
+        if samples:
+            self._semiactive.published(samples)
         for s in samples:
             imu = fill(self._imu, M.imu_msg(s.t_ns, s.y))
             odom = fill(self._odom, M.odom_msg(s.t_ns, s.y))
@@ -679,6 +696,8 @@ class SuspSimNode(Node):
             model["level"] = 1
             model["message"] = "numerically healthy; recording " + (
                 f"stopped: {self.recorder.error}" if self.recorder.error else f"dropped {self.recorder.dropped} messages")
+        with self.lock:  # semi-active damper and ride metrics: added values of the model status
+            model["values"].update(self._semiactive.values(self.core))
         return [inputs, timing, model]
 
     def publish_diagnostics(self) -> None:

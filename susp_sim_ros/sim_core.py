@@ -17,6 +17,10 @@ Reliability rules (each counted per cause in :attr:`SimCore.rejections` and repo
   back (a looped replay) restarts the simulation from rest; a jump forward by more than
   ``max_time_jump_s`` is not stepped through (that would take as long as the gap): the simulation
   continues from the new time with its state held over the gap;
+- a semi-active damper command (``/vehicle/damper_command``, [FL, FR, RL, RR] in [0, 1]) switches the
+  dampers from their passive curve to the valve family; when no valid command arrived for
+  ``input_timeout_s`` it is stale: the dampers fall back to the passive curve (counted once per stale
+  spell as ``damper_command_stale``) until a fresh command arrives;
 - divergence guard: after every publish tick the output vector must be finite and inside
   :data:`OUTPUT_ENVELOPE` (far beyond anything physical); otherwise the core stops for good
   (:attr:`SimCore.diverged` says why and when) and returns no further samples, so nothing non-finite or
@@ -117,6 +121,7 @@ class RateLimitedLog:
 
 #: Topic names of the interface (the node may be remapped; the core does not care).
 SIM_IMU, SIM_ODOM, SIM_SUSPENSION, DIAGNOSTICS = "/sim/imu/data", "/sim/odom", "/sim/suspension", "/diagnostics"
+DAMPER_COMMAND = "/vehicle/damper_command"
 
 
 @dataclass(frozen=True)
@@ -163,6 +168,7 @@ class SimCore:
         self.steering = 0.0
         self.accel = 0.0
         self.wheel_heights: np.ndarray | None = None
+        self.damper_command: np.ndarray | None = None  # the held valve command (None: passive damper)
         self.road: RoadProfile | None = None
         self._last_speed_t: int | None = None
         self.last_input_ns: dict[str, int] = {}
@@ -183,6 +189,7 @@ class SimCore:
         self.samples_out = 0
         self.total_steps = 0  # over the whole life, across restarts
         self.restarts = 0
+        self._command_stale = False
 
     # -- state ----------------------------------------------------------------------------------------
     @property
@@ -217,7 +224,10 @@ class SimCore:
         """Back to rest (e.g. time jumped backwards when a replay loops); inputs are kept, a divergence
         is cleared."""
         model, oil, road = self.model, self.stepper.oil, self.stepper.road
+        semi = self.stepper.semi_active
         self.stepper = Stepper(model, dt=self.step_ns * 1e-9, road=road, oil=oil)
+        if semi and self.damper_command is not None:
+            self.stepper.set_semi_active(True, self.damper_command)
         self.t_start_ns = self.t_ns = None
         self.steps_done = 0
         self._last_speed_t = None
@@ -343,15 +353,58 @@ class SimCore:
         self.last_input_ns["/road/wheel_heights"] = int(t_ns)
         return None
 
+    def set_damper_command(self, t_ns: int, u: Sequence[float], dims: Sequence[tuple] = (),
+                           data_offset: int = 0) -> str | None:
+        """``/vehicle/damper_command``: data [FL, FR, RL, RR] valve commands in [0, 1] (after
+        ``data_offset``); layout dims, if given, must describe 4 values. The first valid command switches
+        the dampers to the semi-active family."""
+        topic = DAMPER_COMMAND
+        try:
+            sizes = [int(d[1]) for d in dims]
+            off = int(data_offset)
+            arr = np.asarray(u, dtype=float)[max(off, 0):]
+        except (ValueError, TypeError, IndexError, OverflowError) as exc:
+            return self._reject("damper_command", f"{topic}: rejected: {exc}", "layout")
+        if sizes and int(np.prod(sizes, dtype=np.int64)) != 4:
+            return self._reject("damper_command", f"{topic}: rejected: layout dims {sizes} do not describe 4 "
+                                                  f"values [FL, FR, RL, RR]", "layout")
+        if off < 0 or arr.shape != (4,):
+            return self._reject("damper_command", f"{topic}: rejected: expected 4 values [FL, FR, RL, RR], "
+                                                  f"got {arr.size}", "count")
+        if not np.all(np.isfinite(arr)):
+            return self._reject("non_finite", f"{topic}: rejected non-finite value")
+        if np.any(arr < 0.0) or np.any(arr > 1.0):
+            return self._reject("damper_command", f"{topic}: rejected {arr.tolist()}: commands must be in "
+                                                  f"[0, 1] (0 softest, 1 hardest)", "range")
+        self.damper_command = arr
+        self._command_stale = False
+        if not self.stepper.semi_active:
+            self.stepper.set_semi_active(True, arr)
+        self.last_input_ns[topic] = int(t_ns)
+        return None
+
+    def _check_command_fresh(self, t_ns: int) -> None:
+        """Back to the passive damper when the command went stale (module docstring)."""
+        last = self.last_input_ns.get(DAMPER_COMMAND)
+        if self.damper_command is None or last is None or t_ns - last <= self.timeout_ns:
+            return
+        if not self._command_stale:
+            self._command_stale = True
+            self.reject(DAMPER_COMMAND, "damper_command_stale",
+                        f"{DAMPER_COMMAND}: no command for {(t_ns - last) * 1e-9:.3f} s (> input_timeout_s "
+                        f"{self.timeout_ns * 1e-9:g} s): dampers back to the passive curve", "stale")
+        self.damper_command = None
+        self.stepper.set_semi_active(False)
+
     def stale_inputs(self, t_ns: int) -> list[str]:
         """Input topics that have not been refreshed for ``input_timeout_s`` (never-seen speed/steering
         count as stale once the core has run longer than the timeout). The latched road profile never
         goes stale."""
         out = []
-        for topic in ("/vehicle/speed", "/vehicle/steering_wheel_angle", "/road/wheel_heights"):
+        for topic in ("/vehicle/speed", "/vehicle/steering_wheel_angle", "/road/wheel_heights", DAMPER_COMMAND):
             last = self.last_input_ns.get(topic)
             if last is None:
-                if topic != "/road/wheel_heights" and self.t_start_ns is not None \
+                if topic not in ("/road/wheel_heights", DAMPER_COMMAND) and self.t_start_ns is not None \
                         and t_ns - self.t_start_ns > self.timeout_ns:
                     out.append(topic)
             elif t_ns - last > self.timeout_ns:
@@ -364,7 +417,9 @@ class SimCore:
         target = (t_ns - self.t_start_ns) // self.step_ns
         n = target - self.steps_done
         if n > 0:
-            y = self.stepper.advance(int(n), self.speed, self.steering, self.accel, self.wheel_heights)
+            self._check_command_fresh(t_ns)
+            y = self.stepper.advance(int(n), self.speed, self.steering, self.accel, self.wheel_heights,
+                                     self.damper_command)
             self.steps_done = target
             self.total_steps += int(n)
             if not self.stepper.healthy or not bool(np.all(np.abs(y) <= OUTPUT_ENVELOPE)):
@@ -431,6 +486,6 @@ class SimCore:
         return out
 
 
-__all__ = ["SimCore", "Sample", "sample_messages", "SIM_IMU", "SIM_ODOM", "SIM_SUSPENSION", "DIAGNOSTICS",
+__all__ = ["SimCore", "Sample", "sample_messages", "DAMPER_COMMAND", "SIM_IMU", "SIM_ODOM", "SIM_SUSPENSION", "DIAGNOSTICS",
            "MAX_STEERING", "MAX_SPEED", "MAX_WHEEL_HEIGHT", "MAX_ACCEL", "OUTPUT_ENVELOPE", "RateLimitedLog",
            "DivergenceError", "STALE_CLOCK_NS"]

@@ -26,6 +26,7 @@ SPEED = "/vehicle/speed"
 STEERING = "/vehicle/steering_wheel_angle"
 ROAD_PROFILE = "/road/profile"
 WHEEL_HEIGHTS = "/road/wheel_heights"
+DAMPER_COMMAND = "/vehicle/damper_command"  # semi-active valve command [FL, FR, RL, RR] in [0, 1] (optional)
 IMU = "/imu/data"
 SIM_IMU = "/sim/imu/data"
 
@@ -104,6 +105,7 @@ class TestDrive:
     wheel_heights: Series | None = None
     imu: ImuSeries | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    damper_command: Series | None = None  # (n, 4) valve commands; None: passive dampers
 
     def oil_levels(self) -> tuple[float, float, float, float]:
         return parse_oil(self.metadata.get("damper_oil_level"))  # type: ignore[return-value]
@@ -126,7 +128,7 @@ class TestDrive:
 # ---- reading -------------------------------------------------------------------------------------
 #: Message type each topic must have when present (a recording with another type there is rejected).
 TOPIC_TYPES = {SPEED: M.FLOAT64, STEERING: M.FLOAT64, ROAD_PROFILE: M.FLOAT64_ARRAY,
-               WHEEL_HEIGHTS: M.FLOAT64_ARRAY, IMU: M.IMU, SIM_IMU: M.IMU}
+               WHEEL_HEIGHTS: M.FLOAT64_ARRAY, IMU: M.IMU, SIM_IMU: M.IMU, DAMPER_COMMAND: M.FLOAT64_ARRAY}
 
 
 def check_topic(rec: Recording, topic: str, msgtype: str | None = None) -> None:
@@ -291,6 +293,13 @@ def drive_from_recording(rec: Recording, *, imu_topic: str = IMU,
             raise RecordingError(f"{path}: topic {whm.topic}: expected 4 values [FL, FR, RL, RR] "
                                  "per message")
         wh = Series(np.array([t for t, _ in items], dtype=np.int64), np.array(vals, dtype=float))
+    cmd = None
+    items = _fields(rec, DAMPER_COMMAND, lambda m: [float(x) for x in m.data])
+    if items:
+        if any(len(v) != 4 for _, v in items):
+            raise RecordingError(f"{path}: topic {DAMPER_COMMAND}: expected 4 values [FL, FR, RL, RR] "
+                                 "per message")
+        cmd = Series(np.array([t for t, _ in items], dtype=np.int64), np.array([v for _, v in items], float))
     imu = _imu_series(rec, imu_topic, tm.imu) if rec.by_topic(imu_topic) else None
     metadata = dict(rec.metadata.get("test_drive", {}))
     if tm.damper_oil_level is not None and rec.by_topic(tm.damper_oil_level.topic):
@@ -305,7 +314,7 @@ def drive_from_recording(rec: Recording, *, imu_topic: str = IMU,
         extra["conversions"] = tm.conversions()
     if imu_topic != SIM_IMU and rec.by_topic(SIM_IMU):
         extra["sim_imu"] = _imu_series(rec, SIM_IMU)
-    drive = TestDrive(metadata, speed, steering, road, wh, imu, extra)
+    drive = TestDrive(metadata, speed, steering, road, wh, imu, extra, damper_command=cmd)
     if "damper_oil_level" in metadata:
         parse_oil(metadata["damper_oil_level"], f"{path}: test_drive metadata damper_oil_level")
     return drive
@@ -340,7 +349,10 @@ def check_drive(drive: TestDrive, where: str | os.PathLike) -> TestDrive:
     series(names.get("speed", SPEED), drive.speed.t_ns, drive.speed.values, 0.0, MAX_SPEED)
     series(names.get("steering", STEERING), drive.steering.t_ns, drive.steering.values, absmax=MAX_STEERING)
     if drive.wheel_heights is not None:
-        series(names.get("wheel_heights", WHEEL_HEIGHTS), drive.wheel_heights.t_ns, drive.wheel_heights.values, absmax=MAX_WHEEL_HEIGHT)
+        series(names.get("wheel_heights", WHEEL_HEIGHTS), drive.wheel_heights.t_ns, drive.wheel_heights.values,
+               absmax=MAX_WHEEL_HEIGHT)
+    if drive.damper_command is not None:
+        series(DAMPER_COMMAND, drive.damper_command.t_ns, drive.damper_command.values, 0.0, 1.0)
     if drive.road is not None and len(drive.road) and (
             np.abs(drive.road.zl).max() > MAX_WHEEL_HEIGHT or np.abs(drive.road.zr).max() > MAX_WHEEL_HEIGHT):
         raise RecordingError(f"{where}: topic {names.get('road_profile', ROAD_PROFILE)}: elevation beyond +-{MAX_WHEEL_HEIGHT:g} m")
@@ -373,6 +385,9 @@ def drive_messages(drive: TestDrive, *, imu_topic: str = IMU) -> list[tuple[int,
     if drive.wheel_heights is not None:
         for t, v in zip(drive.wheel_heights.t_ns.tolist(), drive.wheel_heights.values.tolist()):
             out.append((t, WHEEL_HEIGHTS, M.FLOAT64_ARRAY, M.wheel_heights_msg(v), False))
+    if drive.damper_command is not None:
+        for t, v in zip(drive.damper_command.t_ns.tolist(), drive.damper_command.values.tolist()):
+            out.append((t, DAMPER_COMMAND, M.FLOAT64_ARRAY, M.wheel_heights_msg(v), False))
     if drive.imu is not None:
         for t, g, a in zip(drive.imu.t_ns.tolist(), drive.imu.gyro.tolist(), drive.imu.accel.tolist()):
             out.append((t, imu_topic, M.IMU, {
@@ -422,4 +437,4 @@ def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = 
 __all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "recording_from_drive", "read_imu", "parse_oil",
            "drive_from_recording", "drive_messages", "road_from_msg", "imu_from_recording", "check_topic",
            "TOPIC_TYPES", "check_drive", "MAX_SPEED", "MAX_STEERING", "MAX_WHEEL_HEIGHT", "SPEED", "STEERING", "ROAD_PROFILE",
-           "WHEEL_HEIGHTS", "IMU", "SIM_IMU"]
+           "WHEEL_HEIGHTS", "DAMPER_COMMAND", "IMU", "SIM_IMU"]

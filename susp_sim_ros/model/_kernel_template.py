@@ -24,7 +24,8 @@ from numba.extending import intrinsic
 
 from susp_sim_ros.model.inline_math import TINY, expm1_nonpos, tanh
 from susp_sim_ros.model.layout import (C_INDEX, N_CTX, N_GRID, N_P_FIXED, N_S_FIXED, N_Y, P_GRID,
-                                       P_H_EMPTY, P_H_INTACT, P_INDEX, S_INDEX, U_INDEX, Y_INDEX)
+                                       P_H_EMPTY, P_H_HARD, P_H_INTACT, P_H_SOFT, P_INDEX, P_SEMI_ACTIVE,
+                                       P_VALVE_TAU, S_INDEX, U_INDEX, Y_INDEX)
 
 # ---- named indices, frozen into the compiled code as constants ---------------------------------------
 _G, _M_S, _M_TOT = P_INDEX["G"], P_INDEX["M_S"], P_INDEX["M_TOT"]
@@ -47,8 +48,10 @@ _Z, _PHI, _THETA, _ZD, _PHID, _THETAD = (S_INDEX["Z"], S_INDEX["PHI"], S_INDEX["
 _VY, _R, _X, _Y, _PSI, _SPATH = (S_INDEX["VY"], S_INDEX["R"], S_INDEX["X"], S_INDEX["Y"], S_INDEX["PSI"],
                                  S_INDEX["SPATH"])
 _ZW, _ZWD, _FYT, _ZR_PREV = S_INDEX["ZW"], S_INDEX["ZWD"], S_INDEX["FYT"], S_INDEX["ZR_PREV"]
+_VALVE = S_INDEX["VALVE"]
 
 _U_V, _U_AX, _U_SWA, _U_ZR = U_INDEX["V"], U_INDEX["AX"], U_INDEX["SWA"], U_INDEX["ZR_IN"]
+_U_CMD = U_INDEX["CMD"]
 
 _C_D, _C_DD, _C_FX, _C_FY, _C_FZ = C_INDEX["D"], C_INDEX["DD"], C_INDEX["FX"], C_INDEX["FY"], C_INDEX["FZ"]
 _C_OIL, _C_AXLE, _C_SIDE = C_INDEX["OIL"], C_INDEX["AXLE"], C_INDEX["SIDE"]
@@ -73,7 +76,8 @@ LANES = 16
 # scratch rows per block: per corner (W[_W_x + i]), then per vehicle
 _W_ZR, _W_ZRD, _W_SLOPE, _W_D, _W_DD, _W_FZ, _W_WF, _W_FX, _W_FS = 0, 4, 8, 12, 16, 20, 24, 28, 32
 _W_V, _W_AX, _W_DELTA, _W_ZDD, _W_AY, _W_OK = 36, 37, 38, 39, 40, 41
-N_SCRATCH = 42
+_W_CMD = 42  # 4: the valve command of the step per corner, limited to [0, 1]
+N_SCRATCH = 46
 
 # reciprocals of constant parameters, computed once per run (:func:`derive`): the step then
 # multiplies instead of dividing, and a parameter changed between runs is always seen
@@ -81,7 +85,8 @@ _D_INV_MS, _D_INV_M, _D_INV_IXX, _D_INV_IYY, _D_INV_IZZ, _D_INV_RATIO = 0, 1, 2,
 _D_INV_EP, _D_INV_VS, _D_INV_RELAX, _D_INV_FADE = 6, 7, 8, 9
 _D_INV_MU, _D_DFZ = 10, 14  # 4 each
 _D_INV_CELL = 18  # N_GRID - 1 inverse grid cell widths
-N_DERIVED = _D_INV_CELL + N_GRID - 1
+_D_VALVE_ALPHA = _D_INV_CELL + N_GRID - 1  # 1 - exp(-dt / tau) of the valve lag (set per run: needs dt)
+N_DERIVED = _D_VALVE_ALPHA + 1
 
 
 @njit(cache=True, inline="always")
@@ -199,6 +204,18 @@ def hydraulic_force(p, dv, i, dd, k):
 
 
 @njit(cache=True, inline="always")
+def semi_active_force(p, dv, i, dd, k, valve):
+    """Hydraulic force [N] of a semi-active damper at valve setting ``valve`` in [0, 1]: linear between
+    the softest (0) and hardest (1) curve at deflection velocity dd, then blended by the oil level with
+    the oil-empty curve exactly as the passive damper (:func:`hydraulic_force`)."""
+    oil = p[_OIL + i]
+    soft = _interp_cell(p, dv, P_H_SOFT + i * N_GRID, dd, k)
+    hard = _interp_cell(p, dv, P_H_HARD + i * N_GRID, dd, k)
+    return (oil * (soft + valve * (hard - soft))
+            + (1.0 - oil) * _interp_cell(p, dv, P_H_EMPTY + i * N_GRID, dd, k))
+
+
+@njit(cache=True, inline="always")
 def fill_context_const(p, i, c, dt):
     """The parts of corner ``i``'s context that stay constant over a run (set once per run): oil
     level, axle, side, step ``dt`` [s] and the oil scaling ``s_oil`` of the damper friction."""
@@ -267,6 +284,7 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
             W[_W_ZR + i, l] = zr
             W[_W_ZRD + i, l] = zrd
             W[_W_SLOPE + i, l] = slope
+            W[_W_CMD + i, l] = min(max(U[u, k, _U_CMD + i], 0.0), 1.0)
 
     # -- corner kinematics, tyre loads and horizontal wheel forces ----------------------------------
     for i in range(4):
@@ -304,7 +322,13 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
             dd = W[_W_DD + i, l]
             fill_context(p, dv, i, c, d, dd, W[_W_FX + i, l], S[_FYT + i, l], W[_W_FZ + i, l], W[_W_V, l])
             f_spring = spring_force(p, dv, i, d)
-            f_damper = hydraulic_force(p, dv, i, dd, grid_cell(p, dd))
+            if p[P_SEMI_ACTIVE] > 0.5:
+                # first-order valve lag, exact over the step; the force uses the setting at the step's end
+                valve = S[_VALVE + i, l] + dv[_D_VALVE_ALPHA] * (W[_W_CMD + i, l] - S[_VALVE + i, l])
+                S[_VALVE + i, l] = valve
+                f_damper = semi_active_force(p, dv, i, dd, grid_cell(p, dd), valve)
+            else:
+                f_damper = hydraulic_force(p, dv, i, dd, grid_cell(p, dd))
             f_terms = terms_force(p, S[:, l], i, c, MASK_ALL)
             f_arb = P[_K_ARB + i, l] * (d - W[_W_D + j, l])
             W[_W_FS + i, l] = f_spring + f_damper + f_terms + f_arb
@@ -474,6 +498,7 @@ def _run_block(Pv, Sv, b0, nl, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, d
                 C[i, q, l] = 0.0
             fill_context_const(P[:, l], i, C[:, :, l], dt)
         derive(P[:, l], DV[:, l])
+        DV[_D_VALVE_ALPHA, l] = -expm1_nonpos(-dt / max(P[P_VALVE_TAU, l], TINY))
         urow[l] = u_row[b]
         rrow[l] = road_row[b]
         mrow[l] = mode[b]

@@ -51,20 +51,29 @@ N_GRID = len(DAMPER_GRID)
 P_GRID = N_P_BASE                       # N_GRID velocities [m/s]
 P_H_INTACT = P_GRID + N_GRID            # 4 x N_GRID hydraulic forces, intact [N]
 P_H_EMPTY = P_H_INTACT + 4 * N_GRID     # 4 x N_GRID hydraulic forces, oil-empty [N]
-N_P_FIXED = P_H_EMPTY + 4 * N_GRID
+# Semi-active damper (issue 15): the hydraulic curves at the softest and hardest valve command per corner,
+# then whether the command input is used (1) or the passive curve above (0), and the valve's first-order
+# time constant [s]. Appended after the passive block so every earlier offset stays as it was.
+P_H_SOFT = P_H_EMPTY + 4 * N_GRID       # 4 x N_GRID hydraulic forces at command 0, intact oil [N]
+P_H_HARD = P_H_SOFT + 4 * N_GRID        # 4 x N_GRID hydraulic forces at command 1, intact oil [N]
+P_SEMI_ACTIVE = P_H_HARD + 4 * N_GRID   # 0: passive damper (command ignored), 1: command in use
+P_VALVE_TAU = P_SEMI_ACTIVE + 1         # valve (actuator) time constant [s]
+N_P_FIXED = P_VALVE_TAU + 1
 
 # ---- state -----------------------------------------------------------------------------------------
 _S_SPEC = [
     ("Z", 1), ("PHI", 1), ("THETA", 1), ("ZD", 1), ("PHID", 1), ("THETAD", 1),
     ("VY", 1), ("R", 1), ("X", 1), ("Y", 1), ("PSI", 1), ("SPATH", 1),
     ("ZW", 4), ("ZWD", 4), ("FYT", 4), ("ZR_PREV", 4),
+    ("VALVE", 4),  # semi-active valve setting after the actuator lag [0..1] (unused by a passive damper)
 ]
 S_INDEX, N_S_FIXED = _enumerate(_S_SPEC)
 STATE_LABELS = tuple(
     name if size == 1 else f"{name}_{WHEELS[i]}" for name, size in _S_SPEC for i in range(size))
 
 # ---- inputs of one step ----------------------------------------------------------------------------
-_U_SPEC = [("V", 1), ("AX", 1), ("SWA", 1), ("ZR_IN", 4)]
+_U_SPEC = [("V", 1), ("AX", 1), ("SWA", 1), ("ZR_IN", 4),
+           ("CMD", 4)]  # semi-active valve command [0..1] per corner (read only when P_SEMI_ACTIVE is 1)
 U_INDEX, N_U = _enumerate(_U_SPEC)
 
 # ---- outputs of one step ---------------------------------------------------------------------------

@@ -17,8 +17,9 @@ import numpy as np
 
 from ..errors import SuspInputError
 from .kernel import load_kernel
-from .layout import (DAMPER_GRID, N_GRID, N_P_FIXED, N_U, OUTPUT_LABELS, P_GRID, P_H_EMPTY, P_H_INTACT,
-                     P_INDEX, S_INDEX, U_INDEX, KernelLayout, output_index)
+from .layout import (DAMPER_GRID, N_GRID, N_P_FIXED, N_U, OUTPUT_LABELS, P_GRID, P_H_EMPTY, P_H_HARD,
+                     P_H_INTACT, P_H_SOFT, P_INDEX, P_SEMI_ACTIVE, P_VALVE_TAU, S_INDEX, U_INDEX,
+                     KernelLayout, output_index)
 from .params import CORNER_AXLE, FrictionVariant, VehicleParams, load_variant, load_vehicle
 from .road import RoadProfile
 from .terms import AXLE_FRICTION, BUILTIN_TERMS, DAMPER_FRICTION, PhysicsTerm
@@ -49,39 +50,57 @@ def hydraulic_curves(vp: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
     damper friction at that velocity is subtracted (model-spec 1; the paper does this). The result is
     zero for |v| <= the 1 mm/s reference speed and never changes sign against the velocity.
     """
+    return (hydraulic_from_measured(vp, vp.damper_velocity, vp.damper_measured_intact, vp.damper_friction_intact),
+            hydraulic_from_measured(vp, vp.damper_velocity, vp.damper_measured_empty, vp.damper_friction_empty))
+
+
+def hydraulic_from_measured(vp: VehicleParams, velocity, measured, levels) -> np.ndarray:
+    """Hydraulic curves per axle on :data:`DAMPER_GRID`, shape (2, N_GRID), from measured curves (front,
+    rear) at ``velocity`` [m/s] that contain the damper friction of ``levels`` [N] (front, rear)."""
     g = DAMPER_GRID
     sign = np.sign(g)
     fric_shape = velocity_scaling(vp, np.abs(g))
-    out = []
-    for measured, levels in ((vp.damper_measured_intact, vp.damper_friction_intact),
-                             (vp.damper_measured_empty, vp.damper_friction_empty)):
-        rows = []
-        for axle in range(2):
-            f = _extrap_interp(g, vp.damper_velocity, measured[axle]) - sign * levels[axle] * fric_shape
-            f = sign * np.maximum(sign * f, 0.0)
-            f[np.abs(g) <= vp.sv_reference] = 0.0
-            rows.append(f)
-        out.append(np.array(rows))
-    return out[0], out[1]
+    rows = []
+    for axle in range(2):
+        f = _extrap_interp(g, velocity, measured[axle]) - sign * levels[axle] * fric_shape
+        f = sign * np.maximum(sign * f, 0.0)
+        f[np.abs(g) <= vp.sv_reference] = 0.0
+        rows.append(f)
+    return np.array(rows)
 
 
 class Model:
     """A vehicle parameter set plus a friction variant, with its compiled kernel.
 
-    ``Model("passat_b8_like", "dahl_only")``; names or YAML paths or loaded objects.
+    ``Model("passat_b8_like", "dahl_only")``; names or YAML paths or loaded objects. ``dampers``: the
+    semi-active damper family (:class:`~.semiactive.DamperFamily`, default ``config/semiactive.yaml``,
+    loaded when first needed), used only by ``params(..., semi_active=True)``.
     """
 
     def __init__(self, vehicle: VehicleParams | str = "passat_b8_like",
-                 variant: FrictionVariant | str = "full"):
+                 variant: FrictionVariant | str = "full", dampers=None):
+        self._dampers = dampers
         self.vehicle = vehicle if isinstance(vehicle, VehicleParams) else load_vehicle(vehicle)
         self.variant = variant if isinstance(variant, FrictionVariant) else load_variant(variant)
         self.terms: tuple[PhysicsTerm, ...] = BUILTIN_TERMS + tuple(t.term for t in self.variant.terms)
         self.layout = KernelLayout.for_terms(self.terms)
         self.kernel = load_kernel(self.terms)
 
+    @property
+    def dampers(self):
+        """The semi-active damper family (loaded on first use)."""
+        if self._dampers is None:
+            from .semiactive import load_damper_family
+            self._dampers = load_damper_family()
+        return self._dampers
+
     # -- parameters -------------------------------------------------------------------------------
-    def params(self, oil: Sequence[float] = INTACT) -> np.ndarray:
-        """The flat parameter vector ``P`` for oil levels FL, FR, RL, RR (1 intact, 0 oil-empty)."""
+    def params(self, oil: Sequence[float] = INTACT, semi_active: bool = False) -> np.ndarray:
+        """The flat parameter vector ``P`` for oil levels FL, FR, RL, RR (1 intact, 0 oil-empty).
+
+        ``semi_active``: the damper follows the valve command input (``U[:, CMD]``, [0, 1] per corner)
+        through the soft/hard curves of :attr:`dampers` and the valve lag; otherwise (default) the
+        passive curve, and the semi-active block of ``P`` stays zero (the passive vector is unchanged)."""
         vp, var = self.vehicle, self.variant
         oil = check_oil(oil)
         P = np.zeros(self.layout.n_p)
@@ -150,6 +169,8 @@ class Model:
                                             "sigma": (vp.dahl_stiffness,) * 4})
         for setting in self.variant.terms:
             self._put_term(P, setting.term, setting.values)
+        if semi_active:
+            set_semi_active(self, P, True)
         return P
 
     def _put_term(self, P: np.ndarray, term: PhysicsTerm, values) -> None:
@@ -183,6 +204,19 @@ class Model:
         return e
 
 
+def set_semi_active(model: "Model", P: np.ndarray, on: bool) -> None:
+    """Switch parameter vector ``P`` between the passive damper and the semi-active damper family."""
+    if on:
+        fam = model.dampers
+        for name, off in (("soft", P_H_SOFT), ("hard", P_H_HARD)):
+            h = hydraulic_from_measured(model.vehicle, fam.velocity, getattr(fam, name),
+                                        model.vehicle.damper_friction_intact)
+            for i, a in enumerate(CORNER_AXLE):
+                P[off + i * N_GRID:off + (i + 1) * N_GRID] = h[a]
+        P[P_VALVE_TAU] = fam.valve_time_constant
+    P[P_SEMI_ACTIVE] = 1.0 if on else 0.0
+
+
 def _corners(pair) -> tuple[float, float, float, float]:
     return tuple(float(pair[a]) for a in CORNER_AXLE)
 
@@ -195,11 +229,13 @@ def check_oil(oil: Iterable[float], what: str = "damper_oil_level") -> np.ndarra
 
 
 # ---- inputs -------------------------------------------------------------------------------------------
-def make_inputs(n_steps: int, speed, steering, accel=None, wheel_heights=None) -> np.ndarray:
+def make_inputs(n_steps: int, speed, steering, accel=None, wheel_heights=None,
+                damper_command=None) -> np.ndarray:
     """Per-step input array (n_steps x N_U) from per-step series or constants.
 
     ``speed`` [m/s], ``steering`` steering-wheel angle [rad], ``accel`` dv/dt [m/s^2] (default: the
-    gradient of speed is the caller's job; 0 if omitted), ``wheel_heights`` (n_steps x 4) [m].
+    gradient of speed is the caller's job; 0 if omitted), ``wheel_heights`` (n_steps x 4) [m],
+    ``damper_command`` (n_steps x 4 or 4) valve command [0, 1] (read only with semi-active parameters).
     """
     U = np.zeros((n_steps, N_U))
     U[:, U_INDEX["V"]] = speed
@@ -208,6 +244,8 @@ def make_inputs(n_steps: int, speed, steering, accel=None, wheel_heights=None) -
         U[:, U_INDEX["AX"]] = accel
     if wheel_heights is not None:
         U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4] = wheel_heights
+    if damper_command is not None:
+        U[:, U_INDEX["CMD"]:U_INDEX["CMD"] + 4] = damper_command
     return U
 
 
@@ -251,6 +289,8 @@ def simulate(model: Model, U: np.ndarray, *, dt: float, road: RoadProfile | None
     mode = 0 if road is not None else 1
     if mode == 1:
         S[S_INDEX["ZR_PREV"]:S_INDEX["ZR_PREV"] + 4] = U[0, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4]
+    if P[P_SEMI_ACTIVE] > 0.5 and U.shape[0]:
+        S[S_INDEX["VALVE"]:S_INDEX["VALVE"] + 4] = np.clip(U[0, U_INDEX["CMD"]:U_INDEX["CMD"] + 4], 0.0, 1.0)
     labels, sel = _selection(outputs)
     Y = np.zeros((U.shape[0] // decim, len(sel)))
     done = model.kernel.run_one(P, S, np.ascontiguousarray(U), rs, rzl, rzr, rn, mode, dt, decim, sel, Y)
@@ -316,6 +356,7 @@ class Stepper:
         self.y = np.zeros(len(OUTPUT_LABELS))
         self._sel = np.arange(len(OUTPUT_LABELS), dtype=np.int64)
         self._U = np.zeros((1, N_U))
+        self._cmd = np.zeros(4)  # the held valve command
         self.steps = 0
         self.healthy = True
         self.set_road(road)
@@ -330,6 +371,17 @@ class Stepper:
         self._road_arrays = (road or RoadProfile.flat()).kernel_arrays()
         self._mode = 0 if road is not None else 1
 
+    @property
+    def semi_active(self) -> bool:
+        return bool(self.P[P_SEMI_ACTIVE] > 0.5)
+
+    def set_semi_active(self, on: bool, command: Sequence[float] | None = None) -> None:
+        """Use the valve command (``on``) or the passive damper. Switching on sets the valve to
+        ``command`` (default: its last setting) without lag: the valve starts where it is commanded."""
+        if on and not self.semi_active and command is not None:
+            self.S[S_INDEX["VALVE"]:S_INDEX["VALVE"] + 4] = np.clip(np.asarray(command, float), 0.0, 1.0)
+        set_semi_active(self.model, self.P, on)
+
     def set_oil(self, oil: Sequence[float]) -> None:
         self.oil = check_oil(oil)
         self.P[P_INDEX["OIL"]:P_INDEX["OIL"] + 4] = self.oil
@@ -338,18 +390,20 @@ class Stepper:
         """Switch vehicle/variant while running: the body and wheel states carry over; the states of
         terms present in both models carry over, new terms start unloaded."""
         S_new = model.initial_state()
-        S_new[:S_INDEX["ZR_PREV"] + 4] = self.S[:S_INDEX["ZR_PREV"] + 4]
+        S_new[:S_INDEX["VALVE"] + 4] = self.S[:S_INDEX["VALVE"] + 4]
         for k, t in enumerate(model.terms):
             if t in self.model.terms:
                 j = self.model.terms.index(t)
                 so_old, so_new, n = self.model.layout.state_offsets[j], model.layout.state_offsets[k], 4 * t.n_states
                 S_new[so_new:so_new + n] = self.S[so_old:so_old + n]
         self.model, self.S = model, S_new
-        self.P = model.params(self.oil)
+        self.P = model.params(self.oil, semi_active=self.semi_active)
 
     def advance(self, n_steps: int, speed: float, steering: float, accel: float = 0.0,
-                wheel_heights: Sequence[float] | None = None) -> np.ndarray:
-        """Advance ``n_steps`` steps with held inputs; returns the full output vector of the last step."""
+                wheel_heights: Sequence[float] | None = None,
+                damper_command: Sequence[float] | None = None) -> np.ndarray:
+        """Advance ``n_steps`` steps with held inputs; returns the full output vector of the last step.
+        ``damper_command`` [0, 1] per corner is used when :attr:`semi_active` (else ignored)."""
         if n_steps <= 0 or not self.healthy:
             return self.y
         if self._U.shape[0] != n_steps:
@@ -362,11 +416,15 @@ class Stepper:
             U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4] = wheel_heights
             if self.steps == 0:
                 self.S[S_INDEX["ZR_PREV"]:S_INDEX["ZR_PREV"] + 4] = wheel_heights
+        if damper_command is not None:
+            self._cmd = np.asarray(damper_command, float)
+        U[:, U_INDEX["CMD"]:U_INDEX["CMD"] + 4] = self._cmd
         Y = np.zeros((n_steps, len(self._sel)))
         rs, rzl, rzr, rn = self._road_arrays
         done = self.model.kernel.run_one(self.P, self.S, U, rs, rzl, rzr, rn, self._mode, self.dt, 1,
                                          self._sel, Y)
         self.steps += done
+        self.block = Y[:done]  # the outputs of every step of this call (OUTPUT_LABELS columns)
         self.y = Y[done - 1]
         if done < n_steps:
             self.healthy = False

@@ -160,6 +160,9 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
         tasks = [(tuple(c.id for c in t), (spec.data, spec.hash, [c.runs for c in t]))
                  for t in plan_tasks(todo, getattr(executor, "threads_total", 1))]
         fn = engine.sweep_task
+    elif spec.kind == "ride":
+        tasks = [((c.id,), (spec.data, c.id, spec.runs[c.id])) for c in todo]
+        fn = _ride_task
     else:
         tasks = [((c.id,), (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
                  for c in todo]
@@ -169,7 +172,7 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     store.begin_session()
     from tqdm import tqdm
     done_runs = sum(len(spec.chunks[c].runs) for c in resumed)
-    unit = "run" if spec.kind == "sweep" else "drive"
+    unit = "drive" if spec.kind == "drives" else "run"
     bar = tqdm(total=spec.n_runs, initial=done_runs, desc=spec.name, unit=unit, file=sys.stderr,
                disable=not progress, dynamic_ncols=True, smoothing=0.1)
     computed: list[int] = []
@@ -197,6 +200,9 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
               "compute_s": compute_s, "cpu_s": cpu_s, "runs_per_s": new_runs / compute_s if compute_s > 0 else math.nan}
     if spec.kind == "sweep":
         result.update(_finish_sweep(spec, store, plot))
+    elif spec.kind == "ride":
+        from .ride import finish_ride
+        result.update(finish_ride(spec, store, plot))
     else:
         result.update(_finish_drives(spec, store, plot))
     result["elapsed_s"] = time.perf_counter() - t_start
@@ -222,6 +228,12 @@ def plan_tasks(chunks: Sequence, threads: int, max_chunks: int = MAX_CHUNKS_PER_
         else:
             tasks.append([c])
     return tasks
+
+
+def _ride_task(data, run_id: int, run) -> list[dict]:
+    """:func:`.ride.ride_task` as a task of one chunk."""
+    from .ride import ride_task
+    return [ride_task(data, run_id, run)]
 
 
 def _drive_task(path: str, variants, diagnose: bool) -> list[dict]:
@@ -299,14 +311,17 @@ def _diagnosis_summary(rows) -> dict:
 
 
 def summary_text(r: dict) -> str:
-    lines = [f"study {r['study']} ({r['kind']}): {r['n_runs']} {'runs' if r['kind'] == 'sweep' else 'drives'} "
+    lines = [f"study {r['study']} ({r['kind']}): {r['n_runs']} {'drives' if r['kind'] == 'drives' else 'runs'} "
              f"in {r['n_chunks']} chunks on {r['scheduler']} ({r['workers']} worker(s)); "
              f"{r['chunks_computed']} chunks computed, {r['chunks_resumed']} resumed"]
     if r["runs_computed"]:
-        unit = "runs" if r["kind"] == "sweep" else "drives"
+        unit = "drives" if r["kind"] == "drives" else "runs"
         lines.append(f"  {r['runs_per_s']:.3g} {unit}/s over {r['compute_s']:.1f} s")
     for c, (lo, hi) in r.get("metric_ranges", {}).items():
         lines.append(f"  {c}: {lo:.4g} .. {hi:.4g}")
+    if r["kind"] == "ride":
+        from .ride import ride_summary
+        lines += ride_summary(r)
     if r["kind"] == "drives":
         for m, by_s in r["tables"].items():
             for s, row in by_s.items():

@@ -132,7 +132,7 @@ def study_from_dict(data: Any, source: str = "<study>") -> StudySpec:
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: a study must be a mapping of keys, got {type(data).__name__}")
     unknown = set(data) - TOP_KEYS
-    if unknown:
+    if unknown and data.get("kind") != "ride":  # a ride study checks its own keys
         raise ConfigError(f"{source}: unknown key(s) {', '.join(sorted(unknown))}; "
                           f"known: {', '.join(sorted(TOP_KEYS))}")
     kind = data.get("kind", "sweep")
@@ -141,8 +141,11 @@ def study_from_dict(data: Any, source: str = "<study>") -> StudySpec:
         raise ConfigError(f"{source}: name: expected a short name without spaces or slashes, got {name!r}")
     if kind == "drives":
         return _drives(data, source, name)
+    if kind == "ride":
+        from .ride import ride_study
+        return ride_study(data, source, name)
     if kind != "sweep":
-        raise ConfigError(f"{source}: kind: expected 'sweep' or 'drives', got {kind!r}")
+        raise ConfigError(f"{source}: kind: expected 'sweep', 'drives' or 'ride', got {kind!r}")
     return _sweep(data, source, name)
 
 
