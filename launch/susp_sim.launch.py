@@ -68,7 +68,11 @@ def _actions(context):
         if arg[name]:
             overrides[name] = arg[name]
     if arg["damper_oil_level"]:
-        overrides["damper_oil_level"] = [float(x) for x in arg["damper_oil_level"].split(",")]
+        try:
+            overrides["damper_oil_level"] = [float(x) for x in arg["damper_oil_level"].split(",")]
+        except ValueError:
+            raise ValueError(f"launch argument damper_oil_level:={arg['damper_oil_level']!r}: expected four "
+                             "comma-separated numbers FL,FR,RL,RR") from None
     actions = [Node(package=PACKAGE, executable=NODE_EXECUTABLE, name=NODE_EXECUTABLE, output="screen",
                     parameters=[params_file, overrides])]
     if bag:

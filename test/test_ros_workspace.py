@@ -168,3 +168,83 @@ def test_launch_file_loads_with_ros2_launch():
     ld = get_launch_description_from_python_launch_file(str(LAUNCH))
     declared = {e.name for e in ld.entities if isinstance(e, DeclareLaunchArgument)}
     assert declared == set(_module_constants(LAUNCH)["ARGUMENTS"])
+
+
+def _load_launch_with_stand_ins(monkeypatch, prefix: Path):
+    """The launch file imported with small stand-ins for ROS 2's launch, launch_ros and ament_index
+    (absent here), each action recording its arguments, so its logic runs everywhere."""
+    import importlib.util
+    import sys
+    import types
+
+    class Action:
+        def __init__(self, *args, **kwargs):
+            self.args, self.kwargs = args, kwargs
+
+    class LaunchConfiguration:
+        def __init__(self, name):
+            self.name = name
+
+        def perform(self, context):
+            return context[self.name]
+
+    names = {"launch": {"LaunchDescription": Action},
+             "launch.actions": {n: type(n, (Action,), {}) for n in (
+                 "DeclareLaunchArgument", "EmitEvent", "ExecuteProcess", "OpaqueFunction", "RegisterEventHandler")},
+             "launch.event_handlers": {"OnProcessExit": type("OnProcessExit", (Action,), {})},
+             "launch.events": {"Shutdown": type("Shutdown", (Action,), {})},
+             "launch.substitutions": {"LaunchConfiguration": LaunchConfiguration},
+             "launch_ros": {}, "launch_ros.actions": {"Node": type("Node", (Action,), {})},
+             "ament_index_python": {},
+             "ament_index_python.packages": {
+                 "get_package_prefix": lambda pkg: str(prefix),
+                 "get_package_share_directory": lambda pkg: str(prefix / "share" / pkg)}}
+    for mod, attrs in names.items():
+        monkeypatch.setitem(sys.modules, mod, types.SimpleNamespace(**attrs))
+    spec = importlib.util.spec_from_file_location("susp_sim_launch", LAUNCH)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_launch_logic_node_replay_recorder(monkeypatch, tmp_path):
+    """Run the launch file's action builder with stand-ins: node parameters from the arguments, the replay
+    command accepted by `susp replay`'s own parser, the recorder's topics, and bad flags named."""
+    import argparse
+
+    from susp_sim_ros.cli import replay
+    mod = _load_launch_with_stand_ins(monkeypatch, tmp_path / "install")
+    ld = mod.generate_launch_description()
+    declared = [a for a in ld.args[0] if type(a).__name__ == "DeclareLaunchArgument"]
+    assert [a.args[0] for a in declared] == list(mod.ARGUMENTS)
+    defaults = {name: d for name, (d, _) in mod.ARGUMENTS.items()}
+
+    node_only = mod._actions(defaults)
+    assert [type(a).__name__ for a in node_only] == ["Node"]
+    params = node_only[0].kwargs["parameters"]
+    assert params[0] == str(tmp_path / "install" / "share" / PACKAGE / "config" / "susp_sim_node.yaml")
+    assert params[1] == {"use_sim_time": False}  # everything else from the params file
+
+    ctx = dict(defaults, bag="drive.mcap", rate="2.5", loop="true", vehicle="my_car.yaml",
+               damper_oil_level="1,1,0,0.5", rosbag_out=str(tmp_path / "bag"))
+    acts = mod._actions(ctx)
+    kinds = [type(a).__name__ for a in acts]
+    assert kinds == ["Node", "ExecuteProcess", "RegisterEventHandler", "ExecuteProcess"]
+    assert acts[0].kwargs["parameters"][1] == {"use_sim_time": True, "vehicle": "my_car.yaml",
+                                               "damper_oil_level": [1.0, 1.0, 0.0, 0.5]}
+    cmd = acts[1].kwargs["cmd"]
+    assert cmd[0] == str(tmp_path / "install" / "lib" / PACKAGE / "susp") and cmd[1] == "replay"
+    p = argparse.ArgumentParser()
+    replay.add_arguments(p)
+    a = p.parse_args(cmd[2:])   # the replay accepts exactly what the launch file passes
+    assert (a.recording, a.rate, a.loop, a.wait_subscribers) == ("drive.mcap", 2.5, True, 60.0)
+    rec = acts[3].kwargs["cmd"]
+    assert rec[:7] == ["ros2", "bag", "record", "-s", "mcap", "-o", str(tmp_path / "bag")]
+    assert "--use-sim-time" in rec and set(rec[rec.index("--topics") + 1:]) == set(mod.RECORDED_TOPICS)
+
+    assert mod._actions(dict(ctx, use_sim_time="false"))[0].kwargs["parameters"][1]["use_sim_time"] is False
+    assert len(mod._actions(dict(ctx, shutdown_after_replay="false", rosbag_out=""))) == 2
+    with pytest.raises(ValueError, match="loop:='yes'"):
+        mod._actions(dict(ctx, loop="yes"))
+    with pytest.raises(ValueError, match="damper_oil_level:='1,1,empty'"):
+        mod._actions(dict(ctx, damper_oil_level="1,1,empty"))
