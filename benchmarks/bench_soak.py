@@ -300,7 +300,7 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
                 raise RuntimeError(f"susp_sim_node exited during the soak (code {proc.returncode})")
             rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
             load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid), others.delta()))
-            rt = rt_threads({proc.pid, os.getpid()})
+            rt = rt_threads({proc.pid, os.getpid(), *host.pids})  # the host probes are ours, by design
             busy_rt = sorted({f"{n}[{pid}]" for k, (n, c) in rt.items() if c - rt_seen.get(k, c) > 0.05
                               for pid in (k[0],)})
             rt_seen.update({k: c for k, (n, c) in rt.items()})

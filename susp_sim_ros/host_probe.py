@@ -116,6 +116,11 @@ class HostProbe:
                 self.notes.append(f"cpu {cpu}: {line.strip()}")
         return self
 
+    @property
+    def pids(self) -> list[int]:
+        """Process ids of the running probes (e.g. to leave them out of a list of other busy processes)."""
+        return [p.pid for p in self._procs]
+
     def stop(self) -> "HostProbe":
         for p in self._procs:
             if p.poll() is None:
