@@ -53,6 +53,13 @@ def _env() -> dict[str, str]:
 
 
 def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
+    from susp_sim_ros.host_probe import HostProbe
+    # the machine's own stalls over the whole run; the probes end with the run, also when it fails
+    with HostProbe(max_duration_s=duration + 300.0) as host:
+        return _run(duration, rate_hz, probe_rt, host)
+
+
+def _run(duration: float, rate_hz: float, probe_rt: bool, host) -> dict:
     env = _env()
     os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOG_DIR")})
     import rclpy
@@ -62,8 +69,6 @@ def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
     from std_msgs.msg import Float64
 
     from susp_sim_ros.analysis.host_stalls import Miss, attribute, parse_miss_log
-    from susp_sim_ros.host_probe import HostProbe
-    host = HostProbe(max_duration_s=duration + 300.0).start()  # the machine's own stalls, whole run
     node_proc = subprocess.Popen(
         [sys.executable, "-c", "import sys; from susp_sim_ros.node import main; sys.exit(main())",
          "--ros-args", "-p", f"publish_rate_hz:={float(rate_hz)}"],

@@ -282,7 +282,11 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     from susp_sim_ros.analysis.host_stalls import Miss, attribute
     from susp_sim_ros.host_probe import HostProbe
     host = HostProbe(max_duration_s=duration + 300.0).start()  # the machine's own stalls, whole run
-    probe = Probe(rate_hz, realtime=realtime_probe)
+    try:
+        probe = Probe(rate_hz, realtime=realtime_probe)
+    except BaseException:
+        host.__exit__(*sys.exc_info())
+        raise
     proc = start_node(path, env=env)
     rss: list[tuple[float, int]] = []
     # (t, machine busy, idle, steal, node CPU, other processes' CPU in the last interval) [s]

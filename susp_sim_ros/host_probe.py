@@ -81,6 +81,22 @@ def run_probe(period_s: float = PROBE_PERIOD_S, record_min_s: float = RECORD_MIN
             "start_ns": t_start, "end_ns": time.time_ns()}
 
 
+def _read_line(fd: int, deadline: float) -> str | None:
+    """One line from a pipe, byte by byte (no read-ahead), or None at end of file or at ``deadline``
+    (``time.monotonic``)."""
+    buf = b""
+    while True:
+        ready, _, _ = select.select([fd], [], [], max(0.0, deadline - time.monotonic()))
+        if not ready:
+            return None
+        c = os.read(fd, 1)
+        if not c:
+            return None
+        if c == b"\n":
+            return buf.decode(errors="replace").strip()
+        buf += c
+
+
 class HostProbe:
     """Probe processes, one per CPU, for the lifetime of a ``with`` block (or :meth:`start`/:meth:`stop`).
 
@@ -102,18 +118,18 @@ class HostProbe:
         for cpu in self.cpus:
             args = [sys.executable, "-m", "susp_sim_ros.host_probe", "--period-ms", str(self.period_s * 1e3),
                     "--cpu", str(cpu), "--priority", str(self.priority), "--max-duration", str(self.max_duration_s)]
-            self._procs.append(subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True))
+            # unbuffered, so that select() sees every line still unread
+            self._procs.append(subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, bufsize=0))
         end = time.monotonic() + READY_TIMEOUT_S
         for cpu, p in zip(self.cpus, self._procs):  # each says READY on stderr once it probes
             while True:
-                ready, _, _ = select.select([p.stderr], [], [], max(0.0, end - time.monotonic()))
-                line = p.stderr.readline() if ready else ""
-                if line.strip() == READY:
+                line = _read_line(p.stderr.fileno(), end)
+                if line == READY:
                     break
-                if not line:  # timed out or the probe ended: stop() reports why
+                if line is None:  # timed out or the probe ended: stop() reports why
                     self.notes.append(f"cpu {cpu}: probe not ready after {READY_TIMEOUT_S:g} s")
                     break
-                self.notes.append(f"cpu {cpu}: {line.strip()}")
+                self.notes.append(f"cpu {cpu}: {line}")
         return self
 
     @property
@@ -131,6 +147,7 @@ class HostProbe:
             except subprocess.TimeoutExpired:
                 p.kill()
                 out, err = p.communicate()
+            out, err = out.decode(errors="replace"), err.decode(errors="replace")
             self.notes += [f"cpu {cpu}: {line}" for line in err.splitlines() if line.strip()]
             if p.returncode == -signal.SIGTERM and not out.strip():
                 self.notes.append(f"cpu {cpu}: stopped before it started probing")

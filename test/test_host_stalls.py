@@ -136,3 +136,13 @@ def test_probe_sees_a_stall_it_is_given():
     assert s.start_ns <= t0 + 2 * MS and s.end_ns >= t1 - 2 * MS  # the stall lies where we made it
     assert probe.lateness_max_ns == max(x.lateness_ns for x in probe.stalls)
     assert attribute([Miss(t0 + MS, 50 * MS)], probe.stalls, 2 * MS).unexplained == []
+
+
+def test_probe_without_real_time_scheduling_still_probes_and_says_so():
+    """Where SCHED_FIFO is refused (here: an invalid priority), the probe runs at normal priority and
+    says why in its notes instead of failing."""
+    probe = HostProbe(priority=1000, max_duration_s=30.0).start()
+    time.sleep(0.05)
+    probe.stop()
+    assert probe.wakes > 20
+    assert any("no real-time scheduling" in n for n in probe.notes), probe.notes
