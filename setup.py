@@ -1,7 +1,8 @@
 """ament_python / pip package definition for susp_sim_ros.
 
-Works both in a ROS 2 Jazzy colcon workspace (data_files install the ament index marker, package.xml
-and config under share/) and as a plain pip install into a venv with the ROS 2 Jazzy PyPI wheels.
+Works both in a ROS 2 Jazzy colcon workspace (data_files install the ament index marker, package.xml,
+config, the launch file and the Foxglove layout under share/) and as a plain pip install into a venv
+with the ROS 2 Jazzy PyPI wheels.
 """
 from glob import glob
 
@@ -22,6 +23,8 @@ setup(
         ("share/" + package_name + "/config/variants", glob("config/variants/*.yaml")),
         ("share/" + package_name + "/config/studies", glob("config/studies/*.yaml")),
         ("share/" + package_name + "/config/topic_maps", glob("config/topic_maps/*.yaml")),
+        ("share/" + package_name + "/launch", glob("launch/*.launch.py")),
+        ("share/" + package_name + "/foxglove", glob("foxglove/*.json")),
     ],
     install_requires=["setuptools", "numpy", "scipy", "pyyaml", "matplotlib", "numba", "mcap",
                       "mcap-ros2-support", "tqdm", "dask[distributed]", "rosbags"],

@@ -9,14 +9,23 @@ speed and steering at 100 Hz from this process for ``--duration`` seconds, and r
 - ``latency_p50_ms``, ``latency_p99_ms``: input-to-output latency: the age of each ``/sim/imu/data``
   sample when it arrives in this (another) process, wall receive time minus the sample's stamp (the
   instant the sample represents, i.e. up to which the inputs received so far were integrated);
-- ``deadline_misses``: ticks published more than one period late (or skipped), from ``/diagnostics``.
+- ``deadline_misses``: ticks published more than one period late (or skipped), from ``/diagnostics``;
+- ``host_stall_max_ms``: the longest stall of the machine itself in the same run: the largest lateness
+  of a plain sleeping-thread probe (:mod:`susp_sim_ros.host_probe`: one process per CPU, pinned, 1 ms
+  period, SCHED_FIFO above the node's threads when permitted), running from before the node starts
+  until after it stops;
+- ``misses_unexplained``: deadline misses no host stall explains (:mod:`susp_sim_ros.analysis.host_stalls`:
+  no stall overlapped the miss that was at least as long as the miss was late, less the probe's period
+  and the node's ordinary lateness p99 in the same run). The node lists its misses with their deadlines
+  on ``/diagnostics`` (``deadline_miss_log``); a miss it could not list counts as unexplained.
 
 The node runs with its defaults, i.e. its threads at SCHED_FIFO when permitted (``realtime_priority``).
 The probe here (input publisher and output subscriber) gets SCHED_FIFO too when permitted, as a real-time
 consumer would, so that the load of other processes on the machine enters the figures through the node
 and not through the measuring instrument; ``--probe-normal-priority`` measures with an ordinary probe.
 
-``--json`` prints exactly these keys (interface.md); logs go to stderr.
+``--json`` prints exactly these keys (interface.md); logs go to stderr, the attribution of each miss
+included.
 """
 from __future__ import annotations
 
@@ -44,6 +53,13 @@ def _env() -> dict[str, str]:
 
 
 def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
+    from susp_sim_ros.host_probe import HostProbe
+    # the machine's own stalls over the whole run; the probes end with the run, also when it fails
+    with HostProbe(max_duration_s=duration + 300.0) as host:
+        return _run(duration, rate_hz, probe_rt, host)
+
+
+def _run(duration: float, rate_hz: float, probe_rt: bool, host) -> dict:
     env = _env()
     os.environ.update({k: env[k] for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOG_DIR")})
     import rclpy
@@ -52,6 +68,7 @@ def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
     from sensor_msgs.msg import Imu
     from std_msgs.msg import Float64
 
+    from susp_sim_ros.analysis.host_stalls import Miss, attribute, parse_miss_log
     node_proc = subprocess.Popen(
         [sys.executable, "-c", "import sys; from susp_sim_ros.node import main; sys.exit(main())",
          "--ros-args", "-p", f"publish_rate_hz:={float(rate_hz)}"],
@@ -61,6 +78,7 @@ def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
     node = rclpy.create_node("bench_node_probe", context=ctx)
     lat: list[int] = []
     diag: dict[str, str] = {}
+    miss_log: dict[int, int] = {}  # tick_ns -> lateness_ns, the union of every /diagnostics' list
     measuring = threading.Event()
 
     def on_imu(msg: Imu) -> None:
@@ -73,6 +91,7 @@ def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
             if st.name.endswith(": timing"):
                 diag.clear()
                 diag.update({kv.key: kv.value for kv in st.values})
+                miss_log.update((m.tick_ns, m.lateness_ns) for m in parse_miss_log(diag.get("deadline_miss_log", "")))
 
     node.create_subscription(Imu, "/sim/imu/data", on_imu, 100)
     node.create_subscription(DiagnosticArray, "/diagnostics", on_diag, 10)
@@ -114,10 +133,25 @@ def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
         ex.shutdown()
         node.destroy_node()
         rclpy.try_shutdown(context=ctx)
+        host.stop()
     if not diag:
         raise RuntimeError("no /diagnostics timing status received from susp_sim_node")
     la = np.asarray(lat, dtype=float) * 1e-6
     print("bench_node: node timing status: " + ", ".join(f"{k}={v}" for k, v in diag.items()), file=sys.stderr)
+    misses = int(diag["deadline_misses"])
+    tolerance_ns = host.period_ns + int(float(diag["lateness_p99_ms"]) * 1e6)
+    att = attribute([Miss(t, late) for t, late in miss_log.items()], host.stalls, tolerance_ns)
+    unlisted = max(0, misses - len(miss_log))  # more misses than the node could list: counted as the node's
+    for m, st in att.explained:
+        print(f"bench_node: miss at {m.tick_ns} late {m.lateness_ns * 1e-6:.2f} ms: host stall of "
+              f"{st.lateness_ns * 1e-6:.2f} ms at {st.end_ns}", file=sys.stderr)
+    for m in att.unexplained:
+        print(f"bench_node: miss at {m.tick_ns} late {m.lateness_ns * 1e-6:.2f} ms: no host stall explains it",
+              file=sys.stderr)
+    big = sum(st.lateness_ns > 1e9 / rate_hz for st in host.stalls)
+    print(f"bench_node: host probe: {host.wakes} wakes on {len(host.cpus)} CPUs, {len(host.stalls)} stalls "
+          f">= 1 ms, {big} longer than a node period, max {host.lateness_max_ns * 1e-6:.2f} ms; tolerance "
+          f"{tolerance_ns * 1e-6:.2f} ms" + "".join(f"; {n}" for n in host.notes), file=sys.stderr)
     return {
         "rtf": float(diag["real_time_factor"]),
         "jitter_p50_ms": float(diag["jitter_p50_ms"]),
@@ -125,7 +159,9 @@ def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
         "jitter_max_ms": float(diag["jitter_max_ms"]),
         "latency_p50_ms": float(np.percentile(la, 50)) if la.size else float("nan"),
         "latency_p99_ms": float(np.percentile(la, 99)) if la.size else float("nan"),
-        "deadline_misses": int(diag["deadline_misses"]),
+        "deadline_misses": misses,
+        "host_stall_max_ms": round(host.lateness_max_ns * 1e-6, 6),
+        "misses_unexplained": len(att.unexplained) + unlisted,
     }
 
 

@@ -10,6 +10,9 @@ checks the recording. Reported (``--json``: one JSON object on stdout, logs on s
   (``--warmup``, default 30 s; 5 s for runs of 60 s or less); also ``rss_*_mb`` at start/warm-up/end/max;
 - ``deadline_misses`` (ticks published more than one period late), ``ticks``, ``rtf``, ``jitter_p99_ms``
   and ``jitter_max_ms``, from the node's last ``/diagnostics``;
+- ``host_stall_max_ms`` and ``misses_unexplained`` as in ``bench_node.py``: the longest stall a plain
+  sleeping-thread probe (:mod:`susp_sim_ros.host_probe`) saw during the run, and the misses no host stall
+  explains (:mod:`susp_sim_ros.analysis.host_stalls`); ``misses_by_host`` lists the explained ones;
 - the recording: ``published_inputs`` (what this process sent) and ``recorded_inputs`` per topic,
   ``recorded_sim`` per ``/sim`` topic, ``sim_gaps`` (missing 10 ms ticks in the recorded
   ``/sim/imu/data`` stamps), ``sequence_gaps`` (per topic), ``node_published_samples``, and
@@ -82,6 +85,7 @@ class Probe:
         self.node = rclpy.create_node("susp_soak_probe", context=self.ctx)
         self.diag: dict[str, dict[str, str]] = {}
         self.timeline: list[tuple[float, int, float]] = []  # (monotonic, deadline misses, jitter max) per /diagnostics
+        self.miss_log: dict[int, int] = {}  # tick_ns -> lateness_ns, the union of the node's deadline_miss_log
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diag, 10)
         self.speed = self.node.create_publisher(Float64, "/vehicle/speed", 100)
         self.steer = self.node.create_publisher(Float64, "/vehicle/steering_wheel_angle", 100)
@@ -112,6 +116,8 @@ class Probe:
         for st in msg.status:
             self.diag[st.name.split(": ")[-1]] = {kv.key: kv.value for kv in st.values}
         t = self.diag.get("timing", {})
+        from susp_sim_ros.analysis.host_stalls import parse_miss_log
+        self.miss_log.update((m.tick_ns, m.lateness_ns) for m in parse_miss_log(t.get("deadline_miss_log", "")))
         self.timeline.append((time.monotonic(), int(t.get("deadline_misses", 0)), float(t.get("jitter_max_ms", 0))))
 
     def wait_for(self, proc: subprocess.Popen, timeout: float = 60.0) -> None:
@@ -256,6 +262,15 @@ def check_recording(path: Path, sent: dict[str, int], period_ns: int = 10_000_00
             "recording_bytes": path.stat().st_size}
 
 
+def _nearest_stall(m, stalls, t_wall0_ns: int) -> dict:
+    """A miss the host does not explain, with the probe's longest stall within 50 ms of it (for the reader)."""
+    near = [st for st in stalls if st.start_ns - 50_000_000 <= m.end_ns and st.end_ns + 50_000_000 >= m.tick_ns]
+    st = max(near, key=lambda x: x.lateness_ns) if near else None
+    return {"t_s": round((m.tick_ns - t_wall0_ns) * 1e-9, 3), "late_ms": round(m.lateness_ns * 1e-6, 2),
+            "nearest_stall_ms": round(st.lateness_ns * 1e-6, 2) if st else None,
+            "nearest_stall_at_s": round((st.end_ns - t_wall0_ns) * 1e-9, 3) if st else None}
+
+
 def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: float = 100.0,
              out_dir: str | Path | None = None, realtime_probe: bool = True) -> dict:
     warmup = (5.0 if duration <= 60 else 30.0) if warmup is None else warmup
@@ -264,7 +279,14 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     path = out_dir / "soak.mcap"
     if path.exists():
         path.unlink()
-    probe = Probe(rate_hz, realtime=realtime_probe)
+    from susp_sim_ros.analysis.host_stalls import Miss, attribute
+    from susp_sim_ros.host_probe import HostProbe
+    host = HostProbe(max_duration_s=duration + 300.0).start()  # the machine's own stalls, whole run
+    try:
+        probe = Probe(rate_hz, realtime=realtime_probe)
+    except BaseException:
+        host.__exit__(*sys.exc_info())
+        raise
     proc = start_node(path, env=env)
     rss: list[tuple[float, int]] = []
     # (t, machine busy, idle, steal, node CPU, other processes' CPU in the last interval) [s]
@@ -276,12 +298,13 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
         others = OtherProcessesCpu({proc.pid})
         probe.start_publishing()
         t0 = time.monotonic()
+        t_wall0 = time.time_ns()
         while time.monotonic() - t0 < duration:
             if proc.poll() is not None:
                 raise RuntimeError(f"susp_sim_node exited during the soak (code {proc.returncode})")
             rss.append((time.monotonic() - t0, rss_bytes(proc.pid)))
             load.append((time.monotonic() - t0, *cpu_times(), proc_cpu_s(proc.pid), others.delta()))
-            rt = rt_threads({proc.pid, os.getpid()})
+            rt = rt_threads({proc.pid, os.getpid(), *host.pids})  # the host probes are ours, by design
             busy_rt = sorted({f"{n}[{pid}]" for k, (n, c) in rt.items() if c - rt_seen.get(k, c) > 0.05
                               for pid in (k[0],)})
             rt_seen.update({k: c for k, (n, c) in rt.items()})
@@ -303,6 +326,7 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
             code = proc.wait()
         sent = dict(probe.sent)
         probe.close()
+        host.stop()
     t = np.array([x for x, _ in rss])
     r = np.array([y for _, y in rss], dtype=float) / MB
     at_warm = float(np.interp(warmup, t, r))
@@ -321,12 +345,20 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
             miss_at.append({"t_s": round(tb - t0, 1), "misses": mb - ma, "jitter_max_ms": jb,
                             "busy_other_max": float(busy_other[near].max()) if near.any() else None,
                             "steal_max": float(steal[near].max()) if near.any() else None})
+    misses = int(timing.get("deadline_misses", -1))
+    tolerance_ns = host.period_ns + int(float(timing.get("lateness_p99_ms", 0.0)) * 1e6)
+    att = attribute([Miss(t_, late) for t_, late in probe.miss_log.items()], host.stalls, tolerance_ns)
     res = {
         "duration_s": duration, "warmup_s": warmup, "rate_hz": rate_hz,
         "rss_start_mb": float(r[0]), "rss_after_warmup_mb": at_warm, "rss_end_mb": float(r[-1]),
         "rss_max_mb": float(r.max()),
         "rss_growth_after_warmup_mb": float(after.max() - at_warm) if after.size else 0.0,
-        "deadline_misses": int(timing.get("deadline_misses", -1)), "ticks": int(timing.get("ticks", 0)),
+        "deadline_misses": misses, "ticks": int(timing.get("ticks", 0)),
+        "host_stall_max_ms": round(host.lateness_max_ns * 1e-6, 6),
+        "misses_unexplained": len(att.unexplained) + max(0, misses - len(probe.miss_log)),
+        "misses_by_host": [{"late_ms": round(m.lateness_ns * 1e-6, 2), "host_stall_ms": round(st.lateness_ns * 1e-6, 2)}
+                           for m, st in att.explained][:20],
+        "misses_not_by_host": [_nearest_stall(m, host.stalls, t_wall0) for m in att.unexplained][:20],
         "rtf": float(timing.get("real_time_factor", "nan")), "jitter_p99_ms": float(timing.get("jitter_p99_ms", "nan")),
         "jitter_max_ms": float(timing.get("jitter_max_ms", "nan")),
         "rejected_inputs": int(inputs.get("rejected_total", -1)),
@@ -360,7 +392,7 @@ def main(argv: list[str] | None = None) -> int:
     else:
         for k, v in res.items():
             print(f"{k}: {v}")
-    ok = (res["rss_growth_after_warmup_mb"] < 5.0 and res["deadline_misses"] == 0 and res["recording_complete"]
+    ok = (res["rss_growth_after_warmup_mb"] < 5.0 and res["misses_unexplained"] == 0 and res["recording_complete"]
           and res["node_exit_code"] == 0)
     return 0 if ok else 1
 

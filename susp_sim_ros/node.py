@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import gc
 import heapq
+from collections import deque
 import math
 import os
 import sys
@@ -62,6 +63,7 @@ from std_msgs.msg import Float64, Float64MultiArray
 from .errors import SuspInputError
 from .io import messages as M
 from .io.recorder import McapRecorder
+from .analysis.host_stalls import format_miss_log
 from .lockstep import simulated_metadata
 from .model.vehicle import Model, check_oil
 from .ride_diagnostics import SemiActiveDiagnostics
@@ -222,8 +224,15 @@ def _input_cdr(msg):
     return lambda: serialize_message(msg)
 
 
+MISS_LOG_KEEP = 100  # recent deadline misses listed on /diagnostics (a 1 Hz reader loses none below 100/s)
+
+
 class TimingStats:
     """Publish timing in wall-time mode: period deviation (jitter), lateness, deadline misses.
+
+    The last :data:`MISS_LOG_KEEP` misses (deadline and lateness [ns], ``time.time_ns`` clock) are listed
+    on ``/diagnostics`` as ``deadline_miss_log`` so a benchmark can set them beside host stalls
+    (:mod:`~susp_sim_ros.analysis.host_stalls`).
 
     Ring buffers in numpy arrays: recording is one store, the summary never converts Python lists
     (a long C call would hold the GIL against the tick thread)."""
@@ -236,6 +245,7 @@ class TimingStats:
         self._late.fill(0)
         self._n_jit = 0
         self.deadline_misses = 0
+        self.miss_log: deque[tuple[int, int]] = deque(maxlen=MISS_LOG_KEEP)  # (tick_ns, lateness_ns)
         self.ticks = 0
         self._last_pub: int | None = None
 
@@ -246,6 +256,7 @@ class TimingStats:
         self.ticks += 1
         if late > self.period_ns:
             self.deadline_misses += 1
+            self.miss_log.append((tick_ns, late))
         if self._last_pub is not None:
             self._jit[self._n_jit % keep] = abs(published_ns - self._last_pub - self.period_ns)
             self._n_jit += 1
@@ -257,7 +268,8 @@ class TimingStats:
         q = lambda a, p: float(np.percentile(a, p)) if a.size else 0.0
         return {"jitter_p50_ms": q(j, 50), "jitter_p99_ms": q(j, 99), "jitter_max_ms": float(j.max()) if j.size else 0.0,
                 "lateness_p50_ms": q(lt, 50), "lateness_p99_ms": q(lt, 99),
-                "deadline_misses": self.deadline_misses, "ticks": self.ticks}
+                "deadline_misses": self.deadline_misses, "ticks": self.ticks,
+                "deadline_miss_log": format_miss_log(self.miss_log)}
 
 
 def raise_priority(priority: int) -> str:

@@ -160,7 +160,8 @@ def test_replay_loops_and_latches(tmp_path):
     try:
         rp = subprocess.run([sys.executable, "-m", "susp_sim_ros.cli.main", "replay", str(src), "--rate", "20",
                              "--loop", "--loops", "2", "--json", "--wait-subscribers", "20"],
-                            capture_output=True, text=True, timeout=120, env=dict(os.environ))
+                            capture_output=True, text=True, timeout=120,
+                            env=dict(os.environ, SUSP_PROGRESS="bar"))  # a bar although stderr is a pipe
         time.sleep(0.5)
     finally:
         ex.shutdown()

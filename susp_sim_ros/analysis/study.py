@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -330,9 +329,8 @@ def run_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: boo
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise SuspInputError(f"--out {out}: cannot create the directory: {exc.strerror or exc}") from None
-    from tqdm import tqdm
-    bar = tqdm(total=len(paths) * len(variants), desc="study", unit="run", file=sys.stderr,
-               disable=not progress, dynamic_ncols=True)
+    from ..progress import progress as make_progress
+    bar = make_progress(total=len(paths) * len(variants), desc="study", unit="run", enabled=progress)
     models: dict = {}
     results: list[DriveResult] = []
     try:

@@ -19,7 +19,6 @@ Everything is reproducible from one integer seed (numpy ``PCG64``); the drive's 
 from __future__ import annotations
 
 import math
-import sys
 import dataclasses
 from dataclasses import dataclass
 
@@ -339,15 +338,15 @@ def generate_bundle(out_dir, *, seed: int = DEFAULT_SEED, overwrite: bool = Fals
         for name, _, _ in names:
             if (out / name).exists():
                 raise RecordingExistsError(f"{out / name} exists already, not overwriting (use --overwrite).")
-    items = names
-    if progress:
-        from tqdm import tqdm
-        items = tqdm(names, desc="generate", unit="drive", file=sys.stderr)
+    from ..progress import progress as make_progress
+    bar = make_progress(len(names), desc="generate", unit="drive", enabled=progress)
     summaries = []
-    for name, m, s in items:
+    for name, m, s in names:
         drive = generate_drive(m, s, seed=seed, hidden=hidden, imu=imu)
         path = out / name
         n = write_drive(path, drive, overwrite=overwrite)
         summaries.append({"file": str(path), "maneuver": m, "state": s, "messages": n,
                           "bytes": path.stat().st_size, "duration_s": float(len(drive.speed) - 1) / imu.input_rate_hz})
+        bar.update()
+    bar.close()
     return summaries

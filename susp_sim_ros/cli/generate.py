@@ -6,7 +6,6 @@ dependent friction, small parameter differences) measured through a realistic IM
 """
 from __future__ import annotations
 
-import sys
 
 from ..analysis import synthetic
 
@@ -21,7 +20,7 @@ def add_arguments(p) -> None:
 
 def run(args) -> dict:
     files = synthetic.generate_bundle(args.out, seed=args.seed, overwrite=args.overwrite,
-                                      progress=not args.no_progress and sys.stderr.isatty())
+                                      progress=not args.no_progress)
     total = sum(f["bytes"] for f in files)
     lines = [f"{len(files)} synthetic drives ({synthetic.SOURCE}, seed {args.seed}) in {args.out}, "
              f"{total / 1e6:.2f} MB:"]

@@ -1,7 +1,6 @@
 """``susp paper``: the paper's maneuvers x vehicle states x friction variants on the model."""
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from ..analysis.paper_study import STATES, VARIANTS, run_paper_study, write_report
@@ -35,10 +34,9 @@ def _rig_plots(vehicle: str, out: Path) -> list[str]:
 
 
 def run(args) -> dict:
-    from tqdm import tqdm
-    bar = tqdm(total=2 * len(STATES) * len(VARIANTS), desc="paper study", unit="run", file=sys.stderr)
-    study = run_paper_study(args.config, args.step, progress=lambda _: bar.update())
-    bar.close()
+    from ..progress import progress
+    with progress(total=2 * len(STATES) * len(VARIANTS), desc="paper study", unit="run") as bar:
+        study = run_paper_study(args.config, args.step, progress=lambda _: bar.update())
     result = write_report(study, Path(args.out))
     result["rig_plots"] = _rig_plots(args.config, Path(args.out))
     rows = []

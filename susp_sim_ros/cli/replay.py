@@ -183,9 +183,9 @@ def run(args) -> dict:
         time.sleep(0.2)  # matched: give the subscribers' side of discovery a moment
     progress = None
     if not args.no_progress:
-        from tqdm import tqdm
-        progress = tqdm(total=round((t1 - t0) * 1e-9, 2), unit="s", file=sys.stderr, desc="replay",
-                        bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
+        from ..progress import progress as make_progress
+        progress = make_progress(total=round((t1 - t0) * 1e-9, 2), unit="s", desc="replay",
+                                 bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
     played = loops = 0
     clock_ns = int(round(args.clock_period * 1e9)) if clock_pub is not None else 0
     wall0 = time.monotonic()

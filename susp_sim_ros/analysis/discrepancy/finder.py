@@ -91,7 +91,7 @@ class DiscrepancyFinder:
 
     Parameters (all keyword): ``vehicle``, ``variant`` (the base model), ``candidates`` (names from the
     library; default all), ``max_steps`` of the forward selection, ``heldout`` (leave-one-drive-out),
-    ``progress`` (a tqdm bar on stderr). Fitted attributes end in ``_``.
+    ``progress`` (a bar on stderr: :func:`susp_sim_ros.progress.progress`). Fitted attributes end in ``_``.
     """
 
     def __init__(self, *, vehicle: str = "passat_b8_like", variant: str = "full",
@@ -145,8 +145,8 @@ class DiscrepancyFinder:
         t_start = time.perf_counter()
         bar = None
         if self.progress:
-            from tqdm import tqdm
-            bar = tqdm(desc="diagnose: vehicle runs", unit="run", leave=False, dynamic_ncols=True)
+            from ...progress import progress
+            bar = progress(desc="diagnose: vehicle runs", unit="run", leave=False)
         try:
             self._fit(drives, bar)
         finally:

@@ -14,7 +14,6 @@ import csv
 import logging
 import math
 import os
-import sys
 import time
 from typing import Callable, Iterator, Sequence
 
@@ -170,11 +169,11 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     t_compute, cpu_compute = time.perf_counter(), time.process_time()
     done_tasks = executor.map(fn, tasks)        # on a cluster: submitted, on their way while we go on
     store.begin_session()
-    from tqdm import tqdm
+    from ...progress import progress as make_progress
     done_runs = sum(len(spec.chunks[c].runs) for c in resumed)
     unit = "drive" if spec.kind == "drives" else "run"
-    bar = tqdm(total=spec.n_runs, initial=done_runs, desc=spec.name, unit=unit, file=sys.stderr,
-               disable=not progress, dynamic_ncols=True, smoothing=0.1)
+    bar = make_progress(total=spec.n_runs, initial=done_runs, desc=spec.name, unit=unit, enabled=progress,
+                        smoothing=0.1)
     computed: list[int] = []
     try:
         for cids, results, elapsed in done_tasks:
