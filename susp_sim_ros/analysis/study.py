@@ -8,7 +8,9 @@ node replaying the drive), validate each simulation against the measured IMU
 - the paper's tables: pitch-rate RMSE for bump crossings (bump window), roll-rate RMSE for sine
   steering (steering window), deg/s, variants x vehicle states;
 - overlay plots, measured vs each variant, one PNG per maneuver and state;
-- a Markdown report (``report.md``) and the full result as JSON (``study.json``).
+- a Markdown report (``report.md``) and the full result as JSON (``study.json``);
+- per drive, the ride and road-holding metrics (:mod:`.ride_recording`) of each variant's simulation and
+  the measured Wk comfort over the same time (``drives[].ride``, a table in the report).
 
 The maneuver of a drive comes from its ``test_drive`` metadata (``maneuver`` starting with
 ``bump_crossing`` or ``sine_steer``), the vehicle state from ``damper_oil_level``. Drives of other
@@ -86,6 +88,7 @@ class DriveResult:
     sims: dict = field(default_factory=dict, repr=False)
     drive: object = field(default=None, repr=False)
     plot: str | None = None
+    ride: dict = field(default_factory=dict)  # {"measured": {...}, "simulated": {variant: {...}}}
 
     def rmse(self, variant: str) -> float:
         return self.results[variant].rmse_deg_s(self.window, self.signal)
@@ -94,7 +97,8 @@ class DriveResult:
         return {"file": self.path, "maneuver": self.maneuver, "state": self.state, "vehicle": self.vehicle,
                 "source": self.source, "signal": self.signal, "window": self.window,
                 "rmse_deg_s": {v: self.rmse(v) for v in self.results},
-                "validation": {v: r.as_dict() for v, r in self.results.items()}, "plot": self.plot}
+                "validation": {v: r.as_dict() for v, r in self.results.items()}, "plot": self.plot,
+                "ride": self.ride}
 
 
 def _find_drives(folder: Path) -> list[Path]:
@@ -140,9 +144,25 @@ def simulate_and_validate(path: Path, drive, variants: Sequence[str], models: di
                                  f"simulation: {r.skipped.get(window, '')}")
         res.results[v] = r
         res.sims[v] = sim.imu
+        _add_ride(res, drive, sim, v, _model(models, vehicle, v).vehicle)
         if progress is not None:
             progress.update(1)
     return res
+
+
+def _add_ride(res: DriveResult, drive, sim, variant: str, vp) -> None:
+    """Ride metrics of one variant's lockstep simulation (its outputs are what /sim/suspension carries)
+    and, once per drive, the measured Wk comfort, over the time both IMUs cover."""
+    from ..io.messages import SUSPENSION_COLUMNS
+    from . import ride_recording as rr
+    span = va.overlap((int(drive.imu.t_ns[0]), int(drive.imu.t_ns[-1])), (int(sim.imu.t_ns[0]), int(sim.imu.t_ns[-1])))
+    vargs = rr.vehicle_ride_args(vp)
+    susp = sim.outputs[:, SUSPENSION_COLUMNS].reshape(len(sim.t_ns), 4, -1)
+    res.ride.setdefault("simulated", {})[variant] = rr.ride_of_series(
+        sim.imu.t_ns, sim.imu.gyro, sim.imu.accel, sim.t_ns, susp, span, what=f"{res.path} {variant}", **vargs)
+    if "measured" not in res.ride:
+        res.ride["measured"] = rr.comfort_of_series(drive.imu.t_ns, drive.imu.accel, span, gravity=vargs["gravity"],
+                                                    what=f"{res.path} /imu/data")
 
 
 def _model(models: dict, vehicle: str, variant: str):
@@ -306,6 +326,20 @@ def write_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: di
                     vals.append(_fmt(x * 1e3 if k == "phase_lag_s" else x))
             cells.append(" / ".join(vals))
         lines.append(f"| `{Path(d.path).name}` | {d.signal} | " + " | ".join(cells) + " |")
+    lines += ["", "## Ride and road holding per drive", "",
+              ("ISO 2631-1 Wk-weighted RMS vertical acceleration at the centre of gravity (measured: the drive's "
+               "IMU; it has no suspension travel or tyre loads), and from each simulation's suspension outputs the "
+               "dynamic tyre load RMS (Fz - Fz0) / Fz0 against the static wheel loads, suspension travel RMS and "
+               "stop contacts; over the time both recordings cover, Wk at the recordings' own rates."), "",
+              ("| drive | variant | Wk RMS measured / simulated [m/s^2] | dyn. tyre load RMS FL / FR / RL / RR "
+               "| travel RMS max [mm] | stop contacts |"), "|---|---|---|---|---|---|"]
+    for d in drives:
+        meas = d.ride.get("measured", {}).get("comfort_wk_rms_m_s2", math.nan)
+        for v, r in d.ride.get("simulated", {}).items():
+            dtl = " / ".join(_fmt(x) for x in r["dynamic_tyre_load_rms_rel"].values())
+            lines.append(f"| `{Path(d.path).name}` | {v} | {_fmt(meas)} / {_fmt(r['comfort_wk_rms_m_s2'])} | {dtl} "
+                         f"| {1e3 * max(r['suspension_travel_rms_m'].values()):.1f} "
+                         f"| {sum(r['stop_contacts'].values())} |")
     lines += ["", "## Plots (measured vs each variant)", ""]
     for d in drives:
         if d.plot:
@@ -385,5 +419,12 @@ def summary_text(result: dict) -> str:
                      f"(paper: {PAPER_RATIO:g})")
     if "intact" in f:
         lines.append(f"bump_crossing intact: max / min over variants = {f['intact']['spread_max_over_min']:.2f}")
+    ride = [(Path(d["file"]).stem, d["ride"]) for d in result.get("drives", []) if d.get("ride")]
+    if ride:
+        v = result["variants"][0]
+        lines.append(f"ride ({v}; Wk RMS measured/simulated m/s^2, dyn. tyre load RMS rear): " + ", ".join(
+            f"{name} {r['measured']['comfort_wk_rms_m_s2']:.2f}/{r['simulated'][v]['comfort_wk_rms_m_s2']:.2f} "
+            f"{max(r['simulated'][v]['dynamic_tyre_load_rms_rel'][w] for w in ('RL', 'RR')):.3f}"
+            for name, r in ride if v in r.get("simulated", {})))
     lines.append(f"report: {result['report']}  ({result['elapsed_s']:.1f} s)")
     return "\n".join(lines)

@@ -7,6 +7,10 @@ The first form aligns both recordings in time (log time), resamples them onto a 
 extrapolating, and reports RMSE, maximum error, mean error, correlation and phase lag of roll, pitch and
 yaw rate (deg/s) over the whole overlap and over the measured drive's analysis windows (bump, steering).
 The simulated IMU is ``/sim/imu/data`` if the file has it, else ``/imu/data`` (``--simulated-topic``).
+It also reports ``ride`` (:mod:`susp_sim_ros.analysis.ride_recording`): over the time both recordings
+cover, the simulated recording's ride and road-holding metrics from its IMU and ``/sim/suspension``
+(static tyre loads of its vehicle) and the measured drive's Wk comfort from its IMU (a measured drive has
+no suspension travel or tyre loads).
 
 The second form (see :mod:`susp_sim_ros.analysis.study`) simulates every drive in the folder with all four
 friction variants in lockstep and writes tables, overlay plots and a Markdown report. Its JSON holds
@@ -64,15 +68,15 @@ def _study(args) -> dict:
     return res
 
 
-def _simulated_imu(path: str, topic: str):
+def _simulated_imu(path: str, topic: str, with_recording: bool = False):
     from ..io.drive import IMU, SIM_IMU, imu_from_recording
     from ..io.reader import read_recording
     rec = read_recording(path)
     if topic != "auto":
-        return topic, imu_from_recording(rec, topic)
+        return (topic, imu_from_recording(rec, topic)) + ((rec,) if with_recording else ())
     for t in (SIM_IMU, IMU):
         if rec.by_topic(t):
-            return t, imu_from_recording(rec, t)
+            return (t, imu_from_recording(rec, t)) + ((rec,) if with_recording else ())
     why = f"; file damaged: {rec.error}" if rec.truncated else ""
     raise RecordingError(f"{path}: no IMU messages on {SIM_IMU} or {IMU} (topics: "
                          f"{', '.join(sorted(rec.topics())) or 'none'}{why})")
@@ -86,7 +90,7 @@ def _pair(args) -> dict:
     if drive.imu is None or len(drive.imu) < 2:
         raise RecordingError(f"{args.measured}: no measured IMU samples on {imu_topic} (topics: "
                              f"{', '.join(sorted(drive.extra.get('topics', {}))) or 'none'})")
-    topic, sim = _simulated_imu(args.simulated, args.simulated_topic)
+    topic, sim, sim_rec = _simulated_imu(args.simulated, args.simulated_topic, with_recording=True)
     if len(sim) < 2:
         raise RecordingError(f"{args.simulated}: fewer than 2 IMU samples on {topic}")
     windows = va.analysis_windows(drive)
@@ -102,6 +106,7 @@ def _pair(args) -> dict:
            "measured_truncated": bool(drive.extra.get("truncated", False)),
            "source_measured": drive.metadata.get("source", ""), **res.as_dict(),
            "rmse_deg_s": {w: {s: m.rmse for s, m in ms.items()} for w, ms in res.metrics.items()},
+           "ride": _ride(args, drive, sim, sim_rec),
            "elapsed_s": time.perf_counter() - t_start}
     lines = [f"{args.measured} (measured) vs {args.simulated} ({topic})"
              + (" [measured file truncated: readable prefix used]" if out["measured_truncated"] else "")]
@@ -115,5 +120,58 @@ def _pair(args) -> dict:
                          f"correlation {corr}, lag {lag}")
     for w, why in res.skipped.items():
         lines.append(f"  {w} window skipped: {why}")
+    from ..analysis.ride_recording import summary_line
+    lines.append("  " + summary_line(out["ride"]))
     out["summary"] = "\n".join(lines)
     return out
+
+
+def _ride(args, drive, sim, sim_rec) -> dict:
+    """The ``ride`` object: over the overlap of both IMUs (and ``/sim/suspension``), the simulated
+    recording's ride metrics and the measured drive's Wk comfort (see the module docstring)."""
+    import logging
+
+    from ..analysis import ride_recording as rr
+    from ..errors import ConfigError
+    from ..io.suspension import SIM_SUSPENSION, suspension_from_recording
+    from ..model.params import load_vehicle
+    vehicle = sim_rec.metadata.get("test_drive", {}).get("vehicle", "")
+    try:
+        vargs = rr.vehicle_ride_args(load_vehicle(vehicle)) if vehicle else None
+    except ConfigError:
+        vargs = None
+    if vargs is None:  # unknown vehicle: gravity from the reference car (Wk removes the mean anyway)
+        vargs = {**rr.vehicle_ride_args(load_vehicle()), "static_loads": None}
+    spans = [(int(drive.imu.t_ns[0]), int(drive.imu.t_ns[-1])), (int(sim.t_ns[0]), int(sim.t_ns[-1]))]
+    names = [f"{args.measured} IMU", f"{args.simulated} IMU"]
+    susp, why = None, ""
+    if sim_rec.by_topic(SIM_SUSPENSION):
+        try:
+            susp = suspension_from_recording(sim_rec)
+            va.check_series(susp.t_ns, susp.values.reshape(len(susp), -1), f"{args.simulated} {SIM_SUSPENSION}")
+            spans.append((int(susp.t_ns[0]), int(susp.t_ns[-1])))
+            names.append(f"{args.simulated} {SIM_SUSPENSION}")
+            va.overlap(*spans, what=names)
+        except RecordingError as exc:
+            susp, why = None, str(exc)
+            spans, names = spans[:2], names[:2]
+            logging.getLogger(__name__).warning("ride metrics without %s: %s", SIM_SUSPENSION, why)
+    else:
+        why = f"{args.simulated}: no {SIM_SUSPENSION}"
+    span = va.overlap(*spans, what=names)
+    g = vargs["gravity"]
+    try:
+        measured = rr.comfort_of_series(drive.imu.t_ns, drive.imu.accel, span, gravity=g,
+                                        what=f"{args.measured} IMU")
+        if susp is not None:
+            simulated = rr.ride_of_series(sim.t_ns, sim.gyro, sim.accel, susp.t_ns, susp.values, span,
+                                          what=str(args.simulated), **vargs)
+            if vargs["static_loads"] is None:
+                simulated["static_load_source"] += f" (vehicle {vehicle!r})" if vehicle else " (no vehicle metadata)"
+        else:
+            simulated = rr.comfort_of_series(sim.t_ns, sim.accel, span, gravity=g, what=f"{args.simulated} IMU")
+            simulated["note"] = f"comfort only: {why}"
+    except RecordingError as exc:  # the rate comparison stands; the ride metrics say why they are missing
+        logging.getLogger(__name__).warning("no ride metrics: %s", exc)
+        return {"error": f"{args.measured} vs {args.simulated}: ride metrics: {exc}"}
+    return {"measured": measured, "simulated": simulated, "start_s": span[0] / va.NS, "end_s": span[1] / va.NS}
