@@ -16,7 +16,7 @@ from ..errors import SuspInputError
 
 SUBCOMMANDS = {
     "sim": "offline run: a paper maneuver or a recorded test drive (lockstep); writes a simulated MCAP",
-    "rig": "virtual test rigs: axle friction rig and damper hydropulser",
+    "rig": "virtual test rigs: axle friction rig, damper hydropulser, EUSAMA/phase-shift wheel-plate bench",
     "paper": "the paper's maneuvers x vehicle states x friction variants, with table, plots and report",
     "replay": "play a recorded test drive onto its topics with /clock",
     "recover": "make a recording from a killed process readable again (finalise it)",
