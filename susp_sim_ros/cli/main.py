@@ -22,6 +22,7 @@ SUBCOMMANDS = {
     "recover": "make a recording from a killed process readable again (finalise it)",
     "validate": "compare measured and simulated drives, or run the paper-style study over a folder",
     "diagnose": "the discrepancy finder over one or more drives",
+    "inspect": "damper oil level per wheel with 95 % intervals from recorded drives (bump crossing)",
     "study": "a parameter study from config/studies/*.yaml on Dask",
     "generate": "write the synthetic reference test drives (bags/)",
     "import-csv": "convert a CSV measurement into a recorded test drive MCAP",
