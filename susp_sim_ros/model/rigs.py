@@ -185,23 +185,22 @@ class PlateResult:
 def _per_cycle(pm: PlateMotion, fdyn: np.ndarray):
     """Amplitude [N] and phase angle [deg] of the dynamic contact force against the plate motion, one
     value per whole plate cycle of the sweep (``fdyn ~ a sin(phase) + b cos(phase)`` by projection)."""
-    k = np.floor(pm.phase / (2 * np.pi)).astype(int)
+    k = np.floor(pm.phase / (2 * np.pi)).astype(np.int64)
     sel = np.arange(pm.t.size) >= pm.sweep_start
-    freqs, amps, phs = [], [], []
-    for cyc in np.unique(k[sel])[1:-1]:  # whole cycles only
-        m = sel & (k == cyc)
-        s, co = np.sin(pm.phase[m]), np.cos(pm.phase[m])
-        a = 2 * np.mean(fdyn[m] * s)
-        b = 2 * np.mean(fdyn[m] * co)
-        freqs.append(np.mean(pm.frequency_hz[m]))
-        amps.append(np.hypot(a, b))
-        # force leads the plate displacement by atan2(b, a); the phase-shift method's angle is
-        # 180 deg minus that lead (180 deg when the plate drives the tyre above resonance, falling to its
-        # minimum just below the wheel resonance, lower the weaker the damping)
-        # (unsigned: the angle between the two phasors; a wheel that lifts off can push it past 180 deg)
-        lead = np.degrees(np.arctan2(b, a))
-        phs.append(abs((180.0 - lead + 180.0) % 360.0 - 180.0))
-    return np.array(freqs), np.array(amps), np.array(phs)
+    k, ph, f, fd = k[sel], pm.phase[sel], pm.frequency_hz[sel], fdyn[sel]
+    k = k - k[0]
+    n = np.bincount(k).astype(float)
+    a = 2 * np.bincount(k, fd * np.sin(ph)) / n
+    b = 2 * np.bincount(k, fd * np.cos(ph)) / n
+    freq = np.bincount(k, f) / n
+    whole = slice(1, len(n) - 1)  # whole cycles only
+    a, b, freq = a[whole], b[whole], freq[whole]
+    # force leads the plate displacement by atan2(b, a); the phase-shift method's angle is 180 deg minus
+    # that lead (180 deg when the plate drives the tyre above resonance, falling to its minimum just below
+    # the wheel resonance, lower the weaker the damping); unsigned: the angle between the two phasors (a
+    # wheel that lifts off can push it past 180 deg)
+    lead = np.degrees(np.arctan2(b, a))
+    return freq, np.hypot(a, b), np.abs((180.0 - lead + 180.0) % 360.0 - 180.0)
 
 
 def eusama_bench(model: Model, oil=(1.0, 1.0, 1.0, 1.0), wheels=WHEELS,

@@ -160,6 +160,10 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
         tasks = [(tuple(c.id for c in t), (spec.data, spec.hash, [c.runs for c in t]))
                  for t in plan_tasks(todo, getattr(executor, "threads_total", 1))]
         fn = engine.sweep_task
+    elif spec.kind == "roc":  # damper-inspection detection study (issue 14): one task per chunk of cars
+        from ..inspection.roc import roc_task
+        tasks = [((c.id,), (spec.data, list(c.runs))) for c in todo]
+        fn = roc_task
     else:
         tasks = [((c.id,), (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
                  for c in todo]
@@ -169,7 +173,7 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     store.begin_session()
     from tqdm import tqdm
     done_runs = sum(len(spec.chunks[c].runs) for c in resumed)
-    unit = "run" if spec.kind == "sweep" else "drive"
+    unit = {"sweep": "run", "roc": "car"}.get(spec.kind, "drive")
     bar = tqdm(total=spec.n_runs, initial=done_runs, desc=spec.name, unit=unit, file=sys.stderr,
                disable=not progress, dynamic_ncols=True, smoothing=0.1)
     computed: list[int] = []
@@ -197,6 +201,9 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
               "compute_s": compute_s, "cpu_s": cpu_s, "runs_per_s": new_runs / compute_s if compute_s > 0 else math.nan}
     if spec.kind == "sweep":
         result.update(_finish_sweep(spec, store, plot))
+    elif spec.kind == "roc":
+        from ..inspection.roc import finish_roc
+        result.update(finish_roc(spec, store, plot))
     else:
         result.update(_finish_drives(spec, store, plot))
     result["elapsed_s"] = time.perf_counter() - t_start
@@ -299,14 +306,18 @@ def _diagnosis_summary(rows) -> dict:
 
 
 def summary_text(r: dict) -> str:
-    lines = [f"study {r['study']} ({r['kind']}): {r['n_runs']} {'runs' if r['kind'] == 'sweep' else 'drives'} "
+    lines = [f"study {r['study']} ({r['kind']}): {r['n_runs']} { {'sweep': 'runs', 'roc': 'cars'}.get(r['kind'], 'drives')} "
              f"in {r['n_chunks']} chunks on {r['scheduler']} ({r['workers']} worker(s)); "
              f"{r['chunks_computed']} chunks computed, {r['chunks_resumed']} resumed"]
     if r["runs_computed"]:
-        unit = "runs" if r["kind"] == "sweep" else "drives"
+        unit = {"sweep": "runs", "roc": "cars"}.get(r["kind"], "drives")
         lines.append(f"  {r['runs_per_s']:.3g} {unit}/s over {r['compute_s']:.1f} s")
     for c, (lo, hi) in r.get("metric_ranges", {}).items():
         lines.append(f"  {c}: {lo:.4g} .. {hi:.4g}")
+    for sev, by_m in r.get("roc_by_severity", {}).items():
+        lines.append(f"  ROC {sev} vs intact: " + ", ".join(
+            f"{m} AUC {x['auc']:.3f} [{x['auc_ci95'][0]:.3f}, {x['auc_ci95'][1]:.3f}] sens@95%spec "
+            f"{x['sensitivity_at_95_specificity']:.2f}" for m, x in by_m.items()))
     if r["kind"] == "drives":
         for m, by_s in r["tables"].items():
             for s, row in by_s.items():

@@ -50,7 +50,7 @@ GENERIC_METRICS = ("peak", "rms")      # {peak: OUTPUT_LABEL}: max |x|, {rms: OU
 RESULT_FORMATS = ("csv", "parquet")
 TOP_KEYS = {"name", "description", "kind", "maneuver", "step_s", "output_rate_hz", "chunk_size",
             "parameters", "vehicle_classes", "outputs", "reference", "after_window_s",
-            "ring_out_threshold_deg_s", "results", "plot", "folder", "variants", "diagnose"}
+            "ring_out_threshold_deg_s", "results", "plot", "folder", "variants", "diagnose", "roc", "vehicle"}
 
 
 @dataclass(frozen=True)
@@ -141,8 +141,11 @@ def study_from_dict(data: Any, source: str = "<study>") -> StudySpec:
         raise ConfigError(f"{source}: name: expected a short name without spaces or slashes, got {name!r}")
     if kind == "drives":
         return _drives(data, source, name)
+    if kind == "roc":  # damper-inspection detection study (issue 14)
+        from ..inspection.roc import roc_spec
+        return roc_spec(data, source, name)
     if kind != "sweep":
-        raise ConfigError(f"{source}: kind: expected 'sweep' or 'drives', got {kind!r}")
+        raise ConfigError(f"{source}: kind: expected 'sweep', 'drives' or 'roc', got {kind!r}")
     return _sweep(data, source, name)
 
 
