@@ -104,3 +104,28 @@ def test_state_is_unknown_exactly_when_the_interval_spans_two_bands(a, b):
         assert s == "empty"
     if lo >= CFG["states"]["ok_from"]:
         assert s == "ok"
+
+
+def test_inspection_drive_with_unknown_oil_is_read_and_simulated_as_intact(tmp_path, caplog):
+    """interface.md: an inspection drive's damper_oil_level is `unknown`; every command reads it, those
+    that need oil assume intact and say so."""
+    from susp_sim_ros.io.drive import read_drive, write_drive
+    from susp_sim_ros.lockstep import run_lockstep
+    d = read_drive(BAGS / "bump_crossing_rear_empty.mcap")
+    p = tmp_path / "inspection.mcap"
+    write_drive(p, dataclasses.replace(d, metadata={**d.metadata, "damper_oil_level": "unknown"}), overwrite=True)
+    drive = read_drive(p)
+    assert not drive.oil_known and drive.oil_levels() == (1.0, 1.0, 1.0, 1.0)
+    with caplog.at_level("WARNING"):
+        sim = run_lockstep(drive)
+    assert sim.healthy and "unknown" in caplog.text and "intact" in caplog.text
+    res = inspect_drives([p])
+    assert res.axles_["rear"]["oil_level"] == pytest.approx(0.0, abs=0.15)   # found, not assumed
+
+
+@given(st.sampled_from(["unknown", "UNKNOWN", " Unknown "]))
+def test_unknown_oil_text(text):
+    from susp_sim_ros.io.drive import oil_unknown, parse_oil
+    assert oil_unknown(text) and not oil_unknown("1,1,1,1") and not oil_unknown(None)
+    with pytest.raises(Exception):
+        parse_oil(text)
