@@ -87,7 +87,16 @@ def test_small_study_end_to_end(tmp_path):
         "seed": 5, "cars": 8, "states": {"intact": 0.5, "one_empty": 0.5}, "variation": ["sprung_mass"],
         "speed_kmh": [6.0, 10.0], "bump_height": [0.05, 0.07], "gyro_noise_deg_s": [0.1, 0.1],
         "estimator_variants": ["full"], "bootstrap": 50}}, "<tiny>")
+    class Stop(Exception):
+        pass
+
+    def stop(_cid):
+        raise Stop
+
+    with pytest.raises(Stop):   # killed after its first chunk ...
+        run_study(spec, tmp_path / "out", make_executor("inprocess"), progress=False, on_chunk=stop)
     res = run_study(spec, tmp_path / "out", make_executor("inprocess"), progress=False)
+    assert res["chunks_resumed"] == 1 and res["chunks_computed"] == 1   # ... resumes without redoing it
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert set(summary["roc"]) >= set(roc.METHODS)
     for m in roc.METHODS:

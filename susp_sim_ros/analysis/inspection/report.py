@@ -28,7 +28,7 @@ def plot_fit(res, path: Path) -> list[str]:
             ax.set_ylabel(f"{s} [{SIGNAL_UNIT[SIGNALS.index(s)]}]")
             ax.grid(True, alpha=0.3)
         axes[0, 0].legend(fontsize=8)
-        axes[0, 0].set_title(f"{c.name}: measured vs fitted (oil levels and nuisances free)")
+        axes[0, 0].set_title(f"{c.name}: measured vs fitted", fontsize=10)
         axes[-1, 0].set_xlabel("time [s]")
         fig.tight_layout()
         name = f"fit_{c.name}.png"

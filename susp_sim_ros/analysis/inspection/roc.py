@@ -44,7 +44,7 @@ SEVERITIES = {"one_empty": "one damper oil-empty", "one_half": "one damper at ha
               "any": "any oil loss (one or more dampers)"}
 ROC_KEYS = {"seed", "cars", "states", "variation", "speed_kmh", "bump_height", "gyro_noise_deg_s",
             "accel_noise_m_s2", "imu_rate_hz", "truth_variant", "estimator_variants", "bootstrap",
-            "specificity", "several_oil", "local_workers"}
+            "specificity", "several_oil", "local_workers", "vehicle"}
 
 
 # ---- the study description ------------------------------------------------------------------------------
@@ -80,8 +80,8 @@ def roc_spec(data: dict, source: str, name: str):
     shares = {k: float(v) for k, v in states.items()}
     if any(v < 0 for v in shares.values()) or not math.isclose(sum(shares.values()), 1.0, abs_tol=1e-6):
         raise ConfigError(f"{source}: roc.states: shares must be >= 0 and add up to 1, got {shares}")
-    vehicle = data.get("vehicle", "passat_b8_like")
-    vp = _load(source, "vehicle", load_vehicle, vehicle)
+    vehicle = roc.get("vehicle", "passat_b8_like")
+    vp = _load(source, "roc.vehicle", load_vehicle, vehicle)
     variation = roc.get("variation") or []
     if not isinstance(variation, list) or any(v not in vp.priors for v in variation):
         raise ConfigError(f"{source}: roc.variation: expected vehicle parameters with a documented range in "

@@ -50,7 +50,7 @@ GENERIC_METRICS = ("peak", "rms")      # {peak: OUTPUT_LABEL}: max |x|, {rms: OU
 RESULT_FORMATS = ("csv", "parquet")
 TOP_KEYS = {"name", "description", "kind", "maneuver", "step_s", "output_rate_hz", "chunk_size",
             "parameters", "vehicle_classes", "outputs", "reference", "after_window_s",
-            "ring_out_threshold_deg_s", "results", "plot", "folder", "variants", "diagnose", "roc", "vehicle"}
+            "ring_out_threshold_deg_s", "results", "plot", "folder", "variants", "diagnose", "roc"}
 
 
 @dataclass(frozen=True)
