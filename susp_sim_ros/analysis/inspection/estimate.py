@@ -214,6 +214,17 @@ def _tracks_differ(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
     return False
 
 
+def _road_excites(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
+    """Whether any drive's road (profile or wheel heights) leaves the flat by more than ``tol_m``."""
+    from ...model.layout import U_INDEX
+    for c in cases:
+        if c.road is not None and len(c.road) >= 2 and np.max(np.abs(np.concatenate([c.road.zl, c.road.zr]))) > tol_m:
+            return True
+        if np.max(np.abs(c.U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4])) > tol_m:
+            return True
+    return False
+
+
 def identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
     """Per axle: ``wheel`` (left and right told apart), ``axle`` (only their mean) or ``no``, with the
     posterior sds it was decided on (linearised at half oil, nuisances at their prior centre)."""
@@ -238,9 +249,14 @@ def identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
                    f"posterior sd of {sd_mean:.2f} (needs <= {est['identifiable_max_sd']:g})")
         elif sd_diff <= est["per_wheel_max_sd"]:
             kind = "wheel"
-            how = ("the left and right tracks were excited differently" if _tracks_differ(ev.cases) else
-                   "both tracks were excited alike, but a left-right damping difference rolls the body and "
-                   "the roll rate shows it")
+            if _tracks_differ(ev.cases):
+                how = "the left and right tracks were excited differently"
+            elif _road_excites(ev.cases):
+                how = ("both tracks were excited alike, but a left-right damping difference rolls the body "
+                       "and the roll rate shows it")
+            else:
+                how = ("the road is flat: the maneuver itself (steering, braking) moved the suspension and "
+                       "rolled the body")
             why = (f"left and right {axle} dampers told apart: {how}; their oil difference is pinned to a "
                    f"posterior sd of {sd_diff:.3f} (<= {est['per_wheel_max_sd']:g})")
         else:
