@@ -6,7 +6,10 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import given, strategies as st
 
+from susp_sim_ros.cli.rig import _oil_levels
+from susp_sim_ros.errors import SuspInputError
 from susp_sim_ros.model import rigs
 from susp_sim_ros.model.linear import plate_resonance_hz
 
@@ -82,3 +85,14 @@ def test_cli_json_keys_and_bad_oil():
     for bad in ("1,1,2,1", "1,1,1", "a,b,c,d"):
         rc, _, err = _susp("rig", "eusama", "--oil", bad)
         assert rc == 2 and "--oil" in err and "Traceback" not in err
+
+
+@given(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=1, max_size=6))
+def test_oil_parser_accepts_exactly_four_fractions(vals):
+    text = ",".join(repr(v) for v in vals)
+    ok = len(vals) == 4 and all(0.0 <= v <= 1.0 for v in vals)
+    if ok:
+        assert _oil_levels(text, 4) == pytest.approx(vals)
+    else:
+        with pytest.raises(SuspInputError):
+            _oil_levels(text, 4)

@@ -129,3 +129,18 @@ def test_unknown_oil_text(text):
     assert oil_unknown(text) and not oil_unknown("1,1,1,1") and not oil_unknown(None)
     with pytest.raises(Exception):
         parse_oil(text)
+
+
+def test_without_roll_rate_only_the_axles_are_identifiable():
+    """Left and right crossing the bump alike differ only through the roll they cause: without the roll
+    rate the fit has one oil level per axle, and both wheels carry its figures."""
+    cfg = load_config()
+    cfg["estimator"]["signals"] = ["pitch_rate", "accel_z"]
+    res = inspect_drives([BAGS / "bump_crossing_rear_empty.mcap"], cfg=cfg)
+    for axle, wheels, truth in (("front", ("FL", "FR"), 1.0), ("rear", ("RL", "RR"), 0.0)):
+        a = res.axles_[axle]
+        assert a["identifiable"] == "axle" and a["oil_level"] == pytest.approx(truth, abs=0.15)
+        for w in wheels:
+            e = res.wheels_[w]
+            assert e["identifiable"] == "axle" and e["oil_level"] == a["oil_level"] and e["ci95"] == a["ci95"]
+            assert "roll rate" in e["why"]

@@ -261,9 +261,14 @@ def identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
                    f"posterior sd of {sd_diff:.3f} (<= {est['per_wheel_max_sd']:g})")
         else:
             kind = "axle"
-            why = (f"left and right {axle} wheels were excited alike (a bump across the full width: no roll), "
-                   f"so the drives tell only their mean (sd {sd_mean:.2f}); their difference stays at sd "
-                   f"{sd_diff:.2f} (> {est['per_wheel_max_sd']:g})")
+            if not any("roll_rate" in c.signals for c in ev.cases):
+                cause = "no roll rate is compared, which would show a left-right damping difference"
+            elif _tracks_differ(ev.cases):
+                cause = "the roll the tracks' difference caused does not separate them"
+            else:
+                cause = "left and right were excited alike and the roll stayed too small to separate them"
+            why = (f"only the {axle} axle's mean oil level is identifiable (sd {sd_mean:.2f}): {cause}; the "
+                   f"left-right difference stays at sd {sd_diff:.2f} (> {est['per_wheel_max_sd']:g})")
         out[axle] = {"identifiable": kind, "why": why, "sd_mean": sd_mean, "sd_difference": sd_diff}
     return out
 
