@@ -104,3 +104,18 @@ def test_small_study_end_to_end(tmp_path):
         assert 0.0 <= lo <= summary["roc"][m]["auc"] <= hi <= 1.0
     assert summary["roc"]["model_based"]["auc"] == 1.0   # an empty damper is never missed here
     assert res["cars_failed"] == 0 and (tmp_path / "out" / "cars.csv").is_file()
+
+
+def test_independent_truth_cars_are_scored_by_every_method():
+    """truth_generator: independent: the bump crossing comes from the independent simulator (not our
+    model); an intact car and one with FR oil-empty (cars 0 and 1 of this seed) are told apart."""
+    spec = roc.roc_spec({"roc": {"seed": 20261123, "cars": 2, "truth_generator": "independent",
+                                 "states": {"intact": 0.4, "one_empty": 0.35, "one_half": 0.2, "several": 0.05},
+                                 "variation": ["sprung_mass", "tyre_stiffness", "axle_friction"],
+                                 "speed_kmh": [5.0, 15.0], "bump_height": [0.04, 0.08],
+                                 "gyro_noise_deg_s": [0.05, 0.2], "estimator_variants": ["full"]}}, "<t>", "t")
+    intact, empty = (roc.car_statistics(spec.data, i) for i in (0, 1))
+    assert intact["state"] == "intact" and empty["state"] == "one_empty" and empty["oil_FR"] == 0.0
+    assert all(intact[f"est_oil_{w}"] > 0.85 for w in ("FL", "FR", "RL", "RR"))
+    assert empty["est_oil_FR"] < 0.3 and empty["model_based"] > intact["model_based"] + 0.5
+    assert empty["eusama"] > intact["eusama"] and empty["phase_shift"] > intact["phase_shift"]

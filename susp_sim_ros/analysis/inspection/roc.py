@@ -44,7 +44,7 @@ SEVERITIES = {"one_empty": "one damper oil-empty", "one_half": "one damper at ha
               "any": "any oil loss (one or more dampers)"}
 ROC_KEYS = {"seed", "cars", "states", "variation", "speed_kmh", "bump_height", "gyro_noise_deg_s",
             "accel_noise_m_s2", "imu_rate_hz", "truth_variant", "estimator_variants", "bootstrap",
-            "specificity", "several_oil", "local_workers", "vehicle"}
+            "specificity", "several_oil", "local_workers", "vehicle", "truth_generator"}
 
 
 # ---- the study description ------------------------------------------------------------------------------
@@ -96,6 +96,9 @@ def roc_spec(data: dict, source: str, name: str):
     if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
         raise ConfigError(f"{source}: chunk_size: expected a positive integer, got {chunk!r}")
     several = roc.get("several_oil", [0.0, 0.5])
+    generator = roc.get("truth_generator", "model")
+    if generator not in ("model", "independent"):
+        raise ConfigError(f"{source}: roc.truth_generator: expected 'model' or 'independent', got {generator!r}")
     norm = {"name": name, "kind": "roc", "description": str(data.get("description", "")), "vehicle": vehicle,
             "chunk_size": chunk, "results": "csv",
             "roc": {"seed": int(num("seed")), "cars": cars, "states": shares, "variation": list(variation),
@@ -105,7 +108,7 @@ def roc_spec(data: dict, source: str, name: str):
                     "imu_rate_hz": float(roc.get("imu_rate_hz", 200.0)), "truth_variant": truth,
                     "estimator_variants": list(ests), "bootstrap": int(roc.get("bootstrap", 1000)),
                     "specificity": float(roc.get("specificity", 0.95)), "several_oil": [float(x) for x in several],
-                    "local_workers": int(roc.get("local_workers", 2))}}
+                    "local_workers": int(roc.get("local_workers", 2)), "truth_generator": generator}}
     spec = StudySpec(source, norm)
     spec.runs = [{"car": i} for i in range(cars)]
     spec.chunks = [Chunk(k, tuple(range(j, min(j + chunk, cars)))) for k, j in enumerate(range(0, cars, chunk))]
@@ -183,6 +186,30 @@ def bump_drive(model, draw: Mapping, roc: Mapping, dt: float = 0.001):
     return drive, int(np.searchsorted(t, t_after)), np.degrees(gyro[:, 1])
 
 
+#: vehicle-file fields -> the independent simulator's car (TruthCar) and friction (TruthFriction) fields
+_TRUTH_CAR = {"sprung_mass": "sprung_mass", "unsprung_mass": "unsprung_mass", "cg_height": "cg_height",
+              "roll_inertia": "roll_inertia", "pitch_inertia": "pitch_inertia", "tyre_stiffness": "tyre_stiffness",
+              "wheel_rate": "wheel_rate", "arb_rate": "arb_rate"}
+_TRUTH_FRICTION = {"axle_friction": "axle_level", "damper_friction_intact": "damper_intact",
+                   "damper_friction_empty": "damper_empty"}
+
+
+def bump_drive_independent(draw: Mapping, roc: Mapping):
+    """The car's bump crossing from the independent simulator (:mod:`..independent_sim`: not our model),
+    the car's drawn values replacing its defaults; same outputs as :func:`bump_drive`."""
+    from .. import independent_sim as ind
+    car_kw = {_TRUTH_CAR[f]: v for f, v in draw["values"].items() if f in _TRUTH_CAR}
+    fr_kw = {_TRUTH_FRICTION[f]: v for f, v in draw["values"].items() if f in _TRUTH_FRICTION}
+    car = ind.TruthCar(**car_kw)
+    man = ind.TruthManeuver.bump(speed_kmh=draw["speed_kmh"], height_m=draw["bump_height"], wheelbase_m=car.wheelbase)
+    sensor = ind.TruthSensor(imu_rate_hz=roc["imu_rate_hz"], gyro_noise_deg_s=(draw["gyro_noise_deg_s"],) * 3,
+                             accel_noise_m_s2=(roc["accel_noise_m_s2"],) * 3, exact_rms=False)
+    drive = ind.make_drive(car, ind.TruthFriction(**fr_kw), None, man, sensor, draw["oil"], seed=draw["noise_seed"])
+    t = (drive.imu.t_ns - drive.imu.t_ns[0]) * 1e-9
+    t_after = man.lead_in_s + (man.bump_length_m + car.wheelbase) / man.speed_mps
+    return drive, int(np.searchsorted(t, t_after)), np.degrees(drive.imu.gyro[:, 1])
+
+
 _cache: dict = {}
 
 
@@ -223,7 +250,10 @@ def car_statistics(data: Mapping, i: int) -> dict:
     bench = eusama_bench(car, draw["oil"], plate=plate)
     row["eusama_min_percent"] = min(r.eusama_percent for r in bench.values())
     row["phase_min_deg"] = min(r.phase_min_deg for r in bench.values())
-    drive, k_after, pitch_meas = bump_drive(car, draw, roc)
+    if roc.get("truth_generator", "model") == "independent":
+        drive, k_after, pitch_meas = bump_drive_independent(draw, roc)
+    else:
+        drive, k_after, pitch_meas = bump_drive(car, draw, roc)
     row["decay_ratio"] = decay_ratio(pitch_meas, k_after)
     for variant in roc["estimator_variants"]:
         model, cal = _estimator(data["vehicle"], variant, cfg)
