@@ -8,6 +8,7 @@ simulated:<variant>`` (the node's recording holds the same, plus ``/diagnostics`
 """
 from __future__ import annotations
 
+import logging
 import os
 from dataclasses import dataclass, field
 from typing import Sequence
@@ -21,6 +22,8 @@ from .model.layout import OUTPUT_LABELS, output_index
 from .model.maneuvers import Maneuver
 from .model.vehicle import Model
 from .sim_core import SimCore, sample_messages
+
+log = logging.getLogger(__name__)
 
 _GYRO = [output_index(k) for k in ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")]
 _ACC = [output_index(k) for k in ("AX_SF", "AY_SF", "AZ_SF")]
@@ -86,6 +89,9 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
 
     If the divergence guard stops the core, the result ends at the last good sample, ``healthy`` is
     False and ``diverged`` says why (the output file, if any, holds the samples up to there)."""
+    if oil is None and not drive.oil_known:
+        log.warning("damper_oil_level is unknown (an inspection drive): simulating intact dampers; give "
+                    "the oil levels (--oil) to simulate another state")
     oil = tuple(drive.oil_levels() if oil is None else oil)
     model = model or Model(vehicle, variant)
     core = SimCore(model, step_s=step_s, publish_rate_hz=publish_rate_hz, oil=oil,

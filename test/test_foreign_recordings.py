@@ -134,6 +134,18 @@ def test_diagnose_and_replay_read_every_layout(corpus, layout):
     assert dg["drives"][0]["duration_s"] == own_dg["drives"][0]["duration_s"]
 
 
+def test_inspect_reads_a_foreign_layout_through_the_map(corpus):
+    """The damper inspection of the split rosbag2 directory (odometry speed, degree steering, FRD IMU)
+    read through the car map equals the inspection of the same drive in the interface's layout."""
+    d, paths, _, _ = corpus
+    own = _json(["inspect", BUMP])
+    r = _json(["inspect", paths["split"], "--topic-map", CAR_MAP])
+    for w, e in own["wheels"].items():
+        assert r["wheels"][w]["state"] == e["state"]
+        assert r["wheels"][w]["oil_level"] == pytest.approx(e["oil_level"], abs=1e-6)
+        assert r["wheels"][w]["ci95"] == pytest.approx(e["ci95"], abs=1e-6)
+
+
 def test_replay_without_map_reads_rosbag2_containers(corpus):
     d, paths, _, _ = corpus
     for layout in ("split", "rosbags_db3", "bare.db3"):
@@ -160,7 +172,8 @@ def test_identity_map_changes_nothing(corpus):
 def _every_command_refuses(p, needle, own_sim, topic_map=CAR_MAP, replay=True):
     tm = ["--topic-map", topic_map] if topic_map else []
     for argv in (["sim", "--drive", p, *tm], ["validate", "--measured", p, "--simulated", own_sim, *tm],
-                 ["diagnose", p, "--dry-run", *tm], *([["replay", p, "--dry-run", *tm]] if replay else [])):
+                 ["diagnose", p, "--dry-run", *tm], ["inspect", p, *tm],
+                 *([["replay", p, "--dry-run", *tm]] if replay else [])):
         rc, out, err = _run(argv)
         assert rc == 2 and needle in err and "Traceback" not in err, (argv, rc, err)
 

@@ -127,7 +127,8 @@ def simulate_and_validate(path: Path, drive, variants: Sequence[str], models: di
     window = va.MANEUVER_WINDOW.get(maneuver, "whole")
     if window not in windows:
         window = "whole"
-    res = DriveResult(str(path), maneuver, classify_state(drive.oil_levels()), vehicle,
+    state = classify_state(drive.oil_levels()) if drive.oil_known else "unknown (simulated intact)"
+    res = DriveResult(str(path), maneuver, state, vehicle,
                       meta.get("source", ""), signal, window, drive=drive)
     for v in variants:
         sim = run_lockstep(drive, vehicle=vehicle, variant=v, model=_model(models, vehicle, v))

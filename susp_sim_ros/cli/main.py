@@ -16,12 +16,13 @@ from ..errors import SuspInputError
 
 SUBCOMMANDS = {
     "sim": "offline run: a paper maneuver or a recorded test drive (lockstep); writes a simulated MCAP",
-    "rig": "virtual test rigs: axle friction rig and damper hydropulser",
+    "rig": "virtual test rigs: axle friction rig, damper hydropulser, EUSAMA/phase-shift wheel-plate bench",
     "paper": "the paper's maneuvers x vehicle states x friction variants, with table, plots and report",
     "replay": "play a recorded test drive onto its topics with /clock",
     "recover": "make a recording from a killed process readable again (finalise it)",
     "validate": "compare measured and simulated drives, or run the paper-style study over a folder",
     "diagnose": "the discrepancy finder over one or more drives",
+    "inspect": "damper oil level per wheel with 95 % intervals from recorded drives (bump crossing)",
     "study": "a parameter study from config/studies/*.yaml on Dask",
     "generate": "write the synthetic reference test drives (bags/)",
     "import-csv": "convert a CSV measurement into a recorded test drive MCAP",

@@ -51,7 +51,10 @@ def run(args) -> dict:
         spec = load_study(args.study)
     if args.workers is not None and args.workers < 1:
         raise SuspInputError(f"--workers: expected at least 1, got {args.workers}")
-    executor = make_executor(args.scheduler, args.workers, processes=not args.threads,
+    workers = args.workers
+    if workers is None and spec.kind == "roc":  # its tasks run one car at a time: one worker per core
+        workers = spec.data["roc"].get("local_workers")
+    executor = make_executor(args.scheduler, workers, processes=not args.threads,
                              connect_timeout_s=args.connect_timeout)
     try:
         return run_study(spec, args.out, executor, progress=not args.no_progress, fresh=args.fresh,

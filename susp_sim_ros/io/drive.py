@@ -78,8 +78,17 @@ class ImuSeries:
         return self.t_ns.astype(float) * 1e-9
 
 
+OIL_UNKNOWN = "unknown"  # interface.md: an inspection drive's damper state is what is to be found
+
+
+def oil_unknown(text: str | None) -> bool:
+    """Whether a ``damper_oil_level`` value says the state is not known (an inspection drive)."""
+    return text is not None and str(text).strip().lower() == OIL_UNKNOWN
+
+
 def parse_oil(text: str | None, what: str = "test_drive metadata damper_oil_level") -> tuple[float, ...]:
-    """``"1,1,0,0"`` -> (1.0, 1.0, 0.0, 0.0); missing -> intact."""
+    """``"1,1,0,0"`` -> (1.0, 1.0, 0.0, 0.0); missing -> intact. ``"unknown"`` is not a value: check
+    :func:`oil_unknown` first (:meth:`TestDrive.oil_levels` assumes intact for it)."""
     if text is None or str(text).strip() == "":
         return (1.0, 1.0, 1.0, 1.0)
     try:
@@ -107,7 +116,15 @@ class TestDrive:
     extra: dict[str, Any] = field(default_factory=dict)
     damper_command: Series | None = None  # (n, 4) valve commands; None: passive dampers
 
+    @property
+    def oil_known(self) -> bool:
+        """False for an inspection drive (``damper_oil_level: unknown``)."""
+        return not oil_unknown(self.metadata.get("damper_oil_level"))
+
     def oil_levels(self) -> tuple[float, float, float, float]:
+        """The recorded oil levels; intact when unknown (:attr:`oil_known` tells, callers say so)."""
+        if not self.oil_known:
+            return (1.0, 1.0, 1.0, 1.0)
         return parse_oil(self.metadata.get("damper_oil_level"))  # type: ignore[return-value]
 
     @property
@@ -315,7 +332,7 @@ def drive_from_recording(rec: Recording, *, imu_topic: str = IMU,
     if imu_topic != SIM_IMU and rec.by_topic(SIM_IMU):
         extra["sim_imu"] = _imu_series(rec, SIM_IMU)
     drive = TestDrive(metadata, speed, steering, road, wh, imu, extra, damper_command=cmd)
-    if "damper_oil_level" in metadata:
+    if "damper_oil_level" in metadata and not oil_unknown(metadata["damper_oil_level"]):
         parse_oil(metadata["damper_oil_level"], f"{path}: test_drive metadata damper_oil_level")
     return drive
 
@@ -434,7 +451,8 @@ def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = 
     return len(msgs)
 
 
-__all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "recording_from_drive", "read_imu", "parse_oil",
+__all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "recording_from_drive", "read_imu",
+           "parse_oil", "oil_unknown",
            "drive_from_recording", "drive_messages", "road_from_msg", "imu_from_recording", "check_topic",
            "TOPIC_TYPES", "check_drive", "MAX_SPEED", "MAX_STEERING", "MAX_WHEEL_HEIGHT", "SPEED", "STEERING", "ROAD_PROFILE",
            "WHEEL_HEIGHTS", "DAMPER_COMMAND", "IMU", "SIM_IMU"]

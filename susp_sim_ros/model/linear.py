@@ -88,3 +88,25 @@ def mechanical_energy(vp: VehicleParams, P: np.ndarray, S: np.ndarray, zr=np.zer
     e_tyre = 0.5 * vp.tyre_stiffness * float(np.sum((q[3:] - zr) ** 2))
     planar = 0.5 * vp.total_mass * S[S_INDEX["VY"]] ** 2 + 0.5 * vp.yaw_inertia * S[S_INDEX["R"]] ** 2
     return 0.5 * qd @ M @ qd + 0.5 * q @ K_body @ q + e_tyre + planar
+
+
+def plate_resonance_hz(vp: VehicleParams, corner: int, f_lo: float = 4.0, f_hi: float = 25.0,
+                       damping_ratio: float = 0.01, n: int = 4201) -> float:
+    """Frequency [Hz] of the largest dynamic tyre force when the road under ``corner`` (0..3, FL FR RL
+    RR) moves sinusoidally and the others stay still: the linear model's answer to the EUSAMA bench's
+    resonance. Small stiffness-proportional damping (``damping_ratio`` at the wheel-hop modes) keeps the
+    peak finite; the wheel-hop modes of one axle (in phase, and against the anti-roll bar) both respond,
+    so the peak sits between their frequencies."""
+    M, K = mass_stiffness(vp)
+    w_hop = 2 * np.pi * modes(vp).freq_hz[3]
+    beta = 2 * damping_ratio / w_hop
+    kt = vp.tyre_stiffness
+    rhs = np.zeros(7)
+    rhs[3 + corner] = kt
+    f = np.linspace(f_lo, f_hi, n)
+    amp = np.empty(n)
+    for j, ff in enumerate(f):
+        w = 2 * np.pi * ff
+        x = np.linalg.solve(K - w ** 2 * M + 1j * w * beta * K, rhs)
+        amp[j] = abs(kt * (1.0 - x[3 + corner]))
+    return float(f[np.argmax(amp)])

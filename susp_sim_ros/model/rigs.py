@@ -129,3 +129,132 @@ def plot_loops(results: dict[str, RigResult], path, title: str) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+# ---- EUSAMA / phase-shift wheel-plate bench -----------------------------------------------------------
+WHEELS = ("FL", "FR", "RL", "RR")
+
+
+@dataclass
+class PlateMotion:
+    """The documented bench input: the wheel-plate height [m] at times ``t`` [s] (its rate is taken by
+    the model from successive samples) and the instantaneous plate frequency [Hz] and phase [rad]
+    (``z = amplitude(t) * sin(phase)``). One plate moves at a time; the other three wheels stand on
+    still plates."""
+
+    t: np.ndarray
+    z: np.ndarray
+    frequency_hz: np.ndarray
+    phase: np.ndarray
+    sweep_start: int  # first sample of the sweep (after the settling dwell at the start frequency)
+
+
+def eusama_plate_motion(cfg: dict | None = None) -> PlateMotion:
+    """The EUSAMA plate motion of ``config/rigs.yaml`` ``eusama``: ``settle_duration`` at
+    ``start_frequency`` (amplitude ramped in over its first half), then a linear sweep down to
+    ``end_frequency`` over ``sweep_duration``, at ``plate_amplitude``."""
+    c = _rig_config("eusama") if cfg is None else cfg
+    dt, f0, f1 = c["step"], c["start_frequency"], c["end_frequency"]
+    n_settle = int(round(c["settle_duration"] / dt))
+    n_sweep = int(round(c["sweep_duration"] / dt))
+    t = dt * np.arange(n_settle + n_sweep)
+    f = np.full(t.size, f0)
+    ts = t[n_settle:] - t[n_settle]
+    f[n_settle:] = f0 + (f1 - f0) * ts / c["sweep_duration"]
+    phase = 2 * np.pi * np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * dt)])
+    amp = np.full(t.size, c["plate_amplitude"])
+    ramp = max(n_settle // 2, 1)
+    amp[:ramp] *= 0.5 * (1 - np.cos(np.pi * np.arange(ramp) / ramp))
+    return PlateMotion(t, amp * np.sin(phase), f, phase, n_settle)
+
+
+@dataclass
+class PlateResult:
+    """One wheel on the plate: EUSAMA %, minimum phase angle [deg], resonance [Hz] and per-cycle curves
+    (cycle frequency [Hz], dynamic contact-force amplitude [N], phase angle [deg])."""
+
+    eusama_percent: float
+    phase_min_deg: float
+    resonance_hz: float
+    static_load_N: float
+    freq_hz: np.ndarray
+    force_amp_N: np.ndarray
+    phase_deg: np.ndarray
+
+
+def _per_cycle(pm: PlateMotion, fdyn: np.ndarray):
+    """Amplitude [N] and phase angle [deg] of the dynamic contact force against the plate motion, one
+    value per whole plate cycle of the sweep (``fdyn ~ a sin(phase) + b cos(phase)`` by projection)."""
+    k = np.floor(pm.phase / (2 * np.pi)).astype(np.int64)
+    sel = np.arange(pm.t.size) >= pm.sweep_start
+    k, ph, f, fd = k[sel], pm.phase[sel], pm.frequency_hz[sel], fdyn[sel]
+    k = k - k[0]
+    n = np.bincount(k).astype(float)
+    a = 2 * np.bincount(k, fd * np.sin(ph)) / n
+    b = 2 * np.bincount(k, fd * np.cos(ph)) / n
+    freq = np.bincount(k, f) / n
+    whole = slice(1, len(n) - 1)  # whole cycles only
+    a, b, freq = a[whole], b[whole], freq[whole]
+    # force leads the plate displacement by atan2(b, a); the phase-shift method's angle is 180 deg minus
+    # that lead (180 deg when the plate drives the tyre above resonance, falling to its minimum just below
+    # the wheel resonance, lower the weaker the damping); unsigned: the angle between the two phasors (a
+    # wheel that lifts off can push it past 180 deg)
+    lead = np.degrees(np.arctan2(b, a))
+    return freq, np.hypot(a, b), np.abs((180.0 - lead + 180.0) % 360.0 - 180.0)
+
+
+def eusama_bench(model: Model, oil=(1.0, 1.0, 1.0, 1.0), wheels=WHEELS,
+                 plate: PlateMotion | None = None, P: np.ndarray | None = None) -> dict[str, PlateResult]:
+    """The EUSAMA and phase-shift tests on the full five-mass model standing still on four plates
+    (per-wheel road heights, the four-poster input): each wheel's plate in turn moves by ``plate``
+    (default :func:`eusama_plate_motion`), the others stay still, as on a real tester (one axle at a
+    time, one wheel after the other). EUSAMA % = minimum total contact force over the sweep / static
+    wheel load x 100; phase angle as in :func:`_per_cycle`; resonance = the cycle of largest dynamic
+    contact-force amplitude. ``P``: a parameter vector to use instead of ``model.params(oil)``."""
+    from .vehicle import simulate_batch
+    from .layout import N_U, U_INDEX
+    oil = check_oil(oil, "--oil")
+    pm = eusama_plate_motion() if plate is None else plate
+    dt = float(pm.t[1] - pm.t[0])
+    U = np.zeros((len(wheels), pm.t.size, N_U))
+    for r, w in enumerate(wheels):
+        U[r, :, U_INDEX["ZR_IN"] + WHEELS.index(w)] = pm.z
+    P = np.repeat((model.params(oil) if P is None else P)[None], len(wheels), axis=0)
+    labels = [f"F_Z_{w}" for w in wheels]
+    _, Y, done = simulate_batch(model, P, U, dt=dt, roads=(None,), u_row=np.arange(len(wheels)),
+                                outputs=labels)
+    if np.any(done < pm.t.size):
+        raise RuntimeError("EUSAMA bench: the simulation diverged")
+    fz0 = model.vehicle.static_wheel_loads()
+    out = {}
+    for r, w in enumerate(wheels):
+        i = WHEELS.index(w)
+        fz = Y[r, :, r]
+        # outputs are recorded after each step: sample k belongs to the plate height of input row k
+        sweep = fz[pm.sweep_start:]
+        f, amp, ph = _per_cycle(pm, fz - fz0[i])
+        out[w] = PlateResult(float(100.0 * sweep.min() / fz0[i]), float(ph.min()), float(f[np.argmax(amp)]),
+                             float(fz0[i]), f, amp, ph)
+    return out
+
+
+def plot_eusama(results: dict[str, PlateResult], path, title: str) -> None:
+    """Dynamic contact-force amplitude and phase angle over the plate frequency per wheel (PNG)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 6.0), sharex=True)
+    for w, r in results.items():
+        a1.plot(r.freq_hz, 100 * r.force_amp_N / r.static_load_N,
+                label=f"{w}: EUSAMA {r.eusama_percent:.0f} %, res. {r.resonance_hz:.1f} Hz")
+        a2.plot(r.freq_hz, r.phase_deg, label=f"{w}: min {r.phase_min_deg:.0f} deg")
+    a1.set_ylabel("dyn. contact force amplitude [% static]")
+    a2.set_ylabel("phase angle [deg]")
+    a2.set_xlabel("plate frequency [Hz]")
+    for a in (a1, a2):
+        a.grid(True, alpha=0.3)
+        a.legend(fontsize=8)
+    a1.set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -162,6 +162,10 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     elif spec.kind == "ride":
         tasks = [((c.id,), (spec.data, c.id, spec.runs[c.id])) for c in todo]
         fn = _ride_task
+    elif spec.kind == "roc":  # damper-inspection detection study (issue 14): one task per chunk of cars
+        from ..inspection.roc import roc_task
+        tasks = [((c.id,), (spec.data, list(c.runs))) for c in todo]
+        fn = roc_task
     else:
         tasks = [((c.id,), (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
                  for c in todo]
@@ -171,7 +175,7 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     store.begin_session()
     from ...progress import progress as make_progress
     done_runs = sum(len(spec.chunks[c].runs) for c in resumed)
-    unit = "drive" if spec.kind == "drives" else "run"
+    unit = {"drives": "drive", "roc": "car"}.get(spec.kind, "run")
     bar = make_progress(total=spec.n_runs, initial=done_runs, desc=spec.name, unit=unit, enabled=progress,
                         smoothing=0.1)
     computed: list[int] = []
@@ -202,6 +206,9 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     elif spec.kind == "ride":
         from .ride import finish_ride
         result.update(finish_ride(spec, store, plot))
+    elif spec.kind == "roc":
+        from ..inspection.roc import finish_roc
+        result.update(finish_roc(spec, store, plot))
     else:
         result.update(_finish_drives(spec, store, plot))
     result["elapsed_s"] = time.perf_counter() - t_start
@@ -310,17 +317,21 @@ def _diagnosis_summary(rows) -> dict:
 
 
 def summary_text(r: dict) -> str:
-    lines = [f"study {r['study']} ({r['kind']}): {r['n_runs']} {'drives' if r['kind'] == 'drives' else 'runs'} "
+    units = {"drives": "drives", "roc": "cars"}.get(r["kind"], "runs")
+    lines = [f"study {r['study']} ({r['kind']}): {r['n_runs']} {units} "
              f"in {r['n_chunks']} chunks on {r['scheduler']} ({r['workers']} worker(s)); "
              f"{r['chunks_computed']} chunks computed, {r['chunks_resumed']} resumed"]
     if r["runs_computed"]:
-        unit = "drives" if r["kind"] == "drives" else "runs"
-        lines.append(f"  {r['runs_per_s']:.3g} {unit}/s over {r['compute_s']:.1f} s")
+        lines.append(f"  {r['runs_per_s']:.3g} {units}/s over {r['compute_s']:.1f} s")
     for c, (lo, hi) in r.get("metric_ranges", {}).items():
         lines.append(f"  {c}: {lo:.4g} .. {hi:.4g}")
     if r["kind"] == "ride":
         from .ride import ride_summary
         lines += ride_summary(r)
+    for sev, by_m in r.get("roc_by_severity", {}).items():
+        lines.append(f"  ROC {sev} vs intact: " + ", ".join(
+            f"{m} AUC {x['auc']:.3f} [{x['auc_ci95'][0]:.3f}, {x['auc_ci95'][1]:.3f}] sens@95%spec "
+            f"{x['sensitivity_at_95_specificity']:.2f}" for m, x in by_m.items()))
     if r["kind"] == "drives":
         for m, by_s in r["tables"].items():
             for s, row in by_s.items():

@@ -50,7 +50,7 @@ GENERIC_METRICS = ("peak", "rms")      # {peak: OUTPUT_LABEL}: max |x|, {rms: OU
 RESULT_FORMATS = ("csv", "parquet")
 TOP_KEYS = {"name", "description", "kind", "maneuver", "step_s", "output_rate_hz", "chunk_size",
             "parameters", "vehicle_classes", "outputs", "reference", "after_window_s",
-            "ring_out_threshold_deg_s", "results", "plot", "folder", "variants", "diagnose"}
+            "ring_out_threshold_deg_s", "results", "plot", "folder", "variants", "diagnose", "roc"}
 
 
 @dataclass(frozen=True)
@@ -144,8 +144,11 @@ def study_from_dict(data: Any, source: str = "<study>") -> StudySpec:
     if kind == "ride":
         from .ride import ride_study
         return ride_study(data, source, name)
+    if kind == "roc":  # damper-inspection detection study (issue 14)
+        from ..inspection.roc import roc_spec
+        return roc_spec(data, source, name)
     if kind != "sweep":
-        raise ConfigError(f"{source}: kind: expected 'sweep', 'drives' or 'ride', got {kind!r}")
+        raise ConfigError(f"{source}: kind: expected 'sweep', 'drives', 'ride' or 'roc', got {kind!r}")
     return _sweep(data, source, name)
 
 

@@ -1,0 +1,403 @@
+"""Damper oil level per wheel (or axle) from recorded drives: the model fitted with the oil levels free.
+
+The vehicle at an inspection lane is never known exactly, so the oil levels are fitted together with
+the nuisance parameters that vary between cars of a class (``config/inspection.yaml`` ``nuisance``:
+masses and load, inertias, spring and tyre rates, friction levels, the damper curve's production spread),
+each with the vehicle file's plausible ``range`` as a normal prior (+-2 sd), exactly as the discrepancy
+finder's calibration does (:mod:`..discrepancy.calibration`; same :class:`~..discrepancy.engine.Evaluator`,
+batch simulation and :func:`~..discrepancy.fit.fit_structure`: maximum a posteriori by scipy
+``least_squares`` over whitened residuals, each drive counted at its effective sample size). The oil
+levels are bounded to [0, 1] with a weak prior that only keeps the information matrix invertible.
+
+What the drives can tell, per axle (:func:`identifiability`): from the posterior covariance of a
+per-wheel fit's linearisation at half oil. Left and right are told apart when their *difference* is
+pinned to ``per_wheel_max_sd``; a bump across the full width excites both alike (the roll rate stays
+flat), so only their mean is, and the axle is fitted as one value. An axle whose mean is not pinned to
+``identifiable_max_sd`` is ``unknown``: the drive does not excite it.
+
+States (``config/inspection.yaml`` ``states``): ``ok`` from ``ok_from``, ``empty`` below
+``empty_below``, ``degraded`` between; a 95 % interval that reaches into two of them is ``unknown``.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+import yaml
+
+from ...errors import ConfigError, SuspInputError
+from ...model import Model
+from ...model.layout import P_INDEX
+from ...model.params import CORNER_NAMES, config_dir, load_vehicle
+from ..discrepancy.calibration import calibration_candidate, calibration_params
+from ..discrepancy.candidates import CALIBRATION, CandParam, Candidate
+from ..discrepancy.data import SIGNALS, DriveCase, load_cases, mark_quiet, select_signals
+from ..discrepancy.engine import Evaluator, Structure
+from ..discrepancy.fit import FitResult, fd_jacobian, fit_structure, n_effective
+from ..discrepancy.locate import noise_sigma
+
+AXLE_WHEELS = {"front": (0, 1), "rear": (2, 3)}
+STATES = ("ok", "degraded", "empty")
+
+
+def load_config(path: str | Path | None = None) -> dict:
+    """``config/inspection.yaml`` as {section: {key: value}}."""
+    p = Path(path) if path else config_dir() / "inspection.yaml"
+    try:
+        data = yaml.safe_load(p.read_text())
+        return {sec: {k: v["value"] for k, v in entries.items()} for sec, entries in data.items()}
+    except (OSError, KeyError, TypeError, AttributeError, yaml.YAMLError) as exc:
+        raise ConfigError(f"{p}: cannot read the inspection settings: {exc}") from None
+
+
+def state_of(lo: float, hi: float, states_cfg: dict) -> str:
+    """``ok``/``degraded``/``empty`` when the interval [lo, hi] lies in one band, else ``unknown``."""
+    def band(x):
+        return "ok" if x >= states_cfg["ok_from"] else ("empty" if x < states_cfg["empty_below"] else "degraded")
+    return band(lo) if band(lo) == band(hi) else "unknown"
+
+
+def nuisance_params(model: Model, names: Sequence[str], range_scale: dict | None = None):
+    """Calibration parameters (:class:`~..discrepancy.calibration.CalParam`) for the vehicle fields
+    ``names`` that have a plausible range in the vehicle file, whether or not the file marks them for the
+    discrepancy finder's calibration; ``range_scale`` {field: factor} narrows a range about its centre
+    (the car-to-car spread where the file's range also holds our own uncertainty of the value)."""
+    vp = model.vehicle
+    missing = [n for n in names if n not in vp.priors]
+    if missing:
+        raise ConfigError(f"inspection nuisance parameters without a range in {vp.source_file}: {missing}")
+    marked = {k: dataclasses.replace(p, calibrate=k in names) for k, p in vp.priors.items()}
+    out = calibration_params(dataclasses.replace(vp, priors=marked), model.variant)
+    scale = range_scale or {}
+    return [dataclasses.replace(p, lo=p.prior - scale[p.field] * (p.prior - p.lo),
+                                hi=p.prior + scale[p.field] * (p.hi - p.prior)) if p.field in scale else p
+            for p in out]
+
+
+def oil_candidate(groups: Sequence[tuple[str, tuple[int, ...]]], prior_sd: float) -> Candidate:
+    """The oil levels as one candidate of the fitting machinery: one parameter per group of wheels
+    (``("front", (0, 1))`` for an axle, ``("FL", (0,))`` for a wheel), written into the kernel's ``OIL``
+    entries (which blend the hydraulic curves and scale the damper friction, model-spec 1)."""
+    k = P_INDEX["OIL"]
+
+    def apply(P, _P0, x, _model):
+        for (_, wheels), v in zip(groups, x):
+            for w in wheels:
+                P[:, k + w] = v
+
+    params = tuple(CandParam(f"oil_{name}", "1", 0.5, 0.0, 1.0, 0.05, f"oil level {name} (1 intact, 0 empty)",
+                             prior_sd=prior_sd) for name, _ in groups)
+    return Candidate("oil_level", CALIBRATION, "damper oil levels", params, apply,
+                     tuple(None for _ in groups), "a bump crossing", "bump")
+
+
+@dataclass
+class Inspection:
+    """Result of :func:`inspect_drives` (fitted attributes end in ``_``)."""
+
+    wheels_: dict
+    axles_: dict
+    nuisance_: list
+    fit_: FitResult = field(repr=False)
+    evaluator_: Evaluator = field(repr=False)
+    identifiability_: dict = field(default_factory=dict)
+    elapsed_s_: float = 0.0
+    noise_: dict = field(default_factory=dict)
+    vehicle_: str = ""
+    notes_: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        """The interface object (interface.md, ``susp inspect``) plus details."""
+        return {"wheels": self.wheels_, "axles": self.axles_, "elapsed_s": self.elapsed_s_,
+                "vehicle": self.vehicle_, "nuisance": self.nuisance_,
+                "identifiability": self.identifiability_, "noise": self.noise_, "notes": self.notes_,
+                "fit": {"success": self.fit_.success, "message": self.fit_.message, "nfev": self.fit_.nfev,
+                        "rms_x_noise": math.sqrt(self.fit_.rss / max(self.fit_.n, 1))}}
+
+
+DEFAULT_VEHICLE = "passat_b8_like"
+
+
+def _vehicle_name(cases: Sequence[DriveCase], config: str | None, notes: list) -> str:
+    """``--config``, else the drives' ``vehicle`` metadata when it names a known parameter set, else the
+    reference car (said in ``notes``)."""
+    if config:
+        return config
+    names = {c.metadata.get("vehicle", "") for c in cases} - {""}
+    if len(names) == 1:
+        name = names.pop()
+        try:
+            load_vehicle(name)
+            return name
+        except ConfigError:
+            notes.append(f"the drives name vehicle {name!r}, not a known parameter set: fitted as "
+                         f"{DEFAULT_VEHICLE} with its class ranges (give --config to choose)")
+    elif len(names) > 1:
+        notes.append(f"the drives name several vehicles {sorted(names)}: fitted as {DEFAULT_VEHICLE}")
+    return DEFAULT_VEHICLE
+
+
+def prepare(paths: Sequence[str | Path], config: str | None = None, variant: str = "full",
+            cfg: dict | None = None, topic_map=None, notes: list | None = None) -> tuple[Model, Evaluator, dict]:
+    """Read the drives and set up the evaluator: signals narrowed to the configured ones, the recorded
+    oil levels withheld from the estimator (every drive starts intact), noise per drive and signal from
+    the measurement itself (robust std of its 3rd differences), quiet lead-ins for the sensor bias.
+
+    ``topic_map``: how recordings in another layout are read (``--topic-map``, interface.md "Topic
+    maps"; :mod:`susp_sim_ros.io.topic_map`), ``None`` for the interface's own topics.
+    """
+    cfg = load_config() if cfg is None else cfg
+    notes = [] if notes is None else notes
+    vp = load_vehicle(config or DEFAULT_VEHICLE)
+    cases = load_cases(paths, wheelbase=vp.wheelbase, topic_map=topic_map)
+    name = _vehicle_name(cases, config, notes)
+    model = Model(name, variant)
+    ev, noise = evaluator_for(model, cases, cfg)
+    return model, ev, noise
+
+
+def evaluator_for(model: Model, cases: Sequence[DriveCase], cfg: dict) -> tuple[Evaluator, dict]:
+    """The :class:`Evaluator` of prepared drives ``cases`` for ``model``: signals narrowed to the
+    configured ones, the recorded oil levels withheld (every drive starts intact), noise per drive and
+    signal from the measurement itself (robust std of its 3rd differences), quiet lead-ins marked for
+    the sensor bias."""
+    want = list(cfg["estimator"]["signals"])
+    noise = {}
+    for c in cases:
+        c.oil = np.ones(4)          # the estimator is not told the recorded state
+        select_signals(c, want)
+        if not c.signals:
+            raise SuspInputError(f"{c.path}: none of the signals {want} recorded on /imu/data")
+        noise[c.name] = {s: noise_sigma(c.y_raw[:, SIGNALS.index(s)]) for s in c.signals}
+        bad = [s for s, v in noise[c.name].items() if not (math.isfinite(v) and v > 0)]
+        if bad:
+            raise SuspInputError(f"{c.path}: /imu/data {bad}: no measurable noise (constant or too few samples)")
+    ev = Evaluator(model, cases)
+    base = ev.simulate(Structure([]), np.zeros((1, 0)))[0]
+    for r, c in enumerate(cases):
+        mark_quiet(c, base[r][:, :3])
+    ev.set_noise([np.array([noise[c.name][s] for s in c.signals]) for c in cases])
+    return ev, noise
+
+
+def _information(ev: Evaluator, st: Structure, x: np.ndarray) -> np.ndarray:
+    """Posterior covariance of ``st``'s parameters from the linearisation at ``x`` (data at their
+    effective sample size, as :meth:`FitResult.covariance`, plus the priors)."""
+    idx = tuple(range(len(ev.cases)))
+    from ..discrepancy.fit import debias
+    r, J = fd_jacobian(ev, st, x, idx)
+    if st.bias:
+        J = debias(ev, J, idx)
+    ratio = n_effective(ev, idx) / J.shape[0]
+    H = ratio * (J.T @ J)
+    pidx, _, psd = st.prior()
+    H[pidx, pidx] += 1.0 / psd ** 2
+    return np.linalg.pinv(H)
+
+
+def _tracks_differ(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
+    """Whether any drive's road differs between the left and right tracks by more than ``tol_m``."""
+    from ...model.layout import U_INDEX
+    for c in cases:
+        if c.road is not None and len(c.road) >= 2 and np.max(np.abs(np.asarray(c.road.zl) - np.asarray(c.road.zr))) > tol_m:
+            return True
+        zr = c.U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4]
+        if np.max(np.abs(zr[:, 0] - zr[:, 1])) > tol_m or np.max(np.abs(zr[:, 2] - zr[:, 3])) > tol_m:
+            return True
+    return False
+
+
+def _road_excites(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
+    """Whether any drive's road (profile or wheel heights) leaves the flat by more than ``tol_m``."""
+    from ...model.layout import U_INDEX
+    for c in cases:
+        if c.road is not None and len(c.road) >= 2 and np.max(np.abs(np.concatenate([c.road.zl, c.road.zr]))) > tol_m:
+            return True
+        if np.max(np.abs(c.U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4])) > tol_m:
+            return True
+    return False
+
+
+def identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
+    """Per axle: ``wheel`` (left and right told apart), ``axle`` (only their mean) or ``no``, with the
+    posterior sds it was decided on (linearised at half oil, nuisances at their prior centre)."""
+    est = cfg["estimator"]
+    groups = [(w, (i,)) for i, w in enumerate(CORNER_NAMES)]
+    st = Structure([calibration_candidate(ev.model, cal), oil_candidate(groups, est["oil_prior_sd"]), "sensor_bias"])
+    x = st.neutral()
+    cov = _information(ev, st, x)
+    o = st.offsets[1]
+    C = cov[o:o + 4, o:o + 4]
+    out = {}
+    for axle, (l, r) in AXLE_WHEELS.items():
+        d = np.zeros(4)
+        d[l], d[r] = 1.0, -1.0
+        m = np.zeros(4)
+        m[l] = m[r] = 0.5
+        sd_diff = float(math.sqrt(max(d @ C @ d, 0.0)))
+        sd_mean = float(math.sqrt(max(m @ C @ m, 0.0)))
+        if sd_mean > est["identifiable_max_sd"]:
+            kind = "no"
+            why = (f"the drives do not excite the {axle} dampers: their mean oil level is pinned only to a "
+                   f"posterior sd of {sd_mean:.2f} (needs <= {est['identifiable_max_sd']:g})")
+        elif sd_diff <= est["per_wheel_max_sd"]:
+            kind = "wheel"
+            if _tracks_differ(ev.cases):
+                how = "the left and right tracks were excited differently"
+            elif _road_excites(ev.cases):
+                how = ("both tracks were excited alike, but a left-right damping difference rolls the body "
+                       "and the roll rate shows it")
+            else:
+                how = ("the road is flat: the maneuver itself (steering, braking) moved the suspension and "
+                       "rolled the body")
+            why = (f"left and right {axle} dampers told apart: {how}; their oil difference is pinned to a "
+                   f"posterior sd of {sd_diff:.3f} (<= {est['per_wheel_max_sd']:g})")
+        else:
+            kind = "axle"
+            if not any("roll_rate" in c.signals for c in ev.cases):
+                cause = "no roll rate is compared, which would show a left-right damping difference"
+            elif _tracks_differ(ev.cases):
+                cause = "the roll the tracks' difference caused does not separate them"
+            else:
+                cause = "left and right were excited alike and the roll stayed too small to separate them"
+            why = (f"only the {axle} axle's mean oil level is identifiable (sd {sd_mean:.2f}): {cause}; the "
+                   f"left-right difference stays at sd {sd_diff:.2f} (> {est['per_wheel_max_sd']:g})")
+        out[axle] = {"identifiable": kind, "why": why, "sd_mean": sd_mean, "sd_difference": sd_diff}
+    return out
+
+
+def inspect_drives(paths: Sequence[str | Path], config: str | None = None, variant: str = "full",
+                   cfg: dict | None = None, topic_map=None) -> Inspection:
+    """Estimate each damper's oil level with a 95 % interval from the drives ``paths``."""
+    t_start = time.perf_counter()
+    cfg = load_config() if cfg is None else cfg
+    est = cfg["estimator"]
+    notes: list = []
+    model, ev, noise = prepare(paths, config, variant, cfg, topic_map, notes)
+    cal = nuisance_params(model, est["nuisance"], est.get("nuisance_range_scale"))
+    ident = identifiability(ev, cal, cfg)
+    groups: list = []
+    for axle, (l, r) in AXLE_WHEELS.items():
+        kind = ident[axle]["identifiable"]
+        if kind == "wheel":
+            groups += [(CORNER_NAMES[l], (l,)), (CORNER_NAMES[r], (r,))]
+        elif kind == "axle":
+            groups.append((axle, (l, r)))
+    if groups:
+        st = Structure([calibration_candidate(model, cal), oil_candidate(groups, est["oil_prior_sd"]), "sensor_bias"])
+        fit = fit_structure(ev, st, max_nfev=int(est["max_nfev"]))
+    else:
+        st = Structure([calibration_candidate(model, cal), "sensor_bias"])
+        fit = fit_structure(ev, st, max_nfev=1)
+    cov = fit.covariance()
+    if groups and est.get("consider"):
+        cov = cov + consider_covariance(ev, fit, cal, nuisance_params(model, est["consider"]))
+    se = np.sqrt(np.clip(np.diag(cov), 0, None))
+    sd_m = float(est["model_form_sd"])
+    x = fit.x
+    oil_off = st.offsets[1] if groups else None
+    by_group = {}
+    for g, (name, wheels) in enumerate(groups):
+        j = oil_off + g
+        s = math.hypot(se[j], sd_m)
+        by_group[name] = (float(x[j]), max(0.0, float(x[j] - 1.96 * s)), min(1.0, float(x[j] + 1.96 * s)), j)
+    wheels, axles = {}, {}
+    for axle, (l, r) in AXLE_WHEELS.items():
+        info = ident[axle]
+        kind = info["identifiable"]
+        if kind == "no":
+            entry = {"oil_level": None, "ci95": None, "state": "unknown"}
+            for w in (l, r):
+                wheels[CORNER_NAMES[w]] = dict(entry, identifiable="no", why=info["why"])
+            axles[axle] = dict(entry, identifiable="no", why=info["why"])
+            continue
+        if kind == "axle":
+            v, lo, hi, _ = by_group[axle]
+            for w in (l, r):
+                wheels[CORNER_NAMES[w]] = {"oil_level": v, "ci95": [lo, hi], "state": state_of(lo, hi, cfg["states"]),
+                                           "identifiable": "axle", "why": info["why"]}
+        else:
+            for w in (l, r):
+                v, lo, hi, _ = by_group[CORNER_NAMES[w]]
+                wheels[CORNER_NAMES[w]] = {"oil_level": v, "ci95": [lo, hi], "state": state_of(lo, hi, cfg["states"]),
+                                           "identifiable": "wheel", "why": info["why"]}
+            jl, jr = by_group[CORNER_NAMES[l]][3], by_group[CORNER_NAMES[r]][3]
+            v = 0.5 * (x[jl] + x[jr])
+            s = math.hypot(0.5 * math.sqrt(max(cov[jl, jl] + cov[jr, jr] + 2 * cov[jl, jr], 0.0)), sd_m)
+            lo, hi = max(0.0, v - 1.96 * s), min(1.0, v + 1.96 * s)
+        axles[axle] = {"oil_level": v, "ci95": [lo, hi], "state": state_of(lo, hi, cfg["states"]),
+                       "identifiable": kind, "why": info["why"]}
+    nuis = []
+    for k, p in enumerate(cal):
+        nuis.append({"param": p.name, "unit": p.unit, "prior": p.prior, "prior_range": [p.lo, p.hi],
+                     "value": float(x[k]), "ci95": [float(x[k] - 1.96 * se[k]), float(x[k] + 1.96 * se[k])]})
+    if not fit.success and fit.nfev < int(est["max_nfev"]):
+        notes.append(f"fit did not converge: {fit.message}")
+    res = Inspection(wheels, axles, nuis, fit, ev, ident, 0.0, noise, model.vehicle.name, notes)
+    res.elapsed_s_ = time.perf_counter() - t_start
+    return res
+
+
+def consider_covariance(ev: Evaluator, fit: FitResult, cal, consider) -> np.ndarray:
+    """Covariance added to the fitted parameters by the uncertainty of the ``consider`` parameters
+    (held at their prior centre, prior sd as in the vehicle file): ``S Sigma_c S^T`` with the
+    sensitivity ``S = -H^-1 (w J_a^T J_c)`` of the weighted least-squares estimate to them (Schmidt's
+    consider covariance), from one forward-difference Jacobian at the fitted values. ``fit``'s structure
+    is [calibration of ``cal``, oil levels, sensor bias]."""
+    from ..discrepancy.fit import debias
+    k_cal, n_c = len(cal), len(consider)
+    ext = Structure([calibration_candidate(ev.model, list(cal) + list(consider))] + list(fit.structure.cands[1:]))
+    x = np.concatenate([fit.x[:k_cal], [p.prior for p in consider], fit.x[k_cal:]])
+    idx = tuple(range(len(ev.cases)))
+    _, J = fd_jacobian(ev, ext, x, idx)
+    if ext.bias:
+        J = debias(ev, J, idx)
+    cols_c = np.arange(k_cal, k_cal + n_c)
+    cols_a = np.setdiff1d(np.arange(J.shape[1]), cols_c)
+    Ja, Jc = J[:, cols_a], J[:, cols_c]
+    w = n_effective(ev, idx) / J.shape[0]
+    H = w * (Ja.T @ Ja)
+    pidx, _, psd = fit.structure.prior()
+    H[pidx, pidx] += 1.0 / psd ** 2
+    S = -np.linalg.pinv(H) @ (w * (Ja.T @ Jc))
+    sd_c = np.array([p.sd for p in consider])
+    return S @ np.diag(sd_c ** 2) @ S.T
+
+
+def one_step_estimate(ev: Evaluator, cal, cfg: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The cheap model-based statistic of the ROC study: ONE Gauss-Newton step of exactly the objective
+    :func:`inspect_drives` minimises (the same whitened residuals of the same signals, the same
+    effective-sample weighting and priors), per wheel, taken from the intact car at the prior centre
+    (oil 1 on every wheel, every nuisance at its vehicle-file value) and clipped to the bounds.
+
+    It costs one batch of 1 + n_params simulations (the Jacobian), where the full fit takes several
+    and an identifiability pass. Returns the four oil levels FL, FR, RL, RR and their linearised sds
+    (noise-only, without the model-form term). Near intact it is the full fit's first iterate; far from
+    it (an empty damper) the step overshoots or stops short, but in the same direction, so it ranks cars
+    as the full estimate does (test_inspection_roc checks both)."""
+    from ..discrepancy.fit import debias
+    est = cfg["estimator"]
+    groups = [(w, (i,)) for i, w in enumerate(CORNER_NAMES)]
+    st = Structure([calibration_candidate(ev.model, cal), oil_candidate(groups, est["oil_prior_sd"]), "sensor_bias"])
+    o = st.offsets[1]
+    x0 = st.neutral()
+    x0[o:o + 4] = 1.0
+    idx = tuple(range(len(ev.cases)))
+    r, J = fd_jacobian(ev, st, x0, idx)
+    if st.bias:
+        r, J = debias(ev, r, idx), debias(ev, J, idx)
+    ratio = n_effective(ev, idx) / J.shape[0]
+    pidx, pmu, psd = st.prior()
+    H = ratio * (J.T @ J)
+    g = ratio * (J.T @ r)
+    H[pidx, pidx] += 1.0 / psd ** 2
+    g[pidx] += (x0[pidx] - pmu) / psd ** 2
+    cov = np.linalg.pinv(H)
+    lo, hi = st.bounds()
+    x1 = np.clip(x0 - cov @ g, lo, hi)
+    return x1[o:o + 4], np.sqrt(np.clip(np.diag(cov)[o:o + 4], 0, None))

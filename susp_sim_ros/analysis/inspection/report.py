@@ -1,0 +1,121 @@
+"""Markdown + PNG report of a damper inspection (:func:`.estimate.inspect_drives`)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ...model.params import CORNER_NAMES
+from ..discrepancy.data import SIGNAL_UNIT, SIGNALS
+
+
+def plot_fit(res, path: Path) -> list[str]:
+    """Measured against fitted signals, one PNG per drive; returns the file names."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    ev, fit = res.evaluator_, res.fit_
+    rates = ev.simulate(fit.structure, fit.x[None])[0]
+    names = []
+    for r, c in enumerate(ev.cases):
+        e = ev.case_residual(r, rates[r], 0.0, fit.structure.bias)
+        fig, axes = plt.subplots(len(c.signals), 1, figsize=(7.0, 2.2 * len(c.signals)), sharex=True, squeeze=False)
+        for j, s in enumerate(c.signals):
+            ax = axes[j, 0]
+            ax.plot(c.t_grid_s, c.y_meas[:, j], ".", ms=2, color="0.4", label="measured")
+            ax.plot(c.t_grid_s, c.y_meas[:, j] + e[:, j], "-", lw=1.2, color="C0", label="fitted model")
+            ax.set_ylabel(f"{s} [{SIGNAL_UNIT[SIGNALS.index(s)]}]")
+            ax.grid(True, alpha=0.3)
+        axes[0, 0].legend(fontsize=8)
+        axes[0, 0].set_title(f"{c.name}: measured vs fitted", fontsize=10)
+        axes[-1, 0].set_xlabel("time [s]")
+        fig.tight_layout()
+        name = f"fit_{c.name}.png"
+        fig.savefig(path / name, dpi=100)
+        plt.close(fig)
+        names.append(name)
+    return names
+
+
+def plot_intervals(res, path: Path, states_cfg: dict) -> str:
+    """Oil level and 95 % interval per wheel over the state bands (PNG)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.0, 3.2))
+    ax.axvspan(0, states_cfg["empty_below"], color="C3", alpha=0.12, label="empty")
+    ax.axvspan(states_cfg["empty_below"], states_cfg["ok_from"], color="C1", alpha=0.12, label="degraded")
+    ax.axvspan(states_cfg["ok_from"], 1.0, color="C2", alpha=0.12, label="ok")
+    for k, w in enumerate(CORNER_NAMES):
+        e = res.wheels_[w]
+        if e["oil_level"] is None:
+            ax.text(0.5, k, "unknown (not excited)", ha="center", va="center", fontsize=8)
+            continue
+        lo, hi = e["ci95"]
+        ax.errorbar(e["oil_level"], k, xerr=[[e["oil_level"] - lo], [hi - e["oil_level"]]], fmt="o", color="k",
+                    capsize=4)
+        ax.text(1.02, k, f"{e['state']} ({e['identifiable']})", va="center", fontsize=8)
+    ax.set_yticks(range(4), CORNER_NAMES)
+    ax.set_xlim(0, 1.25)
+    ax.invert_yaxis()
+    ax.set_xlabel("oil level (1 intact, 0 empty), 95 % interval")
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    name = "oil_levels.png"
+    fig.savefig(path / name, dpi=110)
+    plt.close(fig)
+    return name
+
+
+def write_report(res, out: str | Path, cfg: dict, drives) -> dict:
+    """``inspection.md``, ``inspection.json`` and the PNGs into ``out``; returns the paths written."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    d = res.to_json()
+    (out / "inspection.json").write_text(json.dumps(d, indent=1, default=_jsonable))
+    pngs = plot_fit(res, out)
+    iv = plot_intervals(res, out, cfg["states"])
+    st = cfg["states"]
+    lines = ["# Damper inspection", "",
+             f"Drives: {', '.join(str(p) for p in drives)}. Vehicle class: `{res.vehicle_}`. "
+             f"Run time {res.elapsed_s_:.1f} s.", "",
+             "Oil level per damper (1 intact, 0 empty) with its 95 % interval, fitted together with the "
+             "vehicle parameters that vary within the class (masses, inertias, spring and tyre rates, friction "
+             f"levels). States: `ok` from {st['ok_from']:g}, `empty` below {st['empty_below']:g}, `degraded` "
+             "between, `unknown` when the interval reaches into two.", "",
+             "| damper | oil level | 95 % interval | state | identifiable |", "|---|---|---|---|---|"]
+    for w in CORNER_NAMES:
+        e = d["wheels"][w]
+        v = "-" if e["oil_level"] is None else f"{e['oil_level']:.2f}"
+        ci = "-" if e["ci95"] is None else f"{e['ci95'][0]:.2f} - {e['ci95'][1]:.2f}"
+        lines.append(f"| {w} | {v} | {ci} | {e['state']} | {e['identifiable']} |")
+    lines += ["", "| axle | oil level | 95 % interval | state |", "|---|---|---|---|"]
+    for a, e in d["axles"].items():
+        v = "-" if e["oil_level"] is None else f"{e['oil_level']:.2f}"
+        ci = "-" if e["ci95"] is None else f"{e['ci95'][0]:.2f} - {e['ci95'][1]:.2f}"
+        lines.append(f"| {a} | {v} | {ci} | {e['state']} |")
+    lines += ["", "What the drives can tell:", ""]
+    for a, e in d["identifiability"].items():
+        lines.append(f"- {a}: **{e['identifiable']}**: {e['why']}")
+    lines += ["", f"![oil levels]({iv})", "", "## Vehicle parameters fitted alongside (nuisances)", "",
+              "| parameter | unit | prior | range | fitted | 95 % |", "|---|---|---|---|---|---|"]
+    for n in d["nuisance"]:
+        lines.append(f"| {n['param']} | {n['unit']} | {n['prior']:.4g} | {n['prior_range'][0]:.4g} - "
+                     f"{n['prior_range'][1]:.4g} | {n['value']:.4g} | {n['ci95'][0]:.4g} - {n['ci95'][1]:.4g} |")
+    lines += ["", f"Fit: {d['fit']['message']} ({d['fit']['nfev']} evaluations), residual RMS "
+              f"{d['fit']['rms_x_noise']:.2f} x the sensor noise.", ""]
+    for n in d["notes"]:
+        lines.append(f"- note: {n}")
+    lines += ["", "## Measured vs fitted", ""] + [f"![{p}]({p})" for p in pngs]
+    (out / "inspection.md").write_text("\n".join(lines) + "\n")
+    return {"report": str(out / "inspection.md"), "json": str(out / "inspection.json"),
+            "plots": [str(out / p) for p in pngs + [iv]]}
+
+
+def _jsonable(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    return str(x)

@@ -1,0 +1,372 @@
+"""Detection study of damper oil loss (issue 14): every inspection method on the same virtual cars.
+
+A study of ``kind: roc`` (``config/studies/inspection_roc.yaml``, run by ``susp study``) draws ``cars``
+cars, car ``i`` from a random stream seeded by ``(seed, i)`` alone (so chunks are reproducible wherever
+they run and a resumed study gets the same cars):
+
+- an oil state (``states``: shares of intact cars, one damper oil-empty, one damper at half oil, several
+  dampers losing oil), the wheel(s) at random;
+- the vehicle, varied uniformly within the vehicle file's documented ranges (``variation``: sprung mass
+  and load, tyre stiffness (pressure), unsprung masses, friction levels, ...), the speed at the bump,
+  the bump height and the gyro noise within the study's ranges.
+
+Each car is the reference model (``truth_variant``) with its parameters; it crosses the bump and is
+measured by a 200 Hz IMU with white noise, and it stands on the virtual EUSAMA bench
+(:func:`~susp_sim_ros.model.rigs.eusama_bench`). The statistics, larger = more suspicious:
+
+- ``eusama``: 100 - the lowest EUSAMA % of the four wheels;
+- ``phase_shift``: minus the lowest minimum phase angle of the four wheels [deg];
+- ``decay_ratio``: pitch-rate decay ratio after the rear axle has left the bump
+  (:func:`~susp_sim_ros.analysis.sweep.engine.decay_ratio`, on the measured, noisy rate);
+- ``model_based``: 1 - the lowest oil level of :func:`~.estimate.one_step_estimate` on the bump
+  crossing (the estimator is told nothing of the car but its class); ``model_based_<variant>`` for the
+  other ``estimator_variants`` (``dahl_only``: the estimator built on the Dahl-only friction model,
+  issue 14 item 4).
+
+Output (:func:`finish_roc`): ROC curves (PNG), AUC with a stratified bootstrap 95 % interval and the
+sensitivity at 95 % specificity per method, for one damper oil-empty (the ``roc`` key of
+``summary.json``, interface.md), one damper at half oil, and any oil loss; ``cars.csv`` with every car.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ...errors import ConfigError
+
+STATES = ("intact", "one_empty", "one_half", "several")
+METHODS = ("eusama", "phase_shift", "decay_ratio", "model_based")
+SEVERITIES = {"one_empty": "one damper oil-empty", "one_half": "one damper at half oil",
+              "any": "any oil loss (one or more dampers)"}
+ROC_KEYS = {"seed", "cars", "states", "variation", "speed_kmh", "bump_height", "gyro_noise_deg_s",
+            "accel_noise_m_s2", "imu_rate_hz", "truth_variant", "estimator_variants", "bootstrap",
+            "specificity", "several_oil", "local_workers", "vehicle", "truth_generator"}
+
+
+# ---- the study description ------------------------------------------------------------------------------
+def roc_spec(data: dict, source: str, name: str):
+    """A validated ``kind: roc`` study (:class:`~susp_sim_ros.analysis.sweep.spec.StudySpec`)."""
+    from ...model.params import load_variant, load_vehicle
+    from ..sweep.spec import Chunk, StudySpec, _load
+    roc = data.get("roc")
+    if not isinstance(roc, dict):
+        raise ConfigError(f"{source}: roc: a roc study needs a 'roc:' mapping (see config/studies/inspection_roc.yaml)")
+    unknown = set(roc) - ROC_KEYS
+    if unknown:
+        raise ConfigError(f"{source}: roc: unknown key(s) {', '.join(sorted(unknown))}; known: {', '.join(sorted(ROC_KEYS))}")
+
+    def num(key, positive=True):
+        v = roc.get(key)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or (positive and v <= 0):
+            raise ConfigError(f"{source}: roc.{key}: expected a positive number, got {v!r}")
+        return v
+
+    def rng_pair(key):
+        v = roc.get(key)
+        if (not isinstance(v, list) or len(v) != 2 or not all(isinstance(x, (int, float)) for x in v)
+                or not 0 < v[0] <= v[1]):
+            raise ConfigError(f"{source}: roc.{key}: expected [lo, hi] with 0 < lo <= hi, got {v!r}")
+        return [float(v[0]), float(v[1])]
+
+    cars = int(num("cars"))
+    states = roc.get("states")
+    if not isinstance(states, dict) or set(states) - set(STATES) or "intact" not in states or "one_empty" not in states:
+        raise ConfigError(f"{source}: roc.states: expected shares of {', '.join(STATES)} (intact and one_empty "
+                          f"required), got {states!r}")
+    shares = {k: float(v) for k, v in states.items()}
+    if any(v < 0 for v in shares.values()) or not math.isclose(sum(shares.values()), 1.0, abs_tol=1e-6):
+        raise ConfigError(f"{source}: roc.states: shares must be >= 0 and add up to 1, got {shares}")
+    vehicle = roc.get("vehicle", "passat_b8_like")
+    vp = _load(source, "roc.vehicle", load_vehicle, vehicle)
+    variation = roc.get("variation") or []
+    if not isinstance(variation, list) or any(v not in vp.priors for v in variation):
+        raise ConfigError(f"{source}: roc.variation: expected vehicle parameters with a documented range in "
+                          f"{vp.source_file}, got {variation!r}")
+    truth = roc.get("truth_variant", "full")
+    ests = roc.get("estimator_variants", ["full"])
+    if not isinstance(ests, list) or not ests:
+        raise ConfigError(f"{source}: roc.estimator_variants: expected a non-empty list of variants")
+    for i, v in enumerate([truth, *ests]):
+        _load(source, f"roc.variants[{i}]", load_variant, v)
+    chunk = data.get("chunk_size", 20)
+    if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
+        raise ConfigError(f"{source}: chunk_size: expected a positive integer, got {chunk!r}")
+    several = roc.get("several_oil", [0.0, 0.5])
+    generator = roc.get("truth_generator", "model")
+    if generator not in ("model", "independent"):
+        raise ConfigError(f"{source}: roc.truth_generator: expected 'model' or 'independent', got {generator!r}")
+    norm = {"name": name, "kind": "roc", "description": str(data.get("description", "")), "vehicle": vehicle,
+            "chunk_size": chunk, "results": "csv",
+            "roc": {"seed": int(num("seed")), "cars": cars, "states": shares, "variation": list(variation),
+                    "speed_kmh": rng_pair("speed_kmh"), "bump_height": rng_pair("bump_height"),
+                    "gyro_noise_deg_s": rng_pair("gyro_noise_deg_s"),
+                    "accel_noise_m_s2": float(roc.get("accel_noise_m_s2", 0.02)),
+                    "imu_rate_hz": float(roc.get("imu_rate_hz", 200.0)), "truth_variant": truth,
+                    "estimator_variants": list(ests), "bootstrap": int(roc.get("bootstrap", 1000)),
+                    "specificity": float(roc.get("specificity", 0.95)), "several_oil": [float(x) for x in several],
+                    "local_workers": int(roc.get("local_workers", 2)), "truth_generator": generator}}
+    spec = StudySpec(source, norm)
+    spec.runs = [{"car": i} for i in range(cars)]
+    spec.chunks = [Chunk(k, tuple(range(j, min(j + chunk, cars)))) for k, j in enumerate(range(0, cars, chunk))]
+    return spec
+
+
+# ---- one car ---------------------------------------------------------------------------------------------
+def car_draw(roc: Mapping, vp, i: int) -> dict:
+    """Car ``i``: its oil state, oil levels, vehicle parameter values and maneuver (pure function of
+    ``(seed, i)``)."""
+    rng = np.random.default_rng([int(roc["seed"]), int(i)])
+    names = list(roc["states"])
+    state = names[int(rng.choice(len(names), p=[roc["states"][n] for n in names]))]
+    oil = [1.0] * 4
+    if state == "one_empty":
+        oil[int(rng.integers(4))] = 0.0
+    elif state == "one_half":
+        oil[int(rng.integers(4))] = 0.5
+    elif state == "several":
+        lo, hi = roc["several_oil"]
+        for w in rng.choice(4, size=int(rng.integers(2, 5)), replace=False):
+            oil[int(w)] = float(rng.uniform(lo, hi))
+    values = {}
+    for f in roc["variation"]:
+        pr = vp.priors[f]
+        if pr.shape == "axle":
+            values[f] = tuple(float(rng.uniform(pr.lo[a], pr.hi[a])) for a in range(2))
+        elif pr.shape == "table":
+            values[f] = float(rng.uniform(pr.lo[0], pr.hi[0]))
+        else:
+            values[f] = float(rng.uniform(pr.lo[0], pr.hi[0]))
+    return {"car": int(i), "state": state, "oil": oil, "values": values,
+            "speed_kmh": float(rng.uniform(*roc["speed_kmh"])), "bump_height": float(rng.uniform(*roc["bump_height"])),
+            "gyro_noise_deg_s": float(rng.uniform(*roc["gyro_noise_deg_s"])), "noise_seed": int(rng.integers(2**31))}
+
+
+def car_vehicle(vp, values: Mapping):
+    """The nominal vehicle with the car's values (damper tables: a factor on the whole curve)."""
+    changes = {}
+    for f, v in values.items():
+        if vp.priors[f].shape == "table":
+            changes[f] = tuple(tuple(float(x) * v for x in row) for row in getattr(vp, f))
+        else:
+            changes[f] = v
+    return vp.replace(**changes)
+
+
+def bump_drive(model, draw: Mapping, roc: Mapping, dt: float = 0.001):
+    """The car's bump crossing as a recorded drive (in memory): inputs at 100 Hz, road profile, and a
+    ``imu_rate_hz`` IMU with white gyro and accelerometer noise; plus the index of the first IMU sample
+    after the rear axle has left the bump."""
+    from ...io.drive import ImuSeries, Series, TestDrive
+    from ...model import simulate
+    from ...model.maneuvers import bump_crossing
+    vp = model.vehicle
+    man = bump_crossing(speed=draw["speed_kmh"] / 3.6, height=draw["bump_height"], wheelbase=vp.wheelbase)
+    res = simulate(model, man.to_inputs(dt), dt=dt, road=man.road, oil=draw["oil"],
+                   outputs=["ROLL_RATE", "PITCH_RATE", "YAW_RATE", "AX_SF", "AY_SF", "AZ_SF"])
+    if not res.ok:
+        raise RuntimeError(f"car {draw['car']}: the truth simulation diverged")
+    rng = np.random.default_rng(draw["noise_seed"])
+    step = max(1, int(round(1.0 / (roc["imu_rate_hz"] * dt))))
+    y = res.y[step - 1::step]
+    t = res.t[step - 1::step]
+    t0 = 1_000_000_000
+    gyro = y[:, :3] + np.radians(draw["gyro_noise_deg_s"]) * rng.standard_normal((len(t), 3))
+    accel = y[:, 3:] + roc["accel_noise_m_s2"] * rng.standard_normal((len(t), 3))
+    t_in = np.arange(0.0, man.duration + 1e-9, 0.01)
+    t_in_ns = t0 + np.round(t_in * 1e9).astype(np.int64)
+    meta = {"vehicle": vp.name, "maneuver": f"bump_crossing_{draw['speed_kmh']:.0f}kmh",
+            "damper_oil_level": "unknown", "source": "simulated:inspection_roc"}
+    drive = TestDrive(meta, Series(t_in_ns, np.full(t_in.size, man.speed)), Series(t_in_ns.copy(), np.zeros(t_in.size)),
+                      man.road, None, ImuSeries(t0 + np.round(t * 1e9).astype(np.int64), gyro, accel), {})
+    t_after = (float(man.road.s[-1]) + vp.wheelbase) / man.speed
+    return drive, int(np.searchsorted(t, t_after)), np.degrees(gyro[:, 1])
+
+
+#: vehicle-file fields -> the independent simulator's car (TruthCar) and friction (TruthFriction) fields
+_TRUTH_CAR = {"sprung_mass": "sprung_mass", "unsprung_mass": "unsprung_mass", "cg_height": "cg_height",
+              "roll_inertia": "roll_inertia", "pitch_inertia": "pitch_inertia", "tyre_stiffness": "tyre_stiffness",
+              "wheel_rate": "wheel_rate", "arb_rate": "arb_rate"}
+_TRUTH_FRICTION = {"axle_friction": "axle_level", "damper_friction_intact": "damper_intact",
+                   "damper_friction_empty": "damper_empty"}
+
+
+def bump_drive_independent(draw: Mapping, roc: Mapping):
+    """The car's bump crossing from the independent simulator (:mod:`..independent_sim`: not our model),
+    the car's drawn values replacing its defaults; same outputs as :func:`bump_drive`."""
+    from .. import independent_sim as ind
+    car_kw = {_TRUTH_CAR[f]: v for f, v in draw["values"].items() if f in _TRUTH_CAR}
+    fr_kw = {_TRUTH_FRICTION[f]: v for f, v in draw["values"].items() if f in _TRUTH_FRICTION}
+    car = ind.TruthCar(**car_kw)
+    man = ind.TruthManeuver.bump(speed_kmh=draw["speed_kmh"], height_m=draw["bump_height"], wheelbase_m=car.wheelbase)
+    sensor = ind.TruthSensor(imu_rate_hz=roc["imu_rate_hz"], gyro_noise_deg_s=(draw["gyro_noise_deg_s"],) * 3,
+                             accel_noise_m_s2=(roc["accel_noise_m_s2"],) * 3, exact_rms=False)
+    drive = ind.make_drive(car, ind.TruthFriction(**fr_kw), None, man, sensor, draw["oil"], seed=draw["noise_seed"])
+    t = (drive.imu.t_ns - drive.imu.t_ns[0]) * 1e-9
+    t_after = man.lead_in_s + (man.bump_length_m + car.wheelbase) / man.speed_mps
+    return drive, int(np.searchsorted(t, t_after)), np.degrees(drive.imu.gyro[:, 1])
+
+
+_cache: dict = {}
+
+
+def _estimator(vehicle: str, variant: str, cfg: dict):
+    from ...model import Model
+    from .estimate import nuisance_params
+    key = ("est", vehicle, variant)
+    if key not in _cache:
+        m = Model(vehicle, variant)
+        _cache[key] = (m, nuisance_params(m, cfg["estimator"]["nuisance"], cfg["estimator"].get("nuisance_range_scale")))
+    return _cache[key]
+
+
+def car_statistics(data: Mapping, i: int) -> dict:
+    """Every method's statistic for car ``i`` (one row of ``cars.csv``)."""
+    from ...model import Model
+    from ...model.params import load_variant, load_vehicle
+    from ...model.rigs import eusama_bench, eusama_plate_motion
+    from ..discrepancy.data import prepare_case
+    from ..sweep.engine import decay_ratio
+    from .estimate import evaluator_for, load_config, one_step_estimate
+    roc = data["roc"]
+    key = ("setup", data["vehicle"], roc["truth_variant"])
+    if key not in _cache:
+        _cache[key] = (load_vehicle(data["vehicle"]), eusama_plate_motion(), load_config(),
+                       load_variant(roc["truth_variant"]))
+    vp0, plate, cfg, truth_variant = _cache[key]
+    draw = car_draw(roc, vp0, i)
+    car = Model(car_vehicle(vp0, draw["values"]), truth_variant)
+    row = {"car": i, "state": draw["state"], **{f"oil_{w}": o for w, o in zip(("FL", "FR", "RL", "RR"), draw["oil"])},
+           "speed_kmh": draw["speed_kmh"], "bump_height_m": draw["bump_height"],
+           "gyro_noise_deg_s": draw["gyro_noise_deg_s"]}
+    for f, v in draw["values"].items():
+        if isinstance(v, tuple):
+            row[f"{f}_front"], row[f"{f}_rear"] = v
+        else:
+            row[f] = v
+    bench = eusama_bench(car, draw["oil"], plate=plate)
+    row["eusama_min_percent"] = min(r.eusama_percent for r in bench.values())
+    row["phase_min_deg"] = min(r.phase_min_deg for r in bench.values())
+    if roc.get("truth_generator", "model") == "independent":
+        drive, k_after, pitch_meas = bump_drive_independent(draw, roc)
+    else:
+        drive, k_after, pitch_meas = bump_drive(car, draw, roc)
+    row["decay_ratio"] = decay_ratio(pitch_meas, k_after)
+    for variant in roc["estimator_variants"]:
+        model, cal = _estimator(data["vehicle"], variant, cfg)
+        case = prepare_case(f"car_{i}.mcap", drive, wheelbase=model.vehicle.wheelbase)
+        ev, _ = evaluator_for(model, [case], cfg)
+        x, _ = one_step_estimate(ev, cal, cfg)
+        sfx = "" if variant == roc["estimator_variants"][0] else f"_{variant}"
+        for w, o in zip(("FL", "FR", "RL", "RR"), x):
+            row[f"est{sfx}_oil_{w}"] = float(o)
+        row[f"model_based{sfx}"] = float(1.0 - np.min(x))
+    row["eusama"] = 100.0 - row["eusama_min_percent"]
+    row["phase_shift"] = -row["phase_min_deg"]
+    return row
+
+
+def roc_task(data: Mapping, cars: Sequence[int]) -> list[dict]:
+    """One chunk: the rows of its cars (a failed car is a row with its error, never a lost chunk)."""
+    rows = []
+    for i in cars:
+        try:
+            rows.append(car_statistics(data, i))
+        except Exception as exc:  # noqa: BLE001 - reported per car in cars.csv and the summary
+            rows.append({"car": int(i), "error": f"{type(exc).__name__}: {exc}"})
+    return [{"rows": rows}]
+
+
+# ---- ROC analysis ------------------------------------------------------------------------------------------
+def auc(neg: np.ndarray, pos: np.ndarray) -> float:
+    """Area under the ROC curve: P(pos > neg) + P(tie) / 2 (Mann-Whitney)."""
+    from scipy.stats import rankdata
+    x = np.concatenate([neg, pos])
+    r = rankdata(x)
+    n0, n1 = len(neg), len(pos)
+    return float((r[n0:].sum() - n1 * (n1 + 1) / 2) / (n0 * n1))
+
+
+def sensitivity_at(neg: np.ndarray, pos: np.ndarray, specificity: float) -> float:
+    """Share of positives above the threshold that keeps ``specificity`` of the negatives below it."""
+    thr = np.quantile(neg, specificity, method="higher")
+    return float(np.mean(pos > thr))
+
+
+def roc_summary(neg: np.ndarray, pos: np.ndarray, n_boot: int, specificity: float, seed: int) -> dict:
+    """AUC, stratified bootstrap 95 % interval, sensitivity at ``specificity``."""
+    rng = np.random.default_rng(seed)
+    a = auc(neg, pos)
+    boots = [auc(rng.choice(neg, neg.size), rng.choice(pos, pos.size)) for _ in range(n_boot)]
+    lo, hi = np.quantile(boots, [0.025, 0.975])
+    return {"auc": a, "auc_ci95": [float(lo), float(hi)],
+            "sensitivity_at_95_specificity": sensitivity_at(neg, pos, specificity),
+            "n_negative": int(neg.size), "n_positive": int(pos.size)}
+
+
+def roc_curve(neg: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    thr = np.unique(np.concatenate([neg, pos]))[::-1]
+    fpr = np.array([0.0] + [np.mean(neg >= t) for t in thr])
+    tpr = np.array([0.0] + [np.mean(pos >= t) for t in thr])
+    return fpr, tpr
+
+
+def finish_roc(spec, store, plot: bool) -> dict:
+    """Collect the cars, write ``cars.csv``, the ROC figure and the ``roc`` summary."""
+    roc = spec.data["roc"]
+    rows = [r for chunk in store.drive_rows() for r in chunk["rows"]]
+    rows.sort(key=lambda r: r["car"])
+    failed = [r for r in rows if "error" in r]
+    good = [r for r in rows if "error" not in r]
+    header = sorted({k for r in good for k in r}, key=lambda k: (k != "car", k != "state", k))
+    out = Path(store.out)
+    with open(out / "cars.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(header + ["error"])
+        for r in rows:
+            w.writerow([r.get(h, "") for h in header] + [r.get("error", "")])
+    methods = list(METHODS) + [f"model_based_{v}" for v in roc["estimator_variants"][1:]]
+    stat = {m: np.array([r[m] for r in good], float) for m in methods}
+    state = np.array([r["state"] for r in good])
+    neg = state == "intact"
+    groups = {"one_empty": state == "one_empty", "one_half": state == "one_half", "any": state != "intact"}
+    by_sev: dict = {}
+    for sev, pos in groups.items():
+        if pos.sum() < 2 or neg.sum() < 2:
+            continue
+        by_sev[sev] = {m: roc_summary(stat[m][neg], stat[m][pos], roc["bootstrap"], roc["specificity"],
+                                      roc["seed"] + k) for k, m in enumerate(methods)}
+    result = {"roc": by_sev.get("one_empty", {}), "roc_by_severity": by_sev,
+              "roc_positive_class": SEVERITIES["one_empty"], "cars_ok": len(good), "cars_failed": len(failed),
+              "failures": failed[:10], "table": str(out / "cars.csv"), "plots": []}
+    if plot and by_sev:
+        result["plots"].append(str(plot_roc(stat, neg, groups, by_sev, methods, out / f"{spec.name}.png")))
+    return result
+
+
+def plot_roc(stat, neg, groups, by_sev, methods, path: Path) -> Path:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    sevs = [s for s in ("one_empty", "one_half", "any") if s in by_sev]
+    fig, axes = plt.subplots(1, len(sevs), figsize=(4.6 * len(sevs), 4.4), squeeze=False)
+    for ax, sev in zip(axes[0], sevs):
+        pos = groups[sev]
+        for m in methods:
+            fpr, tpr = roc_curve(stat[m][neg], stat[m][pos])
+            s = by_sev[sev][m]
+            ax.plot(fpr, tpr, label=f"{m}: AUC {s['auc']:.3f} [{s['auc_ci95'][0]:.3f}, {s['auc_ci95'][1]:.3f}]")
+        ax.plot([0, 1], [0, 1], ":", color="0.6")
+        ax.axvline(0.05, color="0.7", lw=0.8)
+        ax.set_title(f"{SEVERITIES[sev]} vs intact", fontsize=10)
+        ax.set_xlabel("false positive rate (1 - specificity)")
+        ax.set_ylabel("sensitivity")
+        ax.legend(fontsize=7, loc="lower right")
+        ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

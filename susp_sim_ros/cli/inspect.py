@@ -1,0 +1,48 @@
+"""``susp inspect``: each damper's oil level with a 95 % interval from recorded drives.
+
+    susp inspect DRIVE.mcap... [--config VEHICLE] [--json] [--out DIR]
+
+A slow bump crossing (5-15 km/h) is the target case; any drive that excites the suspension works. The
+drives' ``damper_oil_level`` metadata is never used (an inspection drive says ``unknown``). Exit 2 on bad
+input (unreadable drive, missing topic, a vehicle file without the class ranges).
+"""
+from __future__ import annotations
+
+from ..errors import SuspInputError
+from ..io.topic_map import add_topic_map_argument
+
+
+def add_arguments(p) -> None:
+    p.add_argument("drives", nargs="+", metavar="DRIVE.mcap", help="recorded drives of one car")
+    p.add_argument("--config", default=None,
+                   help="vehicle class (parameter set name or YAML path; default: the drives' vehicle "
+                        "metadata when known, else passat_b8_like)")
+    p.add_argument("--variant", default="full", help="friction variant of the fitted model")
+    p.add_argument("--out", default=None, help="write inspection.md, inspection.json and PNGs here")
+    add_topic_map_argument(p)
+
+
+def run(args) -> dict:
+    from ..analysis.inspection import inspect_drives, load_config
+    from ..analysis.inspection.report import write_report
+    cfg = load_config()
+    res = inspect_drives(args.drives, config=args.config, variant=args.variant, cfg=cfg, topic_map=args.topic_map)
+    out = res.to_json()
+    if args.out:
+        out["written"] = write_report(res, args.out, cfg, args.drives)
+    lines = [f"damper inspection of {len(args.drives)} drive(s), {res.elapsed_s_:.1f} s:"]
+    for w, e in res.wheels_.items():
+        if e["oil_level"] is None:
+            lines.append(f"  {w}: unknown ({e['why']})")
+        else:
+            lines.append(f"  {w}: oil {e['oil_level']:.2f} [{e['ci95'][0]:.2f}, {e['ci95'][1]:.2f}] "
+                         f"{e['state']:8s} ({e['identifiable']})")
+    for a, e in res.identifiability_.items():
+        lines.append(f"  {a}: {e['why']}")
+    lines += [f"  note: {n}" for n in res.notes_]
+    if args.out:
+        lines.append(f"  report: {out['written']['report']}")
+    out["summary"] = "\n".join(lines)
+    if not res.wheels_:
+        raise SuspInputError("no dampers inspected")
+    return out
