@@ -82,7 +82,7 @@ def test_one_step_statistic_relates_to_the_full_inspect_estimate(one_step_vs_ful
 
 def test_small_study_end_to_end(tmp_path):
     from susp_sim_ros.analysis.sweep import make_executor, run_study
-    from susp_sim_ros.analysis.sweep.spec import study_from_dict
+    from susp_sim_ros.analysis.sweep import study_from_dict
     spec = study_from_dict({"name": "roc_tiny", "kind": "roc", "chunk_size": 4, "roc": {
         "seed": 5, "cars": 8, "states": {"intact": 0.5, "one_empty": 0.5}, "variation": ["sprung_mass"],
         "speed_kmh": [6.0, 10.0], "bump_height": [0.05, 0.07], "gyro_noise_deg_s": [0.1, 0.1],

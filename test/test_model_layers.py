@@ -13,3 +13,48 @@ def test_core_does_not_import_rclpy(module):
     code = f"import sys, {module}; sys.exit(2 if 'rclpy' in sys.modules else 0)"
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.returncode == 0, f"{module} pulled in rclpy (rc {r.returncode}): {r.stderr[-500:]}"
+
+
+def test_no_import_cycle_between_modules():
+    """No module imports (directly or through others) a module that imports it back; package
+    ``__init__`` re-exports are not counted. Function-local imports count like top-level ones."""
+    import ast
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1] / "susp_sim_ros"
+    mods = {}
+    for f in root.rglob("*.py"):
+        parts = f.relative_to(root.parent).with_suffix("").parts
+        mods[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = f
+
+    def resolve(cur, node):
+        base = cur.split(".") if mods[cur].name == "__init__.py" else cur.split(".")[:-1]
+        if node.level:
+            base = base[: len(base) - node.level + 1]
+        return ".".join(base + ([node.module] if node.module else []))
+
+    edges = {m: set() for m in mods}
+    for m, f in mods.items():
+        for n in ast.walk(ast.parse(f.read_text())):
+            targets = []
+            if isinstance(n, ast.Import):
+                targets = [a.name for a in n.names]
+            elif isinstance(n, ast.ImportFrom):
+                t = resolve(m, n) if n.level else (n.module or "")
+                targets = [t] + [f"{t}.{a.name}" for a in n.names]
+            edges[m] |= {t for t in targets if t in mods and t != m and not m.startswith(t + ".")
+                         and mods[t].name != "__init__.py"}
+    cycles, state = [], {}
+
+    def visit(u, path):
+        state[u] = 1
+        for v in sorted(edges[u]):
+            if state.get(v) == 1:
+                cycles.append(path[path.index(v):] + [v])
+            elif v not in state:
+                visit(v, path + [v])
+        state[u] = 2
+
+    for m in sorted(mods):
+        if m not in state and mods[m].name != "__init__.py":
+            visit(m, [m])
+    assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles[:5])

@@ -103,7 +103,7 @@ def ride_task(data: Mapping, run_id: int, run: Mapping) -> dict:
     from ...control.ride import RideSpec, run_ride
     from ...errors import SuspInputError
     from ...model import Model
-    from .engine import _cache, _lock
+    from .runs import _cache, _lock
     row: dict[str, Any] = {"run_id": run_id, **run, "error": ""}
     try:
         with _lock:

@@ -23,9 +23,9 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
-import yaml
 
 from ...errors import ConfigError, SuspInputError
+from .runs import MANEUVER_KEYS, maneuver_of, vehicle_key, vehicle_params
 
 ENGINE_VERSION = 2          # bump when a change alters results, so old stores are not resumed into
 MANEUVERS = ("bump_crossing", "sine_steer")
@@ -44,7 +44,6 @@ PARAMETERS: dict[str, tuple[str, str | None, str]] = {
     "steer_frequency": ("positive", "sine_steer", "steering frequency [Hz]"),
 }
 # geometry keys a reference run may not change (it must drive the same maneuver)
-MANEUVER_KEYS = ("speed", "bump_height", "bump_length", "steer_amplitude", "steer_frequency")
 METRICS = ("peak_rate", "decay_ratio", "damping_ratio", "ring_out", "rms_after", "rmse_ref")
 GENERIC_METRICS = ("peak", "rms")      # {peak: OUTPUT_LABEL}: max |x|, {rms: OUTPUT_LABEL}: RMS, SI units
 RESULT_FORMATS = ("csv", "parquet")
@@ -106,50 +105,6 @@ def metric_column(m, maneuver: str) -> str:
     return {"peak_rate": f"peak_{sig}_deg_s", "decay_ratio": f"{sig}_decay_ratio",
             "damping_ratio": f"{sig}_damping_ratio", "ring_out": "ring_out_s",
             "rms_after": f"rms_{sig}_after_deg_s", "rmse_ref": f"rmse_{sig}_vs_ref_deg_s"}[m]
-
-
-# ---- loading -----------------------------------------------------------------------------------------
-def load_study(path: str | Path) -> StudySpec:
-    """Read and validate a study YAML; expand it into runs and chunks."""
-    path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: study file not found") from None
-    except (OSError, yaml.YAMLError) as exc:
-        raise ConfigError(f"{path}: cannot read study YAML: {exc}") from None
-    return study_from_dict(data, str(path))
-
-
-def drives_study(folder: str | Path, variants=("full", "no_horizontal", "no_velocity", "dahl_only"),
-                 name: str = "drives", source: str = "--drives", diagnose: bool = False) -> StudySpec:
-    """A batch-validation (and, with ``diagnose``, diagnosis) study over every ``*.mcap`` in ``folder``."""
-    return study_from_dict({"name": name, "kind": "drives", "folder": str(folder),
-                            "variants": list(variants), "diagnose": diagnose}, source)
-
-
-def study_from_dict(data: Any, source: str = "<study>") -> StudySpec:
-    if not isinstance(data, dict):
-        raise ConfigError(f"{source}: a study must be a mapping of keys, got {type(data).__name__}")
-    unknown = set(data) - TOP_KEYS
-    if unknown and data.get("kind") != "ride":  # a ride study checks its own keys
-        raise ConfigError(f"{source}: unknown key(s) {', '.join(sorted(unknown))}; "
-                          f"known: {', '.join(sorted(TOP_KEYS))}")
-    kind = data.get("kind", "sweep")
-    name = data.get("name", Path(source).stem)
-    if not isinstance(name, str) or not name or any(c in name for c in "/\\ "):
-        raise ConfigError(f"{source}: name: expected a short name without spaces or slashes, got {name!r}")
-    if kind == "drives":
-        return _drives(data, source, name)
-    if kind == "ride":
-        from .ride import ride_study
-        return ride_study(data, source, name)
-    if kind == "roc":  # damper-inspection detection study (issue 14)
-        from ..inspection.roc import roc_spec
-        return roc_spec(data, source, name)
-    if kind != "sweep":
-        raise ConfigError(f"{source}: kind: expected 'sweep', 'drives', 'ride' or 'roc', got {kind!r}")
-    return _sweep(data, source, name)
 
 
 def _number(source, key, v, *, positive=False, fraction=False) -> float:
@@ -424,17 +379,8 @@ def _expand(spec: StudySpec) -> None:
     spec.chunks = chunks
 
 
-def vehicle_key(data: dict, run: Mapping) -> str:
-    """What identifies the vehicle parameter set of a run (a name/path or a class definition)."""
-    if "vehicle_class" in run:
-        c = run["vehicle_class"]
-        return "class:" + json.dumps({c: data["vehicle_classes"][c]}, sort_keys=True)
-    return "vehicle:" + run.get("vehicle", "passat_b8_like")
-
-
 def group_key(data: dict, run: Mapping, cache: dict) -> tuple:
     """Runs with equal keys run in one batched simulation: same kernel (variant) and step count."""
-    from .engine import maneuver_of, vehicle_params
     vk = vehicle_key(data, run)
     if vk not in cache:
         cache[vk] = vehicle_params(data, run).wheelbase
