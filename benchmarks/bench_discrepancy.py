@@ -217,7 +217,7 @@ def run_case(name: str, spec: dict, noise: float, tmp: Path) -> dict:
     ni = [x["name"] for x in rep.get("not_identifiable", [])]
     expect, optional = set(spec["expect"]), set(spec.get("optional", []))
     ni_ok = set(spec.get("handled_if_not_identifiable", []))
-    tp = sorted((set(named) & (expect | optional)))
+    tp = sorted(set(named) & (expect | optional))
     handled_ni = sorted((expect & ni_ok & set(ni)) - set(named))
     fp = sorted(set(named) - expect - optional)
     fn = sorted(expect - set(named) - set(handled_ni))

@@ -121,7 +121,8 @@ def main(n: int = 24, own: bool = False, cfg: dict | None = None, first: int = 0
                "coverage_95": float(cover.mean()),
                "intact_called_ok": f"{sum(r['state'] == 'ok' for r in intact)}/{len(intact)}",
                "empty_called_ok": sum(r["state"] == "ok" for r in empty),
-               "empty_called_empty_or_degraded": f"{sum(r['state'] in ('empty', 'degraded') for r in empty)}/{len(empty)}",
+               "empty_called_empty_or_degraded":
+                   f"{sum(r['state'] in ('empty', 'degraded') for r in empty)}/{len(empty)}",
                "time_s_max": float(max(times)), "time_s_mean": float(np.mean(times)), "seeds": [first, first + n - 1],
                "not_covered": [(r["case"], r["what"], round(r["truth"], 2), round(r["est"], 2),
                                 [round(x, 2) for x in r["ci"]]) for r, c in zip(est, cover) if not c]}

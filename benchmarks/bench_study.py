@@ -109,7 +109,7 @@ def breakdown(spec, tmp: Path, n: int = 7) -> dict:
     rounds = []
     try:
         ex = InProcessExecutor(threads=1)
-        for k in range(n):
+        for _ in range(n):
             acc.clear()
             t0 = time.perf_counter()
             run_study(spec, tmp / "parts", ex, progress=False, fresh=True, plot=False)
@@ -157,7 +157,7 @@ def measure(specs: dict, repeat: int, tmp: Path) -> dict:
                 time_engine(spec, execs[str(w)], tmp / f"warm{w}")
                 time_engine(spec, execs[str(w)], tmp / f"warm{w}")
             start_s[str(w)] = time.perf_counter() - t0
-        for k in range(repeat):
+        for _ in range(repeat):
             for name, spec in specs.items():
                 r = rounds[name]
                 numba.set_num_threads(all_threads)

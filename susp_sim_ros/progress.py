@@ -46,7 +46,8 @@ class PlainProgress:
         elapsed = self._clock() - self._t0
         head = f"{self.desc}: " if self.desc else ""
         if self.total:
-            text = f"{head}{self._fmt(self.n)}/{self._fmt(self.total)} {self.unit} ({100.0 * self.n / self.total:.0f} %)"
+            pct = 100.0 * self.n / self.total
+            text = f"{head}{self._fmt(self.n)}/{self._fmt(self.total)} {self.unit} ({pct:.0f} %)"
         else:
             text = f"{head}{self._fmt(self.n)} {self.unit}"
         text += f", {elapsed:.0f} s"

@@ -33,7 +33,7 @@ import math
 import time
 from collections import Counter
 from dataclasses import dataclass
-from typing import Callable, Hashable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 
 import numpy as np
 
@@ -47,7 +47,8 @@ from .model.vehicle import Model, Stepper, check_oil
 MAX_ACCEL = 20.0              # m/s^2 (2 g): longitudinal acceleration derived from speed messages is limited to this
 MAX_PATH = 1.0e7              # m, |s| of a road profile sample
 MAX_PROFILE_SAMPLES = 2_000_000
-STALE_CLOCK_NS = 10_000_000   # time going back by at most this (jitter, a reordered /clock) is a stale reading, not a restart
+#: time going back by at most this (jitter, a reordered /clock) is a stale reading, not a restart
+STALE_CLOCK_NS = 10_000_000
 
 
 def _envelope() -> np.ndarray:
@@ -486,6 +487,7 @@ class SimCore:
         return out
 
 
-__all__ = ["SimCore", "Sample", "sample_messages", "DAMPER_COMMAND", "SIM_IMU", "SIM_ODOM", "SIM_SUSPENSION", "DIAGNOSTICS",
+__all__ = ["SimCore", "Sample", "sample_messages", "DAMPER_COMMAND", "SIM_IMU", "SIM_ODOM", "SIM_SUSPENSION",
+           "DIAGNOSTICS",
            "MAX_STEERING", "MAX_SPEED", "MAX_WHEEL_HEIGHT", "MAX_ACCEL", "OUTPUT_ENVELOPE", "RateLimitedLog",
            "DivergenceError", "STALE_CLOCK_NS"]

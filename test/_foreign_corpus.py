@@ -114,7 +114,7 @@ def car_split_dir(path, drive, parts=3) -> Path:
 
 def _metadata_yaml(path: Path, storage: str, files, msgs) -> None:
     topics = {}
-    for t, topic, mt, _ in msgs:
+    for _t, topic, mt, _ in msgs:
         topics.setdefault(topic, [mt, 0])[1] += 1
     t0, t1 = msgs[0][0], msgs[-1][0]
     lines = ["rosbag2_bagfile_information:", "  version: 9", f"  storage_identifier: {storage}",

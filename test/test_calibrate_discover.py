@@ -29,7 +29,7 @@ def test_every_parameter_is_declared_once_with_unit_source_and_range():
     fields = [f for f, *_ in PARAMETER_TABLE]
     assert len(fields) == len(set(fields))
     vp = load_vehicle(VEHICLE)
-    for fld, section, key, shape, _ in PARAMETER_TABLE:
+    for fld, section, key, _shape, _ in PARAMETER_TABLE:
         e = data[section][key]
         assert e["unit"] and e["source"], key
         if fld != "damper_velocity":  # the damper table's velocity axis is a grid, not a parameter

@@ -1,6 +1,4 @@
 """Discrepancy finder: noise floor, windows, neutral candidates, small synthetic truth cases, CLI errors."""
-import json
-import math
 import subprocess
 import sys
 from pathlib import Path
@@ -9,7 +7,7 @@ import numpy as np
 import pytest
 
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder
-from susp_sim_ros.analysis.discrepancy.candidates import BY_NAME, LIBRARY
+from susp_sim_ros.analysis.discrepancy.candidates import LIBRARY
 from susp_sim_ros.analysis.discrepancy.data import prepare_case
 from susp_sim_ros.analysis.discrepancy.engine import Evaluator, Structure
 from susp_sim_ros.analysis.discrepancy.finder import extended_model
@@ -21,9 +19,11 @@ INTERFACE_TERMS = {"damper_friction_velocity", "damper_friction_oil", "friction_
                    "friction_lateral_force", "friction_amplitude", "damper_gas_preload", "extra_viscous_damping",
                    "mass_error", "inertia_error", "spring_rate_error", "tyre_relaxation_error", "sensor_bias",
                    "time_offset", "steering_offset"}
-NO_HIDDEN = HiddenPhysics.reference().replace(amplitude_extra=(0.0, 0.0), sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0,
+NO_HIDDEN = HiddenPhysics.reference().replace(amplitude_extra=(0.0, 0.0), sprung_mass=1.0, pitch_inertia=1.0,
+                                              roll_inertia=1.0,
                           wheel_rate=(1.0, 1.0))
-AMPLITUDE = HiddenPhysics.reference().replace(sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0, wheel_rate=(1.0, 1.0))
+AMPLITUDE = HiddenPhysics.reference().replace(sprung_mass=1.0, pitch_inertia=1.0, roll_inertia=1.0, wheel_rate=(1.0,
+                                                                                                                1.0))
 
 
 def _case(man, state, hidden, seed=7):

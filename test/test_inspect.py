@@ -63,7 +63,7 @@ def test_one_empty_damper_found_on_a_car_that_is_not_our_model(truth_paths):
 
 def test_a_drive_that_excites_nothing_gives_unknown_with_the_reason(truth_paths):
     res = inspect_drives([truth_paths["rest"]])
-    for w, e in res.wheels_.items():
+    for _w, e in res.wheels_.items():
         assert e["oil_level"] is None and e["state"] == "unknown" and e["identifiable"] == "no"
         assert "do not excite" in e["why"]
 
@@ -125,9 +125,10 @@ def test_inspection_drive_with_unknown_oil_is_read_and_simulated_as_intact(tmp_p
 
 @given(st.sampled_from(["unknown", "UNKNOWN", " Unknown "]))
 def test_unknown_oil_text(text):
+    from susp_sim_ros.errors import RecordingError
     from susp_sim_ros.io.drive import oil_unknown, parse_oil
     assert oil_unknown(text) and not oil_unknown("1,1,1,1") and not oil_unknown(None)
-    with pytest.raises(Exception):
+    with pytest.raises(RecordingError, match="expected four comma-separated fractions"):
         parse_oil(text)
 
 

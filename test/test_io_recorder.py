@@ -1,12 +1,10 @@
 """MCAP recorder round trips (read back by mcap_ros2 and rosbags), overwrite refusal, killed recorder."""
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
 import sys
 import textwrap
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -61,7 +59,7 @@ def test_round_trip_exact(tmp_path, compression, chunk_size, as_bytes):
     assert meta == {"test_drive": META}
     assert [(g[0], g[1]) for g in got] == [(m[0], m[1]) for m in msgs]
     seq: dict[str, int] = {}
-    for (t, topic, s, d), (_, _, mt, msg, _) in zip(got, msgs):
+    for (_t, topic, s, d), (_, _, mt, msg, _) in zip(got, msgs):
         seq[topic] = seq.get(topic, 0) + 1
         assert s == seq[topic]
         assert d == M.to_dict(M.decode(mt, M.encode(mt, msg)))

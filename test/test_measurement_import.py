@@ -66,7 +66,8 @@ def _write_mdf_csv_names(path, d: TestDrive) -> Path:
     t = d.imu.t_ns * 1e-9
     sig = [Signal(d.steering.values, t, name="steering_wheel_angle_rad", unit="rad"),
            Signal(d.speed.values, t, name="speed_m_s", unit="m/s")]
-    sig += [Signal(d.imu.gyro[:, k], t, name=f"{n}_rate_rad_s", unit="rad/s") for k, n in enumerate(("roll", "pitch", "yaw"))]
+    sig += [Signal(d.imu.gyro[:, k], t, name=f"{n}_rate_rad_s", unit="rad/s") for k, n in enumerate(("roll", "pitch",
+                                                                                                     "yaw"))]
     sig += [Signal(d.imu.accel[:, k], t, name=f"accel_{a}_m_s2", unit="m/s^2") for k, a in enumerate("xyz")]
     mdf = MDF(version="4.10")
     mdf.append(sig, comment="test drive")
@@ -84,8 +85,10 @@ def _write_mdf_vehicle_bus(path, d: TestDrive) -> Path:
     mdf = MDF(version="4.10")
     mdf.append([Signal(d.speed.values * 3.6, t, name="VehSpd", unit="km/h"),
                 Signal(np.degrees(d.steering.values), t, name="SteerWhlAng", unit="\u00b0")], comment="bus")
-    mdf.append([Signal(np.degrees(g[:, k]), t, name=n, unit="\u00b0/s") for k, n in enumerate(("GyroX", "GyroY", "GyroZ"))]
-               + [Signal(a[:, k] / G, t, name=n, unit="g") for k, n in enumerate(("AccX", "AccY", "AccZ"))], comment="imu")
+    mdf.append([Signal(np.degrees(g[:, k]), t, name=n, unit="\u00b0/s") for k, n in enumerate(("GyroX", "GyroY",
+                                                                                               "GyroZ"))]
+               + [Signal(a[:, k] / G, t, name=n, unit="g") for k, n in enumerate(("AccX", "AccY", "AccZ"))],
+               comment="imu")
     mdf.save(path, overwrite=True)
     return Path(path)
 

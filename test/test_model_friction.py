@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from susp_sim_ros.model import Model
 from susp_sim_ros.model.rigs import axle_rig, damper_rig, half_hysteresis_at_zero, triangle
 from susp_sim_ros.model.terms import dahl_exact
 from susp_sim_ros.model.vehicle import hydraulic_curves, velocity_scaling

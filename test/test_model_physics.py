@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from susp_sim_ros.model import Model, RoadProfile, Stepper, cosine_bump, make_inputs, simulate
-from susp_sim_ros.model.layout import OUTPUT_LABELS, P_GRID, P_H_EMPTY, P_INDEX, S_INDEX, N_GRID
+from susp_sim_ros.model.layout import OUTPUT_LABELS, P_H_EMPTY, N_GRID
 from susp_sim_ros.model.linear import mechanical_energy, modes, state_from_q
-from susp_sim_ros.model.maneuvers import bump_crossing, sine_steer, vehicle_state
+from susp_sim_ros.model.maneuvers import bump_crossing, vehicle_state
 
 DT = 1e-3
 

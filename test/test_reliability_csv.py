@@ -16,7 +16,8 @@ from hypothesis import strategies as st
 from susp_sim_ros.analysis import csv_import as ci
 from susp_sim_ros.errors import CsvImportError
 
-HEADER = "time_s,steering_wheel_angle_deg,speed_km_h,roll_rate_rad_s,pitch_rate_rad_s,yaw_rate_rad_s,wheel_height_fl_m,wheel_height_fr_m,wheel_height_rl_m,wheel_height_rr_m"
+HEADER = ("time_s,steering_wheel_angle_deg,speed_km_h,roll_rate_rad_s,pitch_rate_rad_s,yaw_rate_rad_s,"
+          "wheel_height_fl_m,wheel_height_fr_m,wheel_height_rl_m,wheel_height_rr_m")
 N_COLS = HEADER.count(",") + 1
 
 
@@ -89,12 +90,14 @@ def test_damaged_csv_is_parsed_completely_or_named(mutated):
 
 
 @pytest.mark.parametrize("line, needle", [
-    ("0.12,1,30,0,0,0,0,0,0", r"m/drive.csv:15: column 10: expected 10 fields .* got 9: column 10 'wheel_height_rr_m' is missing"),
+    ("0.12,1,30,0,0,0,0,0,0",
+     r"m/drive.csv:15: column 10: expected 10 fields .* got 9: column 10 'wheel_height_rr_m' is missing"),
     ("0.12,1,30,0,0,0,0,0,0,0,7", r"m/drive.csv:15: column 11: .* got 11: column 11 \('7'\) is beyond"),
     ("0.12,1,30,0,0,0,0,0,0,\"0", r"m/drive.csv:15: malformed CSV"),
     ("0.12,1,30,\x00,0,0,0,0,0,0", r"m/drive.csv:15: column 4: NUL"),
     ("0.12,1,-3,0,0,0,0,0,0,0", r"m/drive.csv:15: column 'speed_km_h' \(column 3\): -0.83\d* m/s is outside"),
-    ("0.12,800,30,0,0,0,0,0,0,0", r"m/drive.csv:15: column 'steering_wheel_angle_deg' \(column 2\): 13.9\d* rad is outside"),
+    ("0.12,800,30,0,0,0,0,0,0,0",
+     r"m/drive.csv:15: column 'steering_wheel_angle_deg' \(column 2\): 13.9\d* rad is outside"),
     ("0.12,1,30,0,0,0,0,0,1.5,0", r"m/drive.csv:15: column 'wheel_height_rl_m' \(column 9\): 1.5 m is outside"),
     ("", r"m/drive.csv:15: column 1: blank line"),
 ])

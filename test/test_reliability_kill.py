@@ -35,7 +35,7 @@ def _rosbags_messages(path: Path) -> list[tuple[str, int, bytes]]:
     from rosbags.highlevel import AnyReader
     with AnyReader([path]) as r:
         out = [(c.topic, t, bytes(raw)) for c, t, raw in r.messages()]
-        for c, t, raw in r.messages(connections=[c for c in r.connections if c.topic == "/sim/imu/data"]):
+        for c, _t, raw in r.messages(connections=[c for c in r.connections if c.topic == "/sim/imu/data"]):
             r.deserialize(raw, c.msgtype)  # the typed content decodes too
             break
     return out

@@ -10,11 +10,7 @@ deflection increment ``ramp_speed * dt`` and ``period / dt`` samples per sine pe
 """
 from __future__ import annotations
 
-import os
-import shutil
-import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -24,7 +20,6 @@ import yaml
 
 from susp_sim_ros.io.drive import read_drive
 from susp_sim_ros.lockstep import run_lockstep
-from susp_sim_ros.model import Model
 from susp_sim_ros.model.rigs import _rig_config, axle_rig, damper_rig, half_hysteresis_at_zero, triangle
 from susp_sim_ros.model.vehicle import check_oil
 from susp_sim_ros.sim_core import OUTPUT_ENVELOPE, SimCore
@@ -83,7 +78,8 @@ def test_rigs_at_every_step(models):
                         last = (periods - 1) * n_per
                         for v, got in ((vp, fs[last]), (-vp, fs[last + n_per // 2])):
                             want = table[v]
-                            assert abs(got - want) <= max(1.0, 0.02 * abs(want)), (var, axle, oil_level, dt, v, got, want)
+                            assert abs(got - want) <= max(1.0, 0.02 * abs(want)), (var, axle, oil_level, dt, v, got,
+                                                                                   want)
                             worst["damper"] = max(worst.get("damper", 0.0), abs(got - want) / max(abs(want), 1.0))
     print(f"\nrigs at dt {STEPS}: worst relative deviation from the configured procedure {worst}")
 

@@ -77,7 +77,8 @@ def test_example_study_expands_into_chunks_of_batched_runs():
     assert spec.n_runs == 11 * 11 * 3
     assert [r["oil_front"] for r in spec.runs[:1]] == [0.0] and spec.runs[-1]["oil_rear"] == 1.0
     assert spec.runs[1] == {"variant": "full", "oil_front": 0.0, "oil_rear": 0.0, "bump_height": 0.06}
-    assert {r["oil_rear"] for r in spec.runs} == {round(0.1 * k, 12) for k in range(11)}   # 0.3, not 0.30000000000000004
+    assert {r["oil_rear"] for r in spec.runs} == {round(0.1 * k,
+                                                        12) for k in range(11)}   # 0.3, not 0.30000000000000004
     assert sorted(i for c in spec.chunks for i in c.runs) == list(range(spec.n_runs))
     assert all(len(c.runs) <= spec.data["chunk_size"] for c in spec.chunks)
     assert load_study(EXAMPLE).hash == spec.hash                  # deterministic: resumable
@@ -153,7 +154,8 @@ def test_decay_ratio_of_a_damped_oscillator(zeta):
 def test_vectorised_decay_ratio_equals_the_scalar_definition():
     rng = np.random.default_rng(7)
     t = np.arange(600) * 0.01
-    Q = np.array([np.exp(-z * 9 * t) * np.sin(9 * t + ph) for z, ph in zip(rng.uniform(0, 0.6, 60), rng.uniform(0, 6, 60))])
+    Q = np.array([np.exp(-z * 9 * t) * np.sin(9 * t + ph) for z, ph in zip(rng.uniform(0, 0.6, 60), rng.uniform(0, 6,
+                                                                                                                60))])
     Q[3] = 0.0                      # no motion: NaN
     Q[4] = np.exp(-t)               # no overshoot: 0
     k0 = rng.integers(0, 599, 60)
@@ -196,19 +198,22 @@ def test_example_metrics_equal_the_paper_study_path(model_full):
     spec = load_study(EXAMPLE)
     man = bump_crossing(wheelbase=model_full.vehicle.wheelbase)
     t_leave = (float(man.road.s[-1]) + model_full.vehicle.wheelbase) / man.speed
-    runs = [{"variant": "full", "oil_front": f, "oil_rear": r, "bump_height": 0.06} for f, r in ((1, 1), (0, 1), (1, 0))]
+    runs = [{"variant": "full", "oil_front": f, "oil_rear": r, "bump_height": 0.06} for f, r in ((1, 1), (0, 1), (1,
+                                                                                                                  0))]
     res = engine.chunk_task(spec.data, runs, [np.zeros(1000)] * 3)
     cols = spec.metric_columns()
     for run, m in zip(runs, res["metrics"]):
         oil = (run["oil_front"],) * 2 + (run["oil_rear"],) * 2
-        sim = simulate(model_full, man.to_inputs(0.001), dt=0.001, road=man.road, oil=oil, outputs=["PITCH_RATE"], decim=10)
+        sim = simulate(model_full, man.to_inputs(0.001), dt=0.001, road=man.road, oil=oil, outputs=["PITCH_RATE"],
+                       decim=10)
         q = np.degrees(sim.y[:, 0])
         above = np.nonzero(np.abs(q) > 0.3)[0]
         assert m[cols.index("peak_pitch_rate_deg_s")] == float(np.abs(q).max())
         assert m[cols.index("ring_out_s")] == float(max(sim.t[above[-1]] - t_leave, 0.0))
     peak = {k: m[cols.index("peak_pitch_rate_deg_s")] for k, m in zip(("intact", "front", "rear"), res["metrics"])}
     decay = {k: m[cols.index("pitch_rate_decay_ratio")] for k, m in zip(("intact", "front", "rear"), res["metrics"])}
-    assert peak["intact"] == pytest.approx(8.7, abs=0.05) and peak["rear"] == pytest.approx(9.0, abs=0.05)  # model-spec 5
+    assert peak["intact"] == pytest.approx(8.7, abs=0.05) and peak["rear"] == pytest.approx(9.0,
+                                                                                            abs=0.05)  # model-spec 5
     assert decay["rear"] > 3 * decay["intact"]          # the inspection signal sees the oil-empty rear dampers
 
 
@@ -246,7 +251,8 @@ def test_dask_tasks_spread_over_the_workers(tmp_path, dask_executor):
 def test_tasks_group_consecutive_chunks_of_one_batch_group():
     from susp_sim_ros.analysis.sweep.runner import plan_tasks
     from susp_sim_ros.analysis.sweep.spec import Chunk
-    chunks = [Chunk(i, (i,), ("full", 5000)) for i in range(5)] + [Chunk(5 + i, (5 + i,), ("dahl_only", 5000)) for i in range(3)]
+    chunks = [Chunk(i, (i,), ("full", 5000)) for i in range(5)] + [Chunk(5 + i, (5 + i,), ("dahl_only",
+                                                                                           5000)) for i in range(3)]
     ids = lambda tasks: [[c.id for c in t] for t in tasks]
     assert ids(plan_tasks(chunks, threads=1)) == [[0, 1, 2, 3, 4], [5, 6, 7]]      # never across groups
     assert ids(plan_tasks(chunks, threads=2)) == [[0, 1, 2, 3], [4], [5, 6, 7]]
@@ -378,7 +384,8 @@ def test_damaged_chunk_file_is_recomputed(tmp_path, tiny_reference):
 
 def test_store_refuses_another_study_unless_fresh(tmp_path, tiny_reference):
     out = tmp_path / "out"
-    run_study(study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml"), out, InProcessExecutor(), progress=False, plot=False)
+    run_study(study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml"), out, InProcessExecutor(), progress=False,
+              plot=False)
     other = study_from_dict({**json.loads(json.dumps(TINY)), "chunk_size": 4}, "tiny.yaml")
     from susp_sim_ros.errors import SuspInputError
     with pytest.raises(SuspInputError, match="another study"):

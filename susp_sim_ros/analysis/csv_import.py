@@ -54,7 +54,7 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -99,7 +99,8 @@ class CsvTable:
 
 
 def _column_map(path: str, header: Sequence[str], quantities: Mapping[str, Mapping[str, float]],
-                required: Sequence[str], groups: Sequence[Sequence[str]], line: int) -> dict[str, tuple[int, float, str]]:
+                required: Sequence[str], groups: Sequence[Sequence[str]],
+                line: int) -> dict[str, tuple[int, float, str]]:
     """Header -> {quantity: (field index, factor, column name)} with errors naming the column."""
     lookup = {name: (q, f) for q, names in quantities.items() for name, f in names.items()}
     found: dict[str, tuple[int, float, str]] = {}

@@ -20,7 +20,7 @@ Times are integer nanoseconds on one clock (``time.time_ns``, the clock the node
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterable, Sequence
+from collections.abc import Iterable, Sequence
 
 __all__ = ["Stall", "Miss", "Attribution", "attribute", "parse_miss_log", "format_miss_log"]
 

@@ -46,7 +46,8 @@ from __future__ import annotations
 import os
 import math
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -115,7 +116,8 @@ def parse_channel_map(data: Any, source: str = "channel map") -> dict:
         raise TopicMapError(f"{source}: imu: accel_x, accel_y, accel_z come all together or not at all")
     for ax in _IMU_AXES:
         if ax in imu:
-            out["imu"][ax] = _channel(imu[ax], f"{source}: imu.{ax}", _KIND[ax[:-2] if ax.startswith("accel") else "gyro"])
+            out["imu"][ax] = _channel(imu[ax], f"{source}: imu.{ax}",
+                                      _KIND[ax[:-2] if ax.startswith("accel") else "gyro"])
     wh = data.get("wheel_heights")
     if wh is not None:
         if not isinstance(wh, Mapping) or set(wh) != set(_WHEELS):

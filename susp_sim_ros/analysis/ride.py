@@ -170,5 +170,6 @@ class RideMonitor:
                 "stop_contacts": dict(zip(WHEELS, self.contacts.tolist())), "samples": self.n}
 
 
-__all__ = ["RideMonitor", "WK_TABLE", "WK_ACCURACY_DB", "comfort_wk_rms", "wk_accurate_to_hz", "wk_analog", "wk_response", "wk_sos", "wk_weighted", "ride_metrics", "rms",
+__all__ = ["RideMonitor", "WK_TABLE", "WK_ACCURACY_DB", "comfort_wk_rms", "wk_accurate_to_hz", "wk_analog",
+           "wk_response", "wk_sos", "wk_weighted", "ride_metrics", "rms",
            "stop_contacts"]

@@ -27,7 +27,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -182,7 +182,8 @@ def tables(drives: Sequence[DriveResult], variants: Sequence[str] = VARIANTS) ->
             continue
         for v in variants:
             cells.setdefault(d.maneuver, {}).setdefault(d.state, {}).setdefault(v, []).append(d.rmse(v))
-    out = {m: {s: {v: float(np.mean(x)) for v, x in by_v.items()} for s, by_v in sorted(by_s.items(), key=lambda kv: _state_key(kv[0]))}
+    out = {m: {s: {v: float(np.mean(x)) for v, x in by_v.items()}
+               for s, by_v in sorted(by_s.items(), key=lambda kv: _state_key(kv[0]))}
            for m, by_s in cells.items()}
     return {m: out[m] for m in MANEUVERS if m in out} | {m: out[m] for m in out if m not in MANEUVERS}
 
@@ -344,7 +345,8 @@ def write_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: di
     lines += ["", "## Plots (measured vs each variant)", ""]
     for d in drives:
         if d.plot:
-            lines += [f"### {d.maneuver or Path(d.path).stem}, {d.state}", "", f"![{Path(d.plot).name}]({Path(d.plot).name})", ""]
+            lines += [f"### {d.maneuver or Path(d.path).stem}, {d.state}", "",
+                      f"![{Path(d.plot).name}]({Path(d.plot).name})", ""]
     path.write_text("\n".join(lines) + "\n")
 
 

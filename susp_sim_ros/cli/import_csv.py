@@ -8,7 +8,8 @@ from ..analysis.csv_import import import_csv
 
 def add_arguments(p) -> None:
     p.add_argument("drive_csv", help="drive CSV: time_s, steering_wheel_angle_rad|_deg, speed_m_s|_km_h, "
-                                     "roll/pitch/yaw_rate_rad_s|_deg_s [, accel_x/y/z_m_s2] [, wheel_height_fl/fr/rl/rr_m]")
+                                     "roll/pitch/yaw_rate_rad_s|_deg_s [, accel_x/y/z_m_s2] "
+                                     "[, wheel_height_fl/fr/rl/rr_m]")
     p.add_argument("--road", default=None, help="road-profile CSV: s_m, z_left_m, z_right_m (default: flat road)")
     p.add_argument("--out", required=True, help="output MCAP (refuses to overwrite without --overwrite)")
     p.add_argument("--vehicle", default="passat_b8_like", help="vehicle parameter set name (metadata)")

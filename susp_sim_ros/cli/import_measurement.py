@@ -29,7 +29,8 @@ def add_arguments(p) -> None:
 
 def run(args) -> dict:
     res = import_measurement(args.drive, args.out, args.road, channel_map=args.channel_map,
-                             overwrite=args.overwrite, vehicle=args.vehicle, road_start_u=args.road_start_u, maneuver=args.maneuver,
+                             overwrite=args.overwrite, vehicle=args.vehicle, road_start_u=args.road_start_u,
+                             maneuver=args.maneuver,
                              damper_oil_level=args.oil, source=args.source, notes=args.notes)
     res["summary"] = (f"{args.drive} -> {res['out']}: {res['samples']} IMU samples over {res['duration_s']:.2f} s, "
                       f"{res['messages']} messages" + (f", road profile of {res['road_samples']} points"

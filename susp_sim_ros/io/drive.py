@@ -372,7 +372,8 @@ def check_drive(drive: TestDrive, where: str | os.PathLike) -> TestDrive:
         series(DAMPER_COMMAND, drive.damper_command.t_ns, drive.damper_command.values, 0.0, 1.0)
     if drive.road is not None and len(drive.road) and (
             np.abs(drive.road.zl).max() > MAX_WHEEL_HEIGHT or np.abs(drive.road.zr).max() > MAX_WHEEL_HEIGHT):
-        raise RecordingError(f"{where}: topic {names.get('road_profile', ROAD_PROFILE)}: elevation beyond +-{MAX_WHEEL_HEIGHT:g} m")
+        raise RecordingError(f"{where}: topic {names.get('road_profile', ROAD_PROFILE)}: elevation beyond "
+                             f"+-{MAX_WHEEL_HEIGHT:g} m")
     if drive.imu is not None:
         series(names.get("imu", IMU), drive.imu.t_ns, np.hstack([drive.imu.gyro, drive.imu.accel]))
     return drive
@@ -454,5 +455,6 @@ def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = 
 __all__ = ["Series", "ImuSeries", "TestDrive", "read_drive", "write_drive", "recording_from_drive", "read_imu",
            "parse_oil", "oil_unknown",
            "drive_from_recording", "drive_messages", "road_from_msg", "imu_from_recording", "check_topic",
-           "TOPIC_TYPES", "check_drive", "MAX_SPEED", "MAX_STEERING", "MAX_WHEEL_HEIGHT", "SPEED", "STEERING", "ROAD_PROFILE",
+           "TOPIC_TYPES", "check_drive", "MAX_SPEED", "MAX_STEERING", "MAX_WHEEL_HEIGHT", "SPEED", "STEERING",
+           "ROAD_PROFILE",
            "WHEEL_HEIGHTS", "DAMPER_COMMAND", "IMU", "SIM_IMU"]

@@ -34,8 +34,9 @@ from __future__ import annotations
 import math
 import re
 import struct
-from functools import lru_cache
-from typing import Any, Callable, Mapping, Sequence
+from functools import cache
+from typing import Any
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -124,7 +125,7 @@ def msg_name(msgtype: str) -> str:
     return f"{pkg}/{name}"
 
 
-@lru_cache(maxsize=None)
+@cache
 def full_definition(msgtype: str) -> str:
     r"""Concatenated ros2msg schema text of ``msgtype`` with all dependencies (MCAP ``ros2msg``), as
     rosbag2 writes it: own text, then per dependency (depth first, each message's dependencies sorted by
@@ -144,13 +145,13 @@ def full_definition(msgtype: str) -> str:
     return append(msgtype)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _encoder(msgtype: str) -> Callable[[Any], bytes]:
     from mcap_ros2._dynamic import serialize_dynamic
     return serialize_dynamic(msgtype, full_definition(msgtype))[msgtype]
 
 
-@lru_cache(maxsize=None)
+@cache
 def _decoder_for(msgtype: str, schema_text: str) -> Callable[[bytes], Any]:
     from mcap_ros2._dynamic import generate_dynamic
     return generate_dynamic(msgtype, schema_text)[msgtype]

@@ -22,7 +22,8 @@ a mapping (or just the topic name as a string) with
 - ``scale``: a finite non-zero factor (e.g. ``-1`` for a steering angle recorded positive to the right);
 - ``type``: optional ``pkg/msg/Type`` the topic must carry (checked; the identity map sets it);
 - for ``imu`` only, ``frame``: the sensor axes: ``flu`` (x forward, y left, z up: REP-103; alias
-  ``iso8855``), ``frd`` (x forward, y right, z down: aerospace IMUs; alias ``sae_j670``) or ``{rpy_deg: [roll, pitch, yaw]}``, the
+  ``iso8855``), ``frd`` (x forward, y right, z down: aerospace IMUs; alias ``sae_j670``) or
+  ``{rpy_deg: [roll, pitch, yaw]}``, the
   sensor's mounting rotation relative to the vehicle body (REP-103 roll-pitch-yaw, Z-Y-X, in degrees:
   the rotation that turns the body axes onto the sensor axes). A vector measured in sensor axes is
   ``v_body = R(roll, pitch, yaw) @ v_sensor``, so ``frd`` is ``rpy_deg: [180, 0, 0]``. Rates and specific
@@ -39,7 +40,8 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -312,7 +314,8 @@ def _imu(raw: Any, where: str) -> MappedImu:
                      parse_field_path(raw.get("angular_velocity", "angular_velocity"), f"{where}.angular_velocity"),
                      parse_field_path(raw.get("linear_acceleration", "linear_acceleration"),
                                       f"{where}.linear_acceleration"),
-                     gf, af, tuple(tuple(float(x) for x in row) for row in rot), frame, _msgtype(raw.get("type"), where))
+                     gf, af, tuple(tuple(float(x) for x in row) for row in rot), frame, _msgtype(raw.get("type"),
+                                                                                                 where))
 
 
 def parse_topic_map(data: Any, source: str = "topic map") -> TopicMap:

@@ -5,7 +5,6 @@ a road profile. ``to_inputs(dt)`` samples it on the model's step.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 

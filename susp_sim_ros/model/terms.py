@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from numba import njit
@@ -93,7 +93,8 @@ class PhysicsTerm:
 def dahl_exact(f, level, sigma, dx):
     """Exact position-domain Dahl update (exponent 1) over a deflection increment ``dx`` [m].
 
-    ``F_new = s*Fc + (F - s*Fc) * exp(-sigma*|dx|/Fc)`` (evaluated as an increment), ``s = sign(dx)``; unconditionally stable and
+    ``F_new = s*Fc + (F - s*Fc) * exp(-sigma*|dx|/Fc)`` (evaluated as an increment), ``s = sign(dx)``;
+    unconditionally stable and
     rate independent (model-spec 1). ``f`` is first clipped to the current level, so friction never
     exceeds its level when the level drops; a level <= 0 gives 0. Written without branches (selects
     only), so the kernel runs it on several vehicles per SIMD instruction.

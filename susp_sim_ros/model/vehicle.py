@@ -11,13 +11,13 @@ Units SI, axes REP-103, wheel order FL, FR, RL, RR.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterable, Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 
 from ..errors import SuspInputError
 from .kernel import load_kernel
-from .layout import (DAMPER_GRID, N_GRID, N_P_FIXED, N_U, OUTPUT_LABELS, P_GRID, P_H_EMPTY, P_H_HARD,
+from .layout import (DAMPER_GRID, N_GRID, N_U, OUTPUT_LABELS, P_GRID, P_H_EMPTY, P_H_HARD,
                      P_H_INTACT, P_H_SOFT, P_INDEX, P_SEMI_ACTIVE, P_VALVE_TAU, S_INDEX, U_INDEX,
                      KernelLayout, output_index)
 from .params import CORNER_AXLE, FrictionVariant, VehicleParams, load_variant, load_vehicle
@@ -112,7 +112,6 @@ class Model:
             k = P_INDEX[name]
             P[k:k + 4] = [pair[a] for a in CORNER_AXLE]
 
-        L = vp.wheelbase
         put("G", vp.gravity)
         put("M_S", vp.sprung_mass)
         put("M_TOT", vp.total_mass)

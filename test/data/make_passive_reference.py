@@ -1,6 +1,8 @@
 """Writes test/data/passive_reference.npz: passive-damper outputs of the code before the semi-active
-damper (commit db28f86), for test_semiactive_damper.py (bit-for-bit). Run: python test/data/make_passive_reference.py OUT.npz"""
-import numpy as np, sys
+damper (commit db28f86), for test_semiactive_damper.py (bit-for-bit).
+Run: python test/data/make_passive_reference.py OUT.npz"""
+import numpy as np
+import sys
 from susp_sim_ros.model import Model
 from susp_sim_ros.model.maneuvers import paper_maneuver, vehicle_state
 from susp_sim_ros.model.vehicle import simulate

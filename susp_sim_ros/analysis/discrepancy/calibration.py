@@ -33,7 +33,7 @@ import copy
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

@@ -24,7 +24,7 @@ model (design choice, see also the package docstring):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -204,7 +204,8 @@ def select_signals(case: DriveCase, keep: Sequence[str]) -> None:
 
 def has_road_input(case: DriveCase) -> bool:
     """Whether the recording gives the road under the wheels (a profile or wheel heights)."""
-    return (case.road is not None and len(case.road) >= 2) or bool(np.any(case.U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4] != 0))
+    zr = U_INDEX["ZR_IN"]
+    return (case.road is not None and len(case.road) >= 2) or bool(np.any(case.U[:, zr:zr + 4] != 0))
 
 
 def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.001,

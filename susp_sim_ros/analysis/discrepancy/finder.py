@@ -29,7 +29,7 @@ import importlib
 import math
 import time
 from pathlib import Path
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

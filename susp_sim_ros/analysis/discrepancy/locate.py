@@ -28,7 +28,7 @@ axle only where the road excited one (a drive with road input, deflection veloci
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from scipy import stats

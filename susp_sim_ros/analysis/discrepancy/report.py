@@ -273,7 +273,8 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
         p = st.part(x, "spring_rate_error")
         veh_changes[("suspension", "wheel_rate")] = _axle_map(vp.wheel_rate[0] * p[0], vp.wheel_rate[1] * p[1])
     if "tyre_relaxation_error" in st.names:
-        veh_changes[("tyre", "relaxation_length")] = float(vp.relaxation_length * st.part(x, "tyre_relaxation_error")[0])
+        factor = st.part(x, "tyre_relaxation_error")[0]
+        veh_changes[("tyre", "relaxation_length")] = float(vp.relaxation_length * factor)
     if not veh_changes or src is None:
         return var, None
     data = yaml.safe_load(src.read_text())
@@ -530,7 +531,8 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
             continue
         L.append(f"| {p['step']} | {', '.join(p['added'])} | {p['rms_x_noise']:.3f} | {p['delta_bic']:.1f} | "
                  f"{100 * p['explained_fraction_of_excess']:.0f} % | "
-                 f"{_pct(p.get('heldout_gain_fraction_of_excess'))} | {_pct(p.get('selected_in_fraction_of_refits'))} | "
+                 f"{_pct(p.get('heldout_gain_fraction_of_excess'))} | "
+                 f"{_pct(p.get('selected_in_fraction_of_refits'))} | "
                  f"{'yes' if p['accepted'] else 'no'} |")
     L += ["", "## Ranking of single candidates at the base model (linearised)", "",
           "| candidate | RMS [x noise] | BIC | held-out RMS (LODO) [x noise] |", "|---|---|---|---|"]
@@ -542,7 +544,8 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
           "| drive | signal | from [s] | to [s] | RMS | x noise | dominant f [Hz] | most active axle |",
           "|---|---|---|---|---|---|---|---|"]
     for w in f.windows_:
-        L.append(f"| {w['drive']} | {w['signal']} | {w['start_s']:.2f} | {w['end_s']:.2f} | {w['rms']:.3g} {w['unit']} | "
+        L.append(f"| {w['drive']} | {w['signal']} | {w['start_s']:.2f} | {w['end_s']:.2f} | "
+                 f"{w['rms']:.3g} {w['unit']} | "
                  f"{w['ratio_to_noise']:.1f} | {w['dominant_frequency_hz']:.1f} | {w.get('axle', '-')} |")
     L += ["", "## Files", ""] + [f"- {k}: `{v}`" for k, v in paths.items() if isinstance(v, str)]
     if "variant" in paths:

@@ -25,7 +25,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import yaml
@@ -204,7 +204,8 @@ def _tracks_differ(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
     """Whether any drive's road differs between the left and right tracks by more than ``tol_m``."""
     from ...model.layout import U_INDEX
     for c in cases:
-        if c.road is not None and len(c.road) >= 2 and np.max(np.abs(np.asarray(c.road.zl) - np.asarray(c.road.zr))) > tol_m:
+        if c.road is not None and len(c.road) >= 2 and np.max(
+                np.abs(np.asarray(c.road.zl) - np.asarray(c.road.zr))) > tol_m:
             return True
         zr = c.U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4]
         if np.max(np.abs(zr[:, 0] - zr[:, 1])) > tol_m or np.max(np.abs(zr[:, 2] - zr[:, 3])) > tol_m:
@@ -302,7 +303,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     x = fit.x
     oil_off = st.offsets[1] if groups else None
     by_group = {}
-    for g, (name, wheels) in enumerate(groups):
+    for g, (name, _wheels) in enumerate(groups):
         j = oil_off + g
         s = math.hypot(se[j], sd_m)
         by_group[name] = (float(x[j]), max(0.0, float(x[j] - 1.96 * s)), min(1.0, float(x[j] + 1.96 * s)), j)

@@ -32,7 +32,7 @@ from __future__ import annotations
 import csv
 import math
 from pathlib import Path
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -57,7 +57,8 @@ def roc_spec(data: dict, source: str, name: str):
         raise ConfigError(f"{source}: roc: a roc study needs a 'roc:' mapping (see config/studies/inspection_roc.yaml)")
     unknown = set(roc) - ROC_KEYS
     if unknown:
-        raise ConfigError(f"{source}: roc: unknown key(s) {', '.join(sorted(unknown))}; known: {', '.join(sorted(ROC_KEYS))}")
+        raise ConfigError(f"{source}: roc: unknown key(s) {', '.join(sorted(unknown))}; "
+                          f"known: {', '.join(sorted(ROC_KEYS))}")
 
     def num(key, positive=True):
         v = roc.get(key)
@@ -219,7 +220,8 @@ def _estimator(vehicle: str, variant: str, cfg: dict):
     key = ("est", vehicle, variant)
     if key not in _cache:
         m = Model(vehicle, variant)
-        _cache[key] = (m, nuisance_params(m, cfg["estimator"]["nuisance"], cfg["estimator"].get("nuisance_range_scale")))
+        _cache[key] = (m, nuisance_params(m, cfg["estimator"]["nuisance"],
+                                          cfg["estimator"].get("nuisance_range_scale")))
     return _cache[key]
 
 

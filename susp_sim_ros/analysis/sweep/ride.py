@@ -24,7 +24,8 @@ from __future__ import annotations
 import itertools
 import math
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -67,7 +68,8 @@ def ride_study(data: Mapping, source: str, name: str) -> StudySpec:
     swept = []
     for k in RIDE_KEYS:
         vals = params.get(k, defaults[k])
-        vals = vals if isinstance(vals, list) and not (k == "oil" and vals and not isinstance(vals[0], list)) else [vals]
+        single_oil = k == "oil" and isinstance(vals, list) and vals and not isinstance(vals[0], list)
+        vals = vals if isinstance(vals, list) and not single_oil else [vals]
         if not vals:
             raise ConfigError(f"{source}: parameters.{k}: empty list")
         out = []
@@ -141,7 +143,8 @@ def ride_benefit(rows: list[dict]) -> list[dict]:
         out.append({"controller": r["controller"], "oil": r["oil"], "road_class": r["road_class"],
                     "variant": r["variant"],
                     "comfort_change": r["comfort_wk_rms_m_s2"] / b["comfort_wk_rms_m_s2"] - 1.0,
-                    "tyre_load_change": r["dynamic_tyre_load_rms_rel_mean"] / b["dynamic_tyre_load_rms_rel_mean"] - 1.0})
+                    "tyre_load_change":
+                        r["dynamic_tyre_load_rms_rel_mean"] / b["dynamic_tyre_load_rms_rel_mean"] - 1.0})
     return out
 
 
@@ -197,14 +200,16 @@ def finish_ride(spec: StudySpec, store, plot: bool) -> dict:
     mean: dict = {}
     for b in ben:
         mean.setdefault(f"{b['controller']}/{b['variant']}", []).append((b["comfort_change"], b["tyre_load_change"]))
-    mean = {k: {"comfort_change": float(np.mean([x[0] for x in v])), "tyre_load_change": float(np.mean([x[1] for x in v]))}
+    mean = {k: {"comfort_change": float(np.mean([x[0] for x in v])),
+                "tyre_load_change": float(np.mean([x[1] for x in v]))}
             for k, v in mean.items()}
     return {"table": str(table), "benefit_table": str(benefit), "columns": COLUMNS, "plots": plots,
             "runs_ok": len(rows) - len(failed), "runs_failed": failed, "mean_benefit": mean}
 
 
 def ride_summary(r: dict) -> list[str]:
-    lines = [f"  {k}: Wk RMS {100 * v['comfort_change']:+.1f} %, dynamic tyre load {100 * v['tyre_load_change']:+.1f} % "
+    lines = [f"  {k}: Wk RMS {100 * v['comfort_change']:+.1f} %, "
+             f"dynamic tyre load {100 * v['tyre_load_change']:+.1f} % "
              f"against passive (mean over oil levels and roads)" for k, v in r.get("mean_benefit", {}).items()]
     lines += [f"  FAILED run {f['run_id']}: {f['error']}" for f in r.get("runs_failed", [])]
     return lines

@@ -15,7 +15,7 @@ import logging
 import math
 import os
 import time
-from typing import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 import numpy as np
 

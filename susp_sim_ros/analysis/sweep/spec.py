@@ -20,7 +20,8 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -298,7 +299,8 @@ def _plot(source: str, plot: Any, spec: StudySpec) -> dict | None:
         raise ConfigError(f"{source}: plot: expected a mapping (y, panels, lines)")
     unknown = set(plot) - {"y", "panels", "lines", "title"}
     if unknown:
-        raise ConfigError(f"{source}: plot: unknown key(s) {', '.join(sorted(unknown))}; known: y, panels, lines, title")
+        raise ConfigError(f"{source}: plot: unknown key(s) {', '.join(sorted(unknown))}; "
+                          "known: y, panels, lines, title")
     names = {m if isinstance(m, str) else json.dumps(m): metric_column(m, spec.data["maneuver"])
              for m in spec.data["outputs"]}
     ys = plot.get("y", [next(iter(names))])
