@@ -495,6 +495,7 @@ class DiscrepancyFinder:
         old_cols = [j for j in range(len(x)) if j not in new_cols]
         neutral = st.neutral()
         pidx, pmu, psd = st.prior()
+        lo, hi = st.bounds()
         edges = np.cumsum([0] + [ev.n_res[q] for q in new.idx])
         sq_old = sq_new = 0.0
         n_held = 0
@@ -517,7 +518,12 @@ class DiscrepancyFinder:
                 if pr is not None:
                     A, b = np.vstack([A, pr[0]]), np.concatenate([b, pr[1]])
                 d, *_ = np.linalg.lstsq(A, b, rcond=None)
-                e = base + J[:, free] @ d
+                # within the parameters' bounds, as the nonlinear refit: a term the training drives hardly
+                # inform must not predict the held-out drive from an impossible value
+                step = d0.copy()
+                step[free] += d
+                step = np.clip(x + step, lo, hi) - x
+                e = r + J @ step
                 out[tag] = (float(e[held] @ e[held]), float(e[tr] @ e[tr]))
             sq_old += out["old"][0]
             sq_new += out["new"][0]
