@@ -42,7 +42,7 @@ def parse_road(text: str) -> str:
     return cls.upper()
 
 
-def run_ride(model: Model, spec: RideSpec, *, controller: str = "passive", oil: Sequence[float] = INTACT,
+def run_ride(model: Model, spec: RideSpec, *, controller: str = "passive", oil: Sequence[float] | np.ndarray = INTACT,
              step_s: float = 0.001, config: str | Path | None = None) -> dict:
     """Drive ``spec`` with ``controller``; returns the ride metrics plus ``t_start_s`` (metrics window
     start), ``samples`` and ``mean_command`` {WHEEL: float} (None when passive)."""

@@ -229,14 +229,15 @@ def float64(value: float) -> dict:
     return {"data": float(value)}
 
 
-def road_profile_msg(s: Sequence[float], zl: Sequence[float], zr: Sequence[float]) -> dict:
+def road_profile_msg(s: Sequence[float] | np.ndarray, zl: Sequence[float] | np.ndarray,
+                     zr: Sequence[float] | np.ndarray) -> dict:
     n = len(s)
     return {"layout": {"dim": [{"label": "channel", "size": 3, "stride": 3 * n},
                                {"label": "sample", "size": n, "stride": n}], "data_offset": 0},
             "data": [float(x) for x in np.concatenate([s, zl, zr])]}
 
 
-def wheel_heights_msg(z: Sequence[float]) -> dict:
+def wheel_heights_msg(z: Sequence[float] | np.ndarray) -> dict:
     return {"layout": {"dim": [{"label": "wheel", "size": 4, "stride": 4}], "data_offset": 0},
             "data": [float(x) for x in z]}
 

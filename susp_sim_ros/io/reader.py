@@ -20,7 +20,7 @@ import logging
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 from collections.abc import Iterator
 
 from mcap.exceptions import EndOfFile
@@ -136,7 +136,9 @@ _MAX_EXPANSION = 1000
 
 
 def _records(src: _ExactReader) -> Iterator[Any]:
-    for r in StreamReader(src, skip_magic=False, emit_chunks=True, validate_crcs=True).records:
+    # mcap's stream reader only calls read() and tell(); its annotation asks for a file object
+    for r in StreamReader(src, skip_magic=False, emit_chunks=True,  # type: ignore[arg-type]
+                          validate_crcs=True).records:
         if isinstance(r, Chunk):
             if r.uncompressed_size > max(1 << 20, _MAX_EXPANSION * len(r.data)):
                 raise ValueError(f"chunk claims {r.uncompressed_size} bytes uncompressed from "
@@ -301,6 +303,7 @@ def _msgdef_text(conn) -> tuple[str, str]:
 
 def _read_rosbags(path: Path, name: Path) -> Recording:
     """A rosbag2 directory or ``.db3`` file through ``rosbags`` (sqlite3 storage, compressed bags)."""
+    from rosbags.interfaces import ConnectionExtRosbag2
     from rosbags.rosbag2 import Reader
     from .recorder import qos_yaml
     rec = Recording(name)
@@ -313,12 +316,13 @@ def _read_rosbags(path: Path, name: Path) -> Recording:
                 enc, text = _msgdef_text(conn)
                 sid = len(rec.schemas) + 1
                 rec.schemas[sid] = Schema(id=sid, name=conn.msgtype, encoding=enc, data=text.encode())
+                ext = cast(ConnectionExtRosbag2, conn.ext)  # a rosbag2 reader's connections carry rosbag2 extensions
                 durab = [getattr(getattr(q, "durability", None), "name", "").lower()
-                         for q in conn.ext.offered_qos_profiles]
+                         for q in ext.offered_qos_profiles]
                 cid = len(rec.channels) + 1
                 latched = any("transient_local" in d for d in durab)
                 rec.channels[cid] = Channel(id=cid, schema_id=sid, topic=conn.topic,
-                                            message_encoding=conn.ext.serialization_format,
+                                            message_encoding=ext.serialization_format,
                                             metadata={"offered_qos_profiles": qos_yaml(latched)})
                 ids[id(conn)] = cid
             for seq, (conn, t, data) in enumerate(r.messages()):

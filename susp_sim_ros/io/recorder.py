@@ -132,7 +132,8 @@ class McapRecorder:
         except OSError as exc:
             raise RecordingError(f"{path}: cannot open for writing: {exc.strerror or exc}") from None
         self._file = _CommittingFile(fd)
-        self._writer = Writer(self._file, chunk_size=chunk_size, compression=comp)
+        # mcap's writer only calls write() and tell(); its annotation asks for a file object
+        self._writer = Writer(self._file, chunk_size=chunk_size, compression=comp)  # type: ignore[arg-type]
         self._writer.start(profile="ros2", library="susp_sim_ros recorder (mcap python)")
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, tuple[int, str]] = {}

@@ -154,7 +154,7 @@ class MappedImu:
     linear_acceleration: tuple[str | int, ...] = ("linear_acceleration",)
     gyro_factor: float = 1.0
     accel_factor: float = 1.0
-    rotation: tuple[tuple[float, float, float], ...] = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    rotation: tuple[tuple[float, ...], ...] = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))  # 3x3, rows
     frame: str = "flu"
     msgtype: str | None = None
 

@@ -467,7 +467,7 @@ def _store_state(Sv, b, S, l):
         Sv[b, q] = S[q, l]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", fastmath={"arcp", "nsz"})
+@njit(cache=True, _nrt=False, error_model="numpy", fastmath={"arcp", "nsz"})  # type: ignore[call-overload]  # _nrt: a numba option its stubs do not declare
 def _run_block(Pv, Sv, b0, nl, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Yv, done):
     # compiled without the reference-counting runtime: with it, every array argument of the inlined
     # helpers costs an atomic incref/decref pair per step. The block's parameters, state, context,

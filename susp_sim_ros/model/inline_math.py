@@ -58,7 +58,9 @@ def expm1_nonpos(x):
     q = (((_C2 + _C3 * r) + (_C4 + _C5 * r) * r2) + ((_C6 + _C7 * r) + (_C8 + _C9 * r) * r2) * r4
          + ((_C10 + _C11 * r) + (_C12 + _C13 * r) * r2) * (r4 * r4))
     e = r + r2 * q
-    t = _pow2(k if k == k else 0.0)  # NaN: any exponent; e is NaN and so is the result
+    # NaN: any exponent; e is NaN and so is the result. (In compiled code an @intrinsic is called without
+    # its typing context, which numba's stubs cannot express.)
+    t: float = _pow2(k if k == k else 0.0)  # type: ignore[call-arg]
     return t * e + (t - 1.0)
 
 

@@ -79,7 +79,11 @@ def _dependency_digest(terms: tuple[PhysicsTerm, ...]) -> str:
     files = {Path(__file__).with_name(f) for f in ("layout.py", "terms.py", "inline_math.py")}
     for t in terms:
         for fn in (t.force, t.update):
-            files.add(Path(inspect.getsourcefile(fn.py_func)))
+            src = inspect.getsourcefile(fn.py_func)
+            if src is None:
+                raise ValueError(f"term {t.name}: no source file for {fn.py_func.__name__}; the kernel imports "
+                                 f"a term's functions from their module file")
+            files.add(Path(src))
     h = hashlib.sha256()
     for f in sorted(files):
         h.update(f.read_bytes())
@@ -110,6 +114,8 @@ def load_kernel(terms: tuple[PhysicsTerm, ...]) -> ModuleType:
             os.replace(tmp, path)
         name = f"susp_kernel_{key}"
         spec = importlib.util.spec_from_file_location(name, path)
+        if spec is None or spec.loader is None:
+            raise ImportError(f"{path}: cannot load the generated kernel module")
         mod = importlib.util.module_from_spec(spec)
         sys.modules[name] = mod
         spec.loader.exec_module(mod)

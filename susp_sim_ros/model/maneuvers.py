@@ -41,7 +41,10 @@ def vehicle_state(name: str) -> tuple[float, float, float, float]:
     cfg = _maneuver_config()
     if name not in cfg.get("states", {}):
         raise ConfigError(f"unknown vehicle state {name!r}: expected one of {', '.join(cfg['states'])}")
-    return tuple(float(x) for x in cfg["states"][name]["value"])
+    oil = tuple(float(x) for x in cfg["states"][name]["value"])
+    if len(oil) != 4:
+        raise ConfigError(f"maneuvers.yaml: states.{name}: expected four oil levels FL, FR, RL, RR, got {oil}")
+    return oil[0], oil[1], oil[2], oil[3]
 
 
 @dataclass(frozen=True)

@@ -84,7 +84,8 @@ class _Reader:
     """Reads ``section.key`` entries of one vehicle file with checks and clear errors."""
 
     def __init__(self, path: Path, data: dict):
-        self.path, self.data, self.sources = path, data, {}
+        self.path, self.data = path, data
+        self.sources: dict[str, tuple[str, str]] = {}
 
     def _entry(self, section: str, key: str) -> dict:
         sec = self.data.get(section)
@@ -113,7 +114,8 @@ class _Reader:
         v = self._entry(section, key)["value"]
         if not isinstance(v, dict) or set(v) != set(AXLES):
             raise ConfigError(f"{self.path}: {section}.{key}.value must be {{front: .., rear: ..}}, got {v!r}")
-        return tuple(self._num(section, f"{key}.{a}", v[a], positive, nonneg) for a in AXLES)
+        front, rear = (self._num(section, f"{key}.{a}", v[a], positive, nonneg) for a in AXLES)
+        return front, rear
 
     def table(self, section: str, key: str, n: int | None = None) -> tuple:
         v = self._entry(section, key)["value"]
@@ -344,9 +346,11 @@ def corner_values(where: str, spec: Any, term: str, pname: str) -> tuple[float, 
     if isinstance(spec, (int, float)) and not isinstance(spec, bool):
         return (float(spec),) * 4
     if isinstance(spec, dict) and set(spec) == set(AXLES):
-        return tuple(float(spec[AXLES[a]]) for a in CORNER_AXLE)
+        fl, fr, rl, rr = (float(spec[AXLES[a]]) for a in CORNER_AXLE)
+        return fl, fr, rl, rr
     if isinstance(spec, dict) and set(spec) == set(CORNER_NAMES):
-        return tuple(float(spec[c]) for c in CORNER_NAMES)
+        fl, fr, rl, rr = (float(spec[c]) for c in CORNER_NAMES)
+        return fl, fr, rl, rr
     raise ConfigError(f"{where}: term {term}: parameter {pname} must be a number, {{front, rear}} or "
                       f"{{FL, FR, RL, RR}}, got {spec!r}")
 

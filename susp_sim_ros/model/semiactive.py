@@ -71,12 +71,12 @@ def load_damper_family(path: str | Path | None = None) -> DamperFamily:
     vel = entry(path, data, sec, "velocity")["value"]
     if not isinstance(vel, list) or len(vel) < 3 or any(b <= a for a, b in zip(vel, vel[1:])):
         raise ConfigError(f"{path}: {sec}.velocity must be a strictly increasing list of velocities [m/s]")
-    curves = {}
+    curves: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
     for name in ("soft", "hard"):
         v = entry(path, data, sec, name)["value"]
         if not isinstance(v, dict) or set(v) != set(AXLES):
             raise ConfigError(f"{path}: {sec}.{name}.value must be {{front: [..], rear: [..]}}")
-        pair = []
+        pair: list[tuple[float, ...]] = []
         for a in AXLES:
             row = v[a]
             if (not isinstance(row, list) or len(row) != len(vel)
@@ -85,10 +85,10 @@ def load_damper_family(path: str | Path | None = None) -> DamperFamily:
             if any((x > 0) != (s > 0) for x, s in zip(row, vel) if s != 0 and x != 0):
                 raise ConfigError(f"{path}: {sec}.{name}.{a}: a damper force must have the sign of the velocity")
             pair.append(tuple(float(x) for x in row))
-        curves[name] = tuple(pair)
-    for a in range(2):
-        if any(abs(s) > abs(h) for s, h in zip(curves["soft"][a], curves["hard"][a])):
-            raise ConfigError(f"{path}: {sec}: the soft curve must not exceed the hard one ({AXLES[a]})")
+        curves[name] = (pair[0], pair[1])
+    for k in range(2):
+        if any(abs(s) > abs(h) for s, h in zip(curves["soft"][k], curves["hard"][k])):
+            raise ConfigError(f"{path}: {sec}: the soft curve must not exceed the hard one ({AXLES[k]})")
     tau = number(path, data, sec, "valve_time_constant", positive=True)
     if tau > 1.0:
         raise ConfigError(f"{path}: {sec}.valve_time_constant: expected a valve lag below 1 s, got {tau} s")

@@ -38,9 +38,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
+
+if TYPE_CHECKING:  # numba's stubs make the dispatcher generic; at run time it is not subscriptable
+    from numba.core.dispatcher import Dispatcher
 
 from .inline_math import TINY, expm1_nonpos
 from .layout import C_INDEX
@@ -69,8 +73,8 @@ class PhysicsTerm:
     meaning: str
     params: tuple[TermParam, ...]
     n_states: int
-    force: Callable = field(repr=False)
-    update: Callable = field(repr=False)
+    force: Dispatcher[Callable[..., float]] = field(repr=False)
+    update: Dispatcher[Callable[..., None]] = field(repr=False)
     stored_energy: Callable | None = field(default=None, repr=False)
 
     def __post_init__(self):

@@ -27,7 +27,7 @@ from .terms import AXLE_FRICTION, BUILTIN_TERMS, DAMPER_FRICTION, PhysicsTerm
 INTACT = (1.0, 1.0, 1.0, 1.0)
 
 
-def _extrap_interp(x: np.ndarray, xp: Sequence[float], fp: Sequence[float]) -> np.ndarray:
+def _extrap_interp(x: np.ndarray, xp: Sequence[float] | np.ndarray, fp: Sequence[float] | np.ndarray) -> np.ndarray:
     """Linear interpolation with linear extrapolation beyond both ends."""
     xp, fp = np.asarray(xp, float), np.asarray(fp, float)
     y = np.interp(x, xp, fp)
@@ -95,7 +95,7 @@ class Model:
         return self._dampers
 
     # -- parameters -------------------------------------------------------------------------------
-    def params(self, oil: Sequence[float] = INTACT, semi_active: bool = False) -> np.ndarray:
+    def params(self, oil: Sequence[float] | np.ndarray = INTACT, semi_active: bool = False) -> np.ndarray:
         """The flat parameter vector ``P`` for oil levels FL, FR, RL, RR (1 intact, 0 oil-empty).
 
         ``semi_active``: the damper follows the valve command input (``U[:, CMD]``, [0, 1] per corner)
@@ -217,7 +217,8 @@ def set_semi_active(model: "Model", P: np.ndarray, on: bool) -> None:
 
 
 def _corners(pair) -> tuple[float, float, float, float]:
-    return tuple(float(pair[a]) for a in CORNER_AXLE)
+    fl, fr, rl, rr = (float(pair[a]) for a in CORNER_AXLE)
+    return fl, fr, rl, rr
 
 
 def check_oil(oil: Iterable[float], what: str = "damper_oil_level") -> np.ndarray:
@@ -276,7 +277,7 @@ def _selection(outputs: Sequence[str] | None) -> tuple[tuple[str, ...], np.ndarr
 
 
 def simulate(model: Model, U: np.ndarray, *, dt: float, road: RoadProfile | None = None,
-             oil: Sequence[float] = INTACT, P: np.ndarray | None = None, S: np.ndarray | None = None,
+             oil: Sequence[float] | np.ndarray = INTACT, P: np.ndarray | None = None, S: np.ndarray | None = None,
              decim: int = 1, outputs: Sequence[str] | None = None, t0: float = 0.0) -> SimResult:
     """Run one vehicle over the input rows ``U`` at step ``dt`` [s]; record every ``decim``-th step.
 
@@ -345,7 +346,7 @@ class Stepper:
     """
 
     def __init__(self, model: Model, *, dt: float, road: RoadProfile | None = None,
-                 oil: Sequence[float] = INTACT):
+                 oil: Sequence[float] | np.ndarray = INTACT):
         if not (np.isfinite(dt) and 0 < dt <= 0.01):
             raise SuspInputError(f"step_s: expected a step in (0, 0.01] s, got {dt}")
         self.model, self.dt = model, float(dt)
@@ -374,14 +375,14 @@ class Stepper:
     def semi_active(self) -> bool:
         return bool(self.P[P_SEMI_ACTIVE] > 0.5)
 
-    def set_semi_active(self, on: bool, command: Sequence[float] | None = None) -> None:
+    def set_semi_active(self, on: bool, command: Sequence[float] | np.ndarray | None = None) -> None:
         """Use the valve command (``on``) or the passive damper. Switching on sets the valve to
         ``command`` (default: its last setting) without lag: the valve starts where it is commanded."""
         if on and not self.semi_active and command is not None:
             self.S[S_INDEX["VALVE"]:S_INDEX["VALVE"] + 4] = np.clip(np.asarray(command, float), 0.0, 1.0)
         set_semi_active(self.model, self.P, on)
 
-    def set_oil(self, oil: Sequence[float]) -> None:
+    def set_oil(self, oil: Sequence[float] | np.ndarray) -> None:
         self.oil = check_oil(oil)
         self.P[P_INDEX["OIL"]:P_INDEX["OIL"] + 4] = self.oil
 
@@ -399,8 +400,8 @@ class Stepper:
         self.P = model.params(self.oil, semi_active=self.semi_active)
 
     def advance(self, n_steps: int, speed: float, steering: float, accel: float = 0.0,
-                wheel_heights: Sequence[float] | None = None,
-                damper_command: Sequence[float] | None = None) -> np.ndarray:
+                wheel_heights: Sequence[float] | np.ndarray | None = None,
+                damper_command: Sequence[float] | np.ndarray | None = None) -> np.ndarray:
         """Advance ``n_steps`` steps with held inputs; returns the full output vector of the last step.
         ``damper_command`` [0, 1] per corner is used when :attr:`semi_active` (else ignored)."""
         if n_steps <= 0 or not self.healthy:
