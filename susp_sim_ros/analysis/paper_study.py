@@ -14,10 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Model, simulate
-from ..model.maneuvers import STATES, bump_crossing, sine_steer, vehicle_state
+from ..model.maneuvers import bump_crossing, sine_steer, vehicle_state
+from ..model.paper import PRIMARY_OUTPUT, STATES, VARIANTS
 
-VARIANTS = ("full", "no_horizontal", "no_velocity", "dahl_only")
-SIGNAL = {"bump_crossing": "PITCH_RATE", "sine_steer": "ROLL_RATE"}
 RING_OUT_THRESHOLD_DEG_S = 0.3  # model-spec 5 measures the bump ring-out against 0.3 deg/s
 
 
@@ -44,7 +43,7 @@ def run_paper_study(vehicle: str = "passat_b8_like", dt: float = 0.001, progress
             traces[mname][state], rmse[mname][state], ring[mname][state] = {}, {}, {}
             for var in VARIANTS:
                 res = simulate(models[var], U, dt=dt, road=man.road, oil=vehicle_state(state),
-                               outputs=[SIGNAL[mname]], decim=int(round(0.01 / dt)))
+                               outputs=[PRIMARY_OUTPUT[mname]], decim=int(round(0.01 / dt)))
                 if not res.ok:
                     raise RuntimeError(f"{mname}/{state}/{var}: simulation became non-finite")
                 sig = np.degrees(res.y[:, 0])
@@ -75,7 +74,7 @@ def write_report(study: PaperStudy, out: Path) -> dict:
             for var, (t, sig) in by_state[state].items():
                 ax.plot(t, sig, lw=1.2 if var == "full" else 0.9, label=var)
             ax.set_title(f"{state}")
-            ax.set_ylabel(f"{SIGNAL[mname].lower().replace('_', ' ')} [deg/s]")
+            ax.set_ylabel(f"{PRIMARY_OUTPUT[mname].lower().replace('_', ' ')} [deg/s]")
             ax.grid(True, alpha=0.3)
         axes[0].legend(ncol=4, fontsize=8)
         axes[-1].set_xlabel("time [s]")

@@ -32,15 +32,12 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import RecordingError, SuspInputError
+from ..model.maneuvers import vehicle_state
+from ..model.paper import MANEUVERS, STATES, VARIANTS
 from . import validation as va
 
-VARIANTS = ("full", "no_horizontal", "no_velocity", "dahl_only")
 VARIANT_LABEL = {"full": "Model 1 full", "no_horizontal": "Model 2 no horizontal",
                  "no_velocity": "Model 3 no velocity", "dahl_only": "Model 4 Dahl only"}
-MANEUVERS = ("bump_crossing", "sine_steer")
-STATES = ("intact", "front_empty", "rear_empty")
-STATE_OIL = {"intact": (1.0, 1.0, 1.0, 1.0), "front_empty": (0.0, 0.0, 1.0, 1.0),
-             "rear_empty": (1.0, 1.0, 0.0, 0.0)}
 PAPER_RATIO = 65.0  # paper: rear dampers oil-empty, bump crossing, RMSE dahl_only / full
 # measured with the generator (bags/README.md, "How much each ingredient costs"); valid for its version
 ABLATION_NOTE = ("For this generator version, the same chain without any hidden physics gives a ratio of about "
@@ -67,8 +64,8 @@ def classify_maneuver(text: str) -> str | None:
 
 def classify_state(oil: Sequence[float]) -> str:
     """Vehicle state name of oil levels FL, FR, RL, RR; ``oil_<levels>`` for other combinations."""
-    for name, levels in STATE_OIL.items():
-        if tuple(float(x) for x in oil) == levels:
+    for name in STATES:
+        if tuple(float(x) for x in oil) == vehicle_state(name):
             return name
     return "oil_" + "_".join(f"{x:g}" for x in oil)
 

@@ -26,12 +26,13 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..errors import RecordingError, SuspInputError
+from ..model.paper import PRIMARY_SIGNAL
 
 NS = 1_000_000_000
 RATE_SIGNALS = ("roll_rate", "pitch_rate", "yaw_rate")  # gyro axes x, y, z (REP-103)
 SIGNAL_AXIS = {"roll_rate": 0, "pitch_rate": 1, "yaw_rate": 2}
 # signal the paper's tables use per maneuver (model-spec 4)
-MANEUVER_SIGNAL = {"bump_crossing": "pitch_rate", "sine_steer": "roll_rate"}
+MANEUVER_SIGNAL = PRIMARY_SIGNAL  # the signal each of the paper's maneuvers is compared on
 MANEUVER_WINDOW = {"bump_crossing": "bump", "sine_steer": "steering"}
 
 WINDOW_LEAD_S = 0.5        # window starts this long before the first excitation

@@ -15,9 +15,8 @@ from ..errors import ConfigError
 from .params import config_dir
 from .road import RoadProfile, cosine_bump
 from .vehicle import make_inputs
+from .paper import MANEUVERS, STATES  # noqa: F401  (re-exported: the paper's maneuvers and states)
 
-MANEUVERS = ("bump_crossing", "sine_steer")
-STATES = ("intact", "front_empty", "rear_empty")
 
 
 def _maneuver_config(path: Path | None = None) -> dict:

@@ -19,9 +19,9 @@ import numpy as np
 from numba import njit, prange
 
 from ...model.layout import P_INDEX
+from ...model.paper import PRIMARY_OUTPUT
 from .runs import (MANEUVER_KEYS, _cache, _lock, inputs_of, maneuver_of, model_of, oil_of,  # noqa: F401
                    params_of, vehicle_params)
-from .spec import SIGNAL
 
 def after_time(man, wheelbase: float) -> float:
     """When the excitation is over [s]: the rear axle has left the bump / the last steer has ended."""
@@ -32,7 +32,7 @@ def after_time(man, wheelbase: float) -> float:
 
 def selection(data: Mapping) -> list[str]:
     """Output labels a chunk records: the maneuver's signal first, then those generic metrics name."""
-    labels = [SIGNAL[data["maneuver"]]]
+    labels = [PRIMARY_OUTPUT[data["maneuver"]]]
     for m in data["outputs"]:
         if isinstance(m, dict):
             lab = next(iter(m.values()))

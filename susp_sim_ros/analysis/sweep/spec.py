@@ -26,11 +26,10 @@ from collections.abc import Mapping
 import numpy as np
 
 from ...errors import ConfigError, SuspInputError
+from ...model.paper import MANEUVERS, PRIMARY_OUTPUT
 from .runs import MANEUVER_KEYS, maneuver_of, vehicle_key, vehicle_params
 
 ENGINE_VERSION = 2          # bump when a change alters results, so old stores are not resumed into
-MANEUVERS = ("bump_crossing", "sine_steer")
-SIGNAL = {"bump_crossing": "PITCH_RATE", "sine_steer": "ROLL_RATE"}
 OIL_KEYS = ("oil_front", "oil_rear", "oil_FL", "oil_FR", "oil_RL", "oil_RR")
 # parameter -> (kind, maneuver it belongs to or None, what it is)
 PARAMETERS: dict[str, tuple[str, str | None, str]] = {
@@ -99,7 +98,7 @@ class StudySpec:
 
 def metric_column(m, maneuver: str) -> str:
     """Table column of a metric (units in the name; rates in deg/s as the paper reports them)."""
-    sig = SIGNAL[maneuver].lower()
+    sig = PRIMARY_OUTPUT[maneuver].lower()
     if isinstance(m, dict):
         (kind, label), = m.items()
         return f"{kind}_abs_{label}" if kind == "peak" else f"rms_{label}"
