@@ -1,0 +1,115 @@
+"""The sim-time reorder queue (pure, no rclpy): /clock and inputs released in publish order, whatever
+order they arrive in, with the wall-time window and the wait limit of inputs."""
+from __future__ import annotations
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from susp_sim_ros.ros.sim_time import CLOCK, INPUT, INPUT_WAIT_MAX_NS, SimTimeOrderer
+
+WINDOW = 20_000_000  # 20 ms, the node's default sim_reorder_window_s
+NOW = 10**18         # wall time [ns] far after every source timestamp below
+
+
+def run(orderer: SimTimeOrderer, now: int, pull=lambda: None) -> list:
+    out: list = []
+    orderer.drain(now, lambda t: out.append(("clock", t)), lambda p: out.append(("input", p)), pull)
+    return out
+
+
+def test_importing_the_orderer_needs_no_rclpy():
+    import ast
+    import inspect
+
+    import susp_sim_ros.ros.sim_time as mod
+    imported = {n.names[0].name.split(".")[0] for n in ast.walk(ast.parse(inspect.getsource(mod)))
+                if isinstance(n, ast.Import)}
+    imported |= {n.module.split(".")[0] for n in ast.walk(ast.parse(inspect.getsource(mod)))
+                 if isinstance(n, ast.ImportFrom) and n.module}
+    assert imported <= {"__future__", "heapq", "collections", "typing"}
+
+
+@st.composite
+def replay(draw):
+    """A replay: /clock at increasing times, each followed by 0..3 inputs; the publish (source)
+    timestamps increase in publish order; the arrival order is any permutation of it."""
+    n_clock = draw(st.integers(1, 12))
+    published = []
+    src = 1_000
+    for k in range(n_clock):
+        src += draw(st.integers(1, 5_000_000))
+        published.append((src, CLOCK, 1_000_000_000 + 10_000_000 * k))
+        for j in range(draw(st.integers(0, 3))):
+            src += draw(st.integers(1, 5_000_000))
+            published.append((src, INPUT, f"in{k}.{j}"))
+    arrival = draw(st.permutations(published))
+    return published, arrival
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, database=None)
+@given(replay())
+def test_any_arrival_order_is_released_in_publish_order(case):
+    """Every event released once, in publish order: an input published between /clock t1 and t2 comes
+    after t1 and before t2, as in the lockstep run; the last inputs wait for their wait limit."""
+    published, arrival = case
+    q = SimTimeOrderer(WINDOW)
+    for src, kind, payload in arrival:
+        q.push(src, kind, payload)
+    assert len(q) == len(published)
+    last_clock_src = max(src for src, kind, _ in published if kind == CLOCK)
+    out = run(q, last_clock_src + WINDOW)  # every /clock is old enough, no input has waited long
+    want = [("clock" if k == CLOCK else "input", p) for s, k, p in published if s <= last_clock_src]
+    assert out == want
+    tail = [("input", p) for s, k, p in published if s > last_clock_src]
+    assert len(q) == len(tail)
+    if tail:  # inputs after the last clock wait for the wait limit (wall time since published)
+        first = min(s for s, k, _ in published if s > last_clock_src)
+        assert run(q, first + INPUT_WAIT_MAX_NS - 1) == []
+    assert run(q, published[-1][0] + INPUT_WAIT_MAX_NS) == tail
+    assert len(q) == 0
+
+
+@settings(max_examples=200, deadline=None, derandomize=True, database=None)
+@given(st.lists(st.integers(0, 10 * WINDOW), min_size=1, max_size=20), st.integers(0, 10 * WINDOW))
+def test_a_clock_waits_for_the_reorder_window(srcs, now):
+    """A /clock is released only once it is the window old (wall time), in source order."""
+    q = SimTimeOrderer(WINDOW)
+    for s in srcs:
+        q.push(s, CLOCK, s)
+    out = run(q, now)
+    due = sorted(s for s in srcs if s <= now - WINDOW)
+    assert [t for _, t in out] == due
+    assert len(q) == len(srcs) - len(due)
+
+
+def test_pull_before_a_due_clock_sorts_in_inputs_still_waiting_in_dds():
+    """The pull before each due /clock may queue inputs published before it: they go first; it is called
+    once per /clock released (and once more for the clock still too young, which ends the drain)."""
+    q = SimTimeOrderer(WINDOW)
+    q.push(100, CLOCK, 1)
+    q.push(300, CLOCK, 2)
+    backlog = [(50, INPUT, "before 1"), (200, INPUT, "between"), (400, INPUT, "after 2")]
+    calls = []
+
+    def pull():
+        calls.append(len(q))
+        while backlog:
+            q.push(*backlog.pop(0))
+
+    out = run(q, 300 + WINDOW, pull)
+    assert out == [("input", "before 1"), ("clock", 1), ("input", "between"), ("clock", 2)]
+    assert len(calls) == 2 and len(q) == 1  # "after 2" waits for a later /clock
+    q.push(500 + 0, CLOCK, 3)
+    assert run(q, 500 + WINDOW) == [("input", "after 2"), ("clock", 3)]
+
+
+def test_same_source_time_keeps_arrival_order_and_bad_kinds_are_refused():
+    q = SimTimeOrderer(WINDOW)
+    q.push(10, INPUT, "a")
+    q.push(10, INPUT, "b")
+    q.push(10, CLOCK, 7)
+    q.push(11, CLOCK, 8)
+    assert run(q, NOW) == [("input", "a"), ("input", "b"), ("clock", 7), ("clock", 8)]
+    with pytest.raises(ValueError, match="kind"):
+        q.push(1, 2, None)
