@@ -6,7 +6,8 @@ rclpy refuses a change before any callback runs. The ranges rclpy can check (sca
 descriptors; the per-element range of ``damper_oil_level`` is in its descriptor for ``ros2 param
 describe`` but checked by :func:`~susp_sim_ros.model.vehicle.check_oil` (rclpy checks ranges of scalar
 parameters only). A run-time change is validated (and a new model built and compiled) by
-:func:`prepare_change` in the node's on-set callback and applied in its post-set callback.
+:func:`prepare_change` in the node's on-set callback and applied in its post-set callback. (rclpy's
+pre-set callback can only rewrite the list of parameters; refusing there would lose the reason.)
 """
 from __future__ import annotations
 
