@@ -30,7 +30,6 @@ from rclpy.clock import Clock as RosClock, ClockType
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -41,25 +40,20 @@ from std_msgs.msg import Float64, Float64MultiArray
 
 from ..errors import SuspInputError
 from ..io import messages as M
-from ..io.recorder import McapRecorder
 from ..lockstep import simulated_metadata
 from ..model.vehicle import Model, check_oil
 from ..ride_diagnostics import SemiActiveDiagnostics
 from ..sim_core import DAMPER_COMMAND, DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
 from .conversion import diagnostic_array, fill
 from .inputs import InputCallbacks
-from .parameters import DEFAULTS, ON_DIVERGENCE, RUNTIME, RuntimeChange, descriptor, prepare_change, warm_up
+from .parameters import ON_DIVERGENCE, RUNTIME, RuntimeChange, declare_parameters, prepare_change, warm_up
 from .rclpy_workarounds import guard_time_source
-from .recording import RecordingQueue
+from .qos import CLOCK_QOS, INPUT_QOS, LATCHED_QOS, OUTPUT_QOS
+from .recording import RecordingQueue, open_recording
 from .sim_time import SimTimeOrderer
-from .status import NODE_NAME, CoreSnapshot, node_status
+from .status import NODE_NAME, CoreSnapshot, log_stale_changes, node_status
 from .timing import SWITCH_INTERVAL_S, TickThread, TimingStats, raise_priority
 
-INPUT_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
-LATCHED_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
-CLOCK_QOS = QoSProfile(depth=1000, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
-OUTPUT_QOS = QoSProfile(depth=50, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
 REJECTION_LOG_INTERVAL_S = 10.0
 DRAIN_PERIOD_S = 0.002  # sim time: how often the reorder queue is checked for due events (steady clock) [s]
 
@@ -71,10 +65,7 @@ class SuspSimNode(InputCallbacks, Node):
 
     def __init__(self, *, start_thread: bool = True, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
-        for name, (default, _) in DEFAULTS.items():
-            if not self.has_parameter(name):
-                self.declare_parameter(name, default, descriptor(name))
-        p = {name: self.get_parameter(name).value for name in DEFAULTS}
+        p = declare_parameters(self)
         self.sim_time = bool(self.get_parameter("use_sim_time").value)
         oil = check_oil(p["damper_oil_level"], "parameter damper_oil_level")
         self.vehicle, self.variant = str(p["vehicle"]), str(p["friction_variant"])
@@ -105,10 +96,8 @@ class SuspSimNode(InputCallbacks, Node):
         if p["record_path"]:
             meta = simulated_metadata({"maneuver": "live", "node": NODE_NAME}, model.vehicle.name,
                                       model.variant.name, oil)
-            self.recorder = RecordingQueue(
-                McapRecorder(p["record_path"], metadata=meta, overwrite=bool(p["record_overwrite"]),
-                             flush_interval_s=float(p["record_flush_interval_s"])),
-                lambda text: self.get_logger().error(text))
+            self.recorder = open_recording(p["record_path"], meta, bool(p["record_overwrite"]),
+                                           float(p["record_flush_interval_s"]), self.get_logger().error)
         self._imu, self._odom, self._susp = Imu(), Odometry(), Float64MultiArray()
         self.pub_imu = self.create_publisher(Imu, SIM_IMU, OUTPUT_QOS)
         self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
@@ -263,13 +252,7 @@ class SuspSimNode(InputCallbacks, Node):
         t = self.now_ns()
         with self.lock:
             snap = CoreSnapshot.of(self.core, t)
-        stale = snap.stale
-        for topic in set(stale) - self._stale:
-            self.get_logger().warning(f"input {topic} is stale (no message for more than "
-                                      f"{self.core.timeout_ns * 1e-9:g} s); holding its last value")
-        for topic in self._stale - set(stale):
-            self.get_logger().info(f"input {topic} is fresh again")
-        self._stale = set(stale)
+        self._stale = log_stale_changes(self.get_logger(), self._stale, snap.stale, self.core.timeout_ns)
         return node_status(self, snap, time.monotonic() - self._wall0)
 
     def publish_diagnostics(self) -> None:

@@ -64,6 +64,15 @@ def descriptor(name: str) -> ParameterDescriptor:
     return d
 
 
+def declare_parameters(node) -> dict[str, Any]:
+    """Declare the parameters on ``node`` (an rclpy ``Node``) with their descriptors (those already
+    declared, e.g. from overrides, are kept); returns name -> value."""
+    for name, (default, _) in DEFAULTS.items():
+        if not node.has_parameter(name):
+            node.declare_parameter(name, default, descriptor(name))
+    return {name: node.get_parameter(name).value for name in DEFAULTS}
+
+
 def warm_up(model: Model) -> None:
     """Run the compiled kernel once on a throwaway stepper (JIT compile before real time starts)."""
     Stepper(model, dt=0.001).advance(2, 1.0, 0.0)

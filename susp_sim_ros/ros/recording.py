@@ -5,6 +5,7 @@ from __future__ import annotations
 import heapq
 import queue
 import threading
+from collections.abc import Callable
 
 from ..io.recorder import McapRecorder
 
@@ -96,3 +97,11 @@ class RecordingQueue:
         except Exception as exc:
             self.error = self.error or f"{type(exc).__name__}: {exc}"
             self._log_error(f"recording not finalised: {exc}")
+
+
+def open_recording(path: str, metadata: dict, overwrite: bool, flush_interval_s: float,
+                   log_error: Callable[[str], None]) -> RecordingQueue:
+    """The node's recording to the MCAP file ``path`` (:class:`McapRecorder`: ``metadata``, ``overwrite``,
+    ``flush_interval_s`` [s]) behind a :class:`RecordingQueue`; ``log_error`` reports a write error."""
+    return RecordingQueue(McapRecorder(path, metadata=metadata, overwrite=overwrite,
+                                       flush_interval_s=flush_interval_s), log_error)

@@ -73,3 +73,14 @@ def node_status(node: Any, snap: CoreSnapshot, wall_s: float) -> list[dict]:
     with node.lock:  # semi-active damper and ride metrics: added values of the model status
         values.update(node.semiactive.values(node.core))
     return [inputs, timing, model]
+
+
+def log_stale_changes(logger: Any, before: set[str], stale: list[str], timeout_ns: int) -> set[str]:
+    """Log the inputs that went stale (warning) or fresh again (info) since ``before``; returns the
+    stale set now. ``timeout_ns``: the input timeout [ns]."""
+    for topic in set(stale) - before:
+        logger.warning(f"input {topic} is stale (no message for more than {timeout_ns * 1e-9:g} s); "
+                       "holding its last value")
+    for topic in before - set(stale):
+        logger.info(f"input {topic} is fresh again")
+    return set(stale)
