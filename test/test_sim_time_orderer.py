@@ -112,3 +112,30 @@ def test_same_source_time_keeps_arrival_order_and_bad_kinds_are_refused():
     assert run(q, NOW) == [("input", "a"), ("input", "b"), ("clock", 7), ("clock", 8)]
     with pytest.raises(ValueError, match="kind"):
         q.push(1, 2, None)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, database=None)
+@given(replay(), st.data())
+def test_streamed_with_delivery_delays_under_the_window_gives_publish_order(case, data):
+    """As in a running node: each event arrives (wall time) up to the window after it was published,
+    /clock messages in publish order (one topic), inputs in any order that implies, and the queue is
+    drained at every arrival; what comes out is the publish
+    order, and once the last /clock is the window old only the inputs after it are left."""
+    published, _ = case
+    delays = data.draw(st.lists(st.integers(0, WINDOW - 1), min_size=len(published), max_size=len(published)))
+    arrive, last_clock = [], 0
+    for (src, kind, _), d in zip(published, delays):
+        t = src + d
+        if kind == CLOCK:  # one topic: DDS delivers /clock in publish order
+            t = last_clock = max(t, last_clock)
+        arrive.append(t)
+    arrivals = sorted((t, k, event) for k, (t, event) in enumerate(zip(arrive, published)))
+    q = SimTimeOrderer(WINDOW)
+    out: list = []
+    for t_arrive, _, (src, kind, payload) in arrivals:
+        q.push(src, kind, payload)
+        out += run(q, t_arrive)
+    last_clock_src = max(src for src, kind, _ in published if kind == CLOCK)
+    out += run(q, max(last_clock_src + WINDOW, arrivals[-1][0]))
+    want = [("clock" if k == CLOCK else "input", p) for s, k, p in published if s <= last_clock_src]
+    assert out == want
