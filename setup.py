@@ -42,7 +42,7 @@ setup(
     entry_points={
         "console_scripts": [
             "susp = susp_sim_ros.cli.main:main",
-            "susp_sim_node = susp_sim_ros.node:main",
+            "susp_sim_node = susp_sim_ros.ros.node:main",
             "susp_damper_controller = susp_sim_ros.controller_node:main",
         ],
     },

@@ -70,7 +70,7 @@ def _run(duration: float, rate_hz: float, probe_rt: bool, host) -> dict:
 
     from susp_sim_ros.analysis.host_stalls import Miss, attribute, parse_miss_log
     node_proc = subprocess.Popen(
-        [sys.executable, "-c", "import sys; from susp_sim_ros.node import main; sys.exit(main())",
+        [sys.executable, "-c", "import sys; from susp_sim_ros.ros.node import main; sys.exit(main())",
          "--ros-args", "-p", f"publish_rate_hz:={float(rate_hz)}"],
         env=env, stdout=sys.stderr, stderr=sys.stderr)
     ctx = rclpy.Context()
@@ -102,7 +102,7 @@ def _run(duration: float, rate_hz: float, probe_rt: bool, host) -> dict:
     spin = threading.Thread(target=ex.spin, daemon=True)
     spin.start()
     if probe_rt:
-        from susp_sim_ros.node import raise_priority
+        from susp_sim_ros.ros.timing import raise_priority
         note = raise_priority(5)
         if note:
             print(f"bench_node: probe: {note}", file=sys.stderr)

@@ -34,7 +34,7 @@ class SimDriver:
         from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import Imu
         from std_msgs.msg import Float64, Float64MultiArray
-        from susp_sim_ros.node import SuspSimNode
+        from susp_sim_ros.ros.node import SuspSimNode
 
         self.rclpy = rclpy
         self.ctx = rclpy.Context()
@@ -46,8 +46,9 @@ class SimDriver:
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
                              reliability=ReliabilityPolicy.RELIABLE)
         self.pub_clock = self.drv.create_publisher(Clock, "/clock", 100)
+        steer = "/vehicle/steering_wheel_angle"
         self.pub = {"/vehicle/speed": self.drv.create_publisher(Float64, "/vehicle/speed", 100),
-                    "/vehicle/steering_wheel_angle": self.drv.create_publisher(Float64, "/vehicle/steering_wheel_angle", 100),
+                    steer: self.drv.create_publisher(Float64, steer, 100),
                     "/road/profile": self.drv.create_publisher(Float64MultiArray, "/road/profile", latched),
                     "/road/wheel_heights": self.drv.create_publisher(Float64MultiArray, "/road/wheel_heights", 100)}
         self.imu: list = []

@@ -11,8 +11,7 @@ from _ros_helpers import SimDriver
 from susp_sim_ros.io import messages as M
 from susp_sim_ros.io.drive import Series, TestDrive
 from susp_sim_ros.lockstep import maneuver_drive, run_lockstep
-from susp_sim_ros.model import Model, make_inputs, simulate
-from susp_sim_ros.model.layout import output_index
+from susp_sim_ros.model import make_inputs, simulate
 from susp_sim_ros.model.maneuvers import bump_crossing, sine_steer
 
 T0 = 1_000_000_000
@@ -94,9 +93,9 @@ def test_oil_level_change_at_run_time_takes_effect(driver):
     drive = maneuver_drive(man, rate_hz=50.0)
     half = drive.t0_ns + int(0.6 * (drive.t_end_ns - drive.t0_ns)) // PERIOD * PERIOD
     # play the first part, change the oil, play the rest
-    first = TestDrive(drive.metadata, Series(drive.speed.t_ns[drive.speed.t_ns <= half], drive.speed.values[drive.speed.t_ns <= half]),
-                      Series(drive.steering.t_ns[drive.steering.t_ns <= half], drive.steering.values[drive.steering.t_ns <= half]),
-                      drive.road)
+    sp, st_ = drive.speed.t_ns <= half, drive.steering.t_ns <= half
+    first = TestDrive(drive.metadata, Series(drive.speed.t_ns[sp], drive.speed.values[sp]),
+                      Series(drive.steering.t_ns[st_], drive.steering.values[st_]), drive.road)
     driver.play(first)
     bad = driver.node.set_parameters([Parameter("damper_oil_level", value=[2.0, 1.0, 1.0, 1.0])])
     assert not bad[0].successful and "damper_oil_level" in bad[0].reason
@@ -129,7 +128,37 @@ def test_friction_variant_change_at_run_time(driver):
     res = driver.node.set_parameters([Parameter("friction_variant", value="no_such_variant")])
     assert not res[0].successful
     res = driver.node.set_parameters([Parameter("step_s", value=0.002)])
-    assert not res[0].successful and "fixed" in res[0].reason
+    assert not res[0].successful and "read-only" in res[0].reason
+    assert driver.node.core.step_ns == 1_000_000
+
+
+def test_parameters_are_described_read_only_and_ranged(driver):
+    """The descriptors say what may change at run time (ros2 param describe), rclpy enforces read-only
+    and scalar ranges before the node's callbacks; a refused change leaves the node as it was."""
+    from rclpy.parameter import Parameter
+    from susp_sim_ros.ros.parameters import DEFAULTS, RUNTIME
+    node = driver.node
+    desc = dict(zip(DEFAULTS, node.describe_parameters(list(DEFAULTS))))
+    assert {n for n, d in desc.items() if not d.read_only} == set(RUNTIME)
+    assert all(d.description == DEFAULTS[n][1] for n, d in desc.items())
+    rate = desc["publish_rate_hz"].floating_point_range[0]
+    assert (rate.from_value, rate.to_value) == (0.0, 1000.0)
+    assert desc["on_divergence"].additional_constraints == "exit or hold"
+    for name, value in (("publish_rate_hz", 50.0), ("record_path", "x.mcap"), ("realtime_priority", 0),
+                        ("use_sim_time", False)):
+        res = node.set_parameters([Parameter(name, value=value)])
+        assert not res[0].successful, name
+    assert node.core.period_ns == 10_000_000 and node.sim_time
+    # a run-time change refused by validation is not applied, nor half-applied with another one
+    bad = node.set_parameters_atomically([Parameter("damper_oil_level", value=[0.5, 0.5, 0.5, 0.5]),
+                                          Parameter("vehicle", value="no_such_vehicle")])
+    assert not bad.successful
+    np.testing.assert_array_equal(node.core.oil, [1.0, 1.0, 1.0, 1.0])
+    assert node.get_parameter("damper_oil_level").value == [1.0, 1.0, 1.0, 1.0]
+    ok = node.set_parameters_atomically([Parameter("damper_oil_level", value=[0.5, 0.5, 0.5, 0.5])])
+    assert ok.successful
+    np.testing.assert_array_equal(node.core.oil, [0.5, 0.5, 0.5, 0.5])
+    assert node.diagnostics()[2]["values"]["damper_oil_level"] == "0.5,0.5,0.5,0.5"
 
 
 def test_bad_inputs_are_rejected_not_integrated(driver):
@@ -180,8 +209,8 @@ def test_diagnostics_published(driver):
 def test_node_recording_equals_lockstep_recording(tmp_path):
     from susp_sim_ros.io.reader import read_recording
     drive = maneuver_drive(bump_crossing(), rate_hz=50.0)
-    drive.speed.t_ns = drive.speed.t_ns[:120]; drive.speed.values = drive.speed.values[:120]
-    drive.steering.t_ns = drive.steering.t_ns[:120]; drive.steering.values = drive.steering.values[:120]
+    drive.speed.t_ns, drive.speed.values = drive.speed.t_ns[:120], drive.speed.values[:120]
+    drive.steering.t_ns, drive.steering.values = drive.steering.t_ns[:120], drive.steering.values[:120]
     node_path, ls_path = tmp_path / "node.mcap", tmp_path / "ls.mcap"
     d = SimDriver({"record_path": str(node_path)})
     try:
@@ -216,14 +245,15 @@ def test_params_file_loads(tmp_path):
     """config/susp_sim_node.yaml has the shape ros2 expects and every key is a declared parameter."""
     import rclpy
     from pathlib import Path
-    from susp_sim_ros.node import DEFAULTS, SuspSimNode
+    from susp_sim_ros.ros.node import SuspSimNode
+    from susp_sim_ros.ros.parameters import DEFAULTS
     cfg = Path(__file__).resolve().parents[1] / "config" / "susp_sim_node.yaml"
     import yaml
     keys = set(yaml.safe_load(cfg.read_text())["susp_sim_node"]["ros__parameters"])
     assert keys == set(DEFAULTS)
     ctx = rclpy.Context()
-    rclpy.init(context=ctx, args=["--ros-args", "--params-file", str(cfg), "-p", "damper_oil_level:=[1.0, 1.0, 0.5, 0.0]",
-                                  "-p", "use_sim_time:=true"])
+    rclpy.init(context=ctx, args=["--ros-args", "--params-file", str(cfg),
+                                  "-p", "damper_oil_level:=[1.0, 1.0, 0.5, 0.0]", "-p", "use_sim_time:=true"])
     try:
         node = SuspSimNode(context=ctx, start_thread=False)
         assert node.get_parameter("publish_rate_hz").value == 100.0
@@ -259,7 +289,7 @@ def test_recording_thread_writes_in_log_time_order(jitter):
     """Messages queued by two racing threads, up to 44 ms out of log-time order (within the 50 ms
     reorder window), are written sorted and none is lost; a message is held until one a window
     later has been queued (then it is on disk), and close writes the rest."""
-    from susp_sim_ros.node import RECORD_REORDER_NS, RecordingQueue
+    from susp_sim_ros.ros.recording import RECORD_REORDER_NS, RecordingQueue
     rec = _ListRecorder()
     q = RecordingQueue(rec, log_error=lambda text: None)
     times = [1_000_000_000 + k * 10_000_000 + j for k, j in enumerate(jitter)]  # 100 Hz ticks, jittered

@@ -1,7 +1,6 @@
 """Across processes over real DDS: susp_sim_node in a subprocess, plain rclpy (or susp replay) here."""
 from __future__ import annotations
 
-import math
 import os
 import signal
 import subprocess
@@ -20,8 +19,9 @@ pytestmark = pytest.mark.slow
 def _start_node(tmp_path, *args):
     ros_env()
     log = open(tmp_path / "node.log", "w")
-    proc = subprocess.Popen([sys.executable, "-c", "import sys; from susp_sim_ros.node import main; sys.exit(main())",
-                             "--ros-args", *args], stdout=log, stderr=subprocess.STDOUT, env=dict(os.environ))
+    run_node = "import sys; from susp_sim_ros.ros.node import main; sys.exit(main())"
+    proc = subprocess.Popen([sys.executable, "-c", run_node, "--ros-args", *args], stdout=log,
+                            stderr=subprocess.STDOUT, env=dict(os.environ))
     return proc
 
 

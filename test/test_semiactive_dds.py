@@ -42,7 +42,7 @@ def test_controller_in_its_own_process_drives_the_dampers(tmp_path):
 
     from susp_sim_ros.model.iso8608 import faded_road
 
-    sim = _start(tmp_path, "node", "susp_sim_ros.node", "-p", "diagnostics_rate_hz:=2.0")
+    sim = _start(tmp_path, "node", "susp_sim_ros.ros.node", "-p", "diagnostics_rate_hz:=2.0")
     ctl = _start(tmp_path, "controller", "susp_sim_ros.controller_node", "-p", "controller:=skyhook")
     ctx = rclpy.Context()
     rclpy.init(context=ctx)

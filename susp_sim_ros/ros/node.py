@@ -1,0 +1,316 @@
+"""``susp_sim_node``: the ROS 2 node, a thin adapter around :class:`~susp_sim_ros.sim_core.SimCore`.
+
+Subscribes to the test-drive input topics (interface.md), publishes ``/sim/imu/data``, ``/sim/odom``,
+``/sim/suspension`` and ``/diagnostics``, optionally records everything to an MCAP file (:mod:`.recording`).
+
+Timing: in wall time (default) a tick thread (:class:`~.timing.TickThread`) wakes at each publish tick,
+steps the core to "now" and publishes; jitter, lateness and deadline misses go to ``/diagnostics``. In sim
+time (``use_sim_time:=true``) every ``/clock`` message steps the core exactly as far as the clock moved;
+``/clock`` and the inputs are put back into publish order first (:mod:`.sim_time`), so replays at any
+rate give the same outputs. Every input first steps the core to its time, then replaces the held value.
+
+Bad input never stops the node: a rejected message is not integrated, counted per cause on
+``/diagnostics`` and logged rate-limited (``REJECTION_LOG_INTERVAL_S``). When the divergence guard of the
+core trips, nothing more is published on ``/sim/...``; the node logs an error, publishes ERROR
+diagnostics, finalises the recording and (``on_divergence: exit``) exits with code 1.
+
+Parameters: :mod:`.parameters` (``--ros-args --params-file config/susp_sim_node.yaml``); ``vehicle``,
+``friction_variant`` and ``damper_oil_level`` may change while running, the others are read-only.
+"""
+from __future__ import annotations
+
+import gc
+import sys
+import threading
+import time
+
+import rclpy
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.clock import Clock as RosClock, ClockType
+from rclpy.exceptions import InvalidParameterValueException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.serialization import serialize_message
+
+from diagnostic_msgs.msg import DiagnosticArray
+from rosgraph_msgs.msg import Clock
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import Imu
+from std_msgs.msg import Float64, Float64MultiArray
+
+from ..errors import SuspInputError
+from ..io import messages as M
+from ..lockstep import simulated_metadata
+from ..model.vehicle import Model, check_oil
+from ..ride_diagnostics import SemiActiveDiagnostics
+from ..sim_core import DAMPER_COMMAND, DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
+from .conversion import diagnostic_array, fill
+from .inputs import InputCallbacks
+from .parameters import ON_DIVERGENCE, RUNTIME, RuntimeChange, declare_parameters, prepare_change, warm_up
+from .rclpy_workarounds import guard_time_source
+from .qos import CLOCK_QOS, INPUT_QOS, LATCHED_QOS, OUTPUT_QOS
+from .recording import RecordingQueue, open_recording
+from .sim_time import SimTimeOrderer
+from .status import NODE_NAME, CoreSnapshot, log_stale_changes, node_status
+from .timing import SWITCH_INTERVAL_S, TickThread, TimingStats, raise_priority
+
+REJECTION_LOG_INTERVAL_S = 10.0
+DRAIN_PERIOD_S = 0.002  # sim time: how often the reorder queue is checked for due events (steady clock) [s]
+
+
+class SuspSimNode(InputCallbacks, Node):
+    """The simulation node (see the module docstring). ``start_thread=False`` leaves wall-time stepping
+    to the caller (:meth:`tick`), for deterministic in-process tests. The ``on_*`` methods are the
+    subscription callbacks ``(message, message info or None)``; tests may call them directly."""
+
+    def __init__(self, *, start_thread: bool = True, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        p = declare_parameters(self)
+        self.sim_time = bool(self.get_parameter("use_sim_time").value)
+        oil = check_oil(p["damper_oil_level"], "parameter damper_oil_level")
+        self.vehicle, self.variant = str(p["vehicle"]), str(p["friction_variant"])
+        model = Model(self.vehicle, self.variant)
+        self.on_divergence = str(p["on_divergence"])
+        if self.on_divergence not in ON_DIVERGENCE:
+            raise SuspInputError(f"parameter on_divergence: expected exit or hold, got {self.on_divergence!r}")
+        self.core = SimCore(model, step_s=float(p["step_s"]), publish_rate_hz=float(p["publish_rate_hz"]),
+                            oil=oil, input_timeout_s=float(p["input_timeout_s"]),
+                            max_time_jump_s=float(p["max_time_jump_s"]))
+        self.lock = threading.RLock()
+        self.failure = ""  # the last divergence (set when the divergence guard stopped the simulation)
+        self.divergences = self.handler_errors = self.tick_errors = 0
+        self._failure_key: tuple | None = None
+        self.rejection_log = RateLimitedLog(lambda text: self.get_logger().warning(text),
+                                            REJECTION_LOG_INTERVAL_S)
+        self.core.on_reject = self.rejection_log  # every rejection, once per cause and interval
+        self._sim_now = 0
+        self.inputs_received = 0  # applied
+        self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
+        self._wall_inputs: list = []  # wall time: (arrival ns, input) for the next tick
+        self.orderer = SimTimeOrderer(int(round(float(p["sim_reorder_window_s"]) * 1e9)))
+        self._pulling = False  # taking queued messages straight from DDS (see _pull_pending)
+        self._change: RuntimeChange | None = None  # validated, not yet applied parameter change
+        warm_up(model)
+        self.timing = TimingStats(self.core.period_ns)
+        self.recorder: RecordingQueue | None = None
+        if p["record_path"]:
+            meta = simulated_metadata({"maneuver": "live", "node": NODE_NAME}, model.vehicle.name,
+                                      model.variant.name, oil)
+            self.recorder = open_recording(p["record_path"], meta, bool(p["record_overwrite"]),
+                                           float(p["record_flush_interval_s"]), self.get_logger().error)
+        self._imu, self._odom, self._susp = Imu(), Odometry(), Float64MultiArray()
+        self.pub_imu = self.create_publisher(Imu, SIM_IMU, OUTPUT_QOS)
+        self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
+        self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
+        self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
+        self._sim_clock_sub = None
+        if self.sim_time:
+            guard_time_source(self)
+            # Our own /clock subscription, reliable and deep (rclpy's time source keeps only the latest
+            # /clock, so a busy node would see the clock skip ahead of queued inputs): every clock value
+            # is seen, in order, and each one steps the core exactly that far.
+            self._sim_clock_sub = self.create_subscription(Clock, "/clock", self.on_clock, CLOCK_QOS)
+            self.create_timer(DRAIN_PERIOD_S, self._drain, clock=RosClock(clock_type=ClockType.STEADY_TIME))
+        self._input_subs = [
+            self.create_subscription(Float64, "/vehicle/speed", self.on_speed, INPUT_QOS),
+            self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self.on_steering, INPUT_QOS),
+            self.create_subscription(Float64MultiArray, "/road/profile", self.on_profile, LATCHED_QOS),
+            self.create_subscription(Float64MultiArray, "/road/wheel_heights", self.on_wheel_heights, INPUT_QOS),
+            self.create_subscription(Float64MultiArray, DAMPER_COMMAND, self.on_damper_command, INPUT_QOS)]
+        self.semiactive = SemiActiveDiagnostics(model, self.core.period_ns)
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        self._stale: set[str] = set()
+        self._wall0 = time.monotonic()
+        self.published = 0
+        self._ticker: TickThread | None = None
+        if start_thread and not self.sim_time:
+            note = raise_priority(int(p["realtime_priority"]))
+            if note:
+                self.get_logger().info(note)
+            self._ticker = TickThread(priority=int(p["realtime_priority"]), begin=self._begin_wall_time,
+                                      next_tick_ns=lambda: self.core.next_tick_ns, tick=self.tick,
+                                      ok=self.context.ok, on_error=self._on_tick_error,
+                                      log=lambda text: self.get_logger().info(text))
+            self._ticker.start()
+        self.create_timer(1.0 / float(p["diagnostics_rate_hz"]), self.publish_diagnostics)
+        self.get_logger().info(
+            f"{NODE_NAME}: vehicle {self.vehicle}, variant {self.variant}, oil {oil.tolist()}, "
+            f"step {self.core.step_ns * 1e-9} s, publish {1e9 / self.core.period_ns:g} Hz, "
+            f"{'sim' if self.sim_time else 'wall'} time"
+            + (f", recording to {p['record_path']}" if self.recorder else ""))
+
+    # -- time -----------------------------------------------------------------------------------------
+    def now_ns(self) -> int:
+        """ROS time [ns]: the last /clock value processed in sim time, else the wall clock."""
+        if self.sim_time:
+            return self._sim_now
+        return self.get_clock().now().nanoseconds
+
+    def _start_core(self, t_ns: int) -> None:
+        self.core.start(t_ns)
+        self._wall0 = time.monotonic()
+
+    def _begin_wall_time(self) -> None:
+        with self.lock:
+            if not self.core.started:
+                self._start_core(time.time_ns())
+
+    def _on_tick_error(self, exc: Exception) -> None:
+        self.tick_errors += 1  # never let the tick thread die silently
+        self.core.reject("tick", "tick_error", f"tick: {type(exc).__name__}: {exc}")
+
+    def _record(self, topic: str, msgtype: str, t_ns: int, data, latched: bool = False) -> None:
+        """Queue a message for the recording: CDR bytes, or a function making them (see RecordingQueue)."""
+        if self.recorder is not None:
+            self.recorder.write(topic, msgtype, t_ns, data, latched=latched)
+
+    # -- stepping and publishing ----------------------------------------------------------------------
+    def _publish_samples(self, samples) -> None:
+        if samples:
+            self.semiactive.published(samples)
+        for s in samples:
+            imu = fill(self._imu, M.imu_msg(s.t_ns, s.y))
+            odom = fill(self._odom, M.odom_msg(s.t_ns, s.y))
+            susp = fill(self._susp, M.suspension_msg(s.y))
+            self.pub_imu.publish(imu)
+            if not self.sim_time:  # whichever thread published this tick (tick thread or an input)
+                self.timing.record(s.t_ns, time.time_ns())
+            self.pub_odom.publish(odom)
+            self.pub_susp.publish(susp)
+            self.published += 1
+            if self.recorder is not None:  # the message objects are reused: serialise now
+                self._record(SIM_IMU, M.IMU, s.t_ns, serialize_message(imu))
+                self._record(SIM_ODOM, M.ODOMETRY, s.t_ns, serialize_message(odom))
+                self._record(SIM_SUSPENSION, M.FLOAT64_ARRAY, s.t_ns, serialize_message(susp))
+
+    def tick(self, t_ns: int | None = None) -> int:
+        """Step to ``t_ns`` (default: now) and publish the samples passed; returns how many."""
+        with self.lock:
+            n0 = self.published
+            if self._wall_inputs:  # wall time: inputs take effect at their arrival instants
+                pending, self._wall_inputs = self._wall_inputs, []
+                for t_in, payload in pending:
+                    self._apply_input(*payload, t=t_in)
+            t = self.now_ns() if t_ns is None else int(t_ns)
+            if not self.core.started:
+                if t > 0:
+                    self._start_core(t)
+                return 0
+            self._publish_samples(self.core.advance_to(t, allow_restart=self.sim_time))
+            self._check_failure()
+            return self.published - n0
+
+    def _check_failure(self) -> None:
+        """After stepping: when the divergence guard has stopped the core, report it once (error log,
+        ERROR diagnostics right away, recording finalised); ``main`` then exits with code 1 (with
+        ``on_divergence: hold`` the node stays up; a restart from rest, a looped replay, clears it)."""
+        key = (self.core.restarts, self.core.diverged_at_ns)
+        if not self.core.diverged or key == self._failure_key:
+            return
+        self._failure_key = key
+        self.divergences += 1
+        self.failure = self.core.diverged
+        self.get_logger().error(f"{self.failure}; nothing more is published on /sim"
+                                + ("; exiting" if self.on_divergence == "exit" else ""))
+        self.publish_diagnostics()
+        if self.recorder is not None and self.on_divergence == "exit":
+            self.recorder.close()
+
+    # -- parameters -----------------------------------------------------------------------------------
+    def _validate_parameters(self, params) -> SetParametersResult:
+        """On-set callback: read-only parameters and ranges are refused by rclpy (descriptors) before
+        this; validate run-time changes (a new model is built and compiled here) for the post-set
+        callback to apply."""
+        new = {p.name: p.value for p in params}
+        if new.get("use_sim_time", self.sim_time) != self.sim_time:
+            return SetParametersResult(successful=False, reason="parameter use_sim_time is fixed after start; "
+                                                                f"run-time changes: {', '.join(RUNTIME)}")
+        try:
+            self._change = prepare_change({k: v for k, v in new.items() if k in RUNTIME},
+                                          self.vehicle, self.variant)
+        except (SuspInputError, ValueError, TypeError) as exc:
+            self.get_logger().warning(f"rejected parameter change: {exc}")
+            return SetParametersResult(successful=False, reason=str(exc))
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, params) -> None:
+        """Post-set callback: apply the change validated by :meth:`_validate_parameters`."""
+        change, self._change = self._change, None
+        if change is not None:
+            with self.lock:
+                if change.oil is not None:
+                    self.core.set_oil(change.oil)
+                if change.model is not None:
+                    self.core.set_model(change.model)
+                    self.vehicle, self.variant = change.vehicle, change.variant
+        self.get_logger().info(f"parameters changed: {', '.join(f'{p.name}={p.value}' for p in params)}")
+
+    # -- diagnostics ----------------------------------------------------------------------------------
+    def diagnostics(self) -> list[dict]:
+        """The three statuses (inputs, timing, model) of ``/diagnostics`` (:func:`.status.node_status`)."""
+        t = self.now_ns()
+        with self.lock:
+            snap = CoreSnapshot.of(self.core, t)
+        self._stale = log_stale_changes(self.get_logger(), self._stale, snap.stale, self.core.timeout_ns)
+        return node_status(self, snap, time.monotonic() - self._wall0)
+
+    def publish_diagnostics(self) -> None:
+        t = self.now_ns()
+        msg = diagnostic_array(t, self.diagnostics())
+        self.pub_diag.publish(msg)
+        with self.lock:
+            if self.recorder is not None:
+                # logged no earlier than the samples recorded while this message was built (the tick
+                # thread may have published meanwhile): the file stays in log-time order
+                t_log = max(t, self.core.t_ns or 0, 0)
+                self._record(DIAGNOSTICS, M.DIAGNOSTIC_ARRAY, t_log, serialize_message(msg))
+                self.recorder.flush_if_due()  # idle periods (sim time paused) still reach the disk
+
+    # -- shutdown -------------------------------------------------------------------------------------
+    def close(self) -> None:
+        """Stop the tick thread and finalise the recording (idempotent)."""
+        if self._ticker is not None:
+            self._ticker.stop()
+        with self.lock:
+            if self.recorder is not None:
+                self.recorder.close()
+
+    def destroy_node(self):
+        self.close()
+        return super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console entry point ``susp_sim_node [--ros-args ...]``. Exit 0 on SIGINT/SIGTERM, 2 on a bad
+    parameter, 1 when the divergence guard stopped the simulation (``on_divergence: exit``)."""
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
+    rclpy.init(args=args if args is not None else sys.argv)
+    node = None
+    try:
+        node = SuspSimNode()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        gc.freeze()  # start-up objects out of the collector's way: shorter pauses in real time
+        while rclpy.ok() and not (node.failure and node.on_divergence == "exit"):
+            executor.spin_once(timeout_sec=0.1)
+        if node.failure:
+            end = time.monotonic() + 0.5  # let the ERROR diagnostic reach its subscribers
+            while rclpy.ok() and time.monotonic() < end:
+                executor.spin_once(timeout_sec=0.05)
+            print(f"{NODE_NAME}: stopped: {node.failure}", file=sys.stderr)
+            return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (SuspInputError, InvalidParameterValueException) as exc:
+        print(f"{NODE_NAME}: error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

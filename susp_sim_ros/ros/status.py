@@ -1,0 +1,86 @@
+"""The node's ``/diagnostics`` statuses (inputs, timing, model) as plain dicts for
+:func:`~susp_sim_ros.io.messages.diagnostics_msg` (no rclpy)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from ..sim_core import SimCore
+
+NODE_NAME = "susp_sim_node"
+
+
+@dataclass(frozen=True)
+class CoreSnapshot:
+    """What ``/diagnostics`` reports of the core, taken at once under the node's lock."""
+
+    stale: list[str]
+    rejections: dict[str, int]
+    by_topic: str
+    last_rejection: str
+    healthy: bool
+    diverged: str
+    accel_clamped: int
+    time_jumps: int
+    sim_s: float
+    restarts: int
+    oil: list[float]
+    started: bool
+
+    @classmethod
+    def of(cls, core: SimCore, t_ns: int) -> "CoreSnapshot":
+        return cls(stale=core.stale_inputs(t_ns) if core.started else [], rejections=dict(core.rejections),
+                   by_topic=",".join(f"{tp}:{c}={n}" for (tp, c), n in sorted(core.rejections_by_topic.items())),
+                   last_rejection=core.last_rejection, healthy=core.healthy, diverged=core.diverged,
+                   accel_clamped=core.accel_clamped, time_jumps=core.time_jumps, sim_s=core.total_sim_time_s,
+                   restarts=core.restarts, oil=core.oil.tolist(), started=core.started)
+
+
+def node_status(node: Any, snap: CoreSnapshot, wall_s: float) -> list[dict]:
+    """Statuses of a :class:`~.node.SuspSimNode` (its public counters) and a core snapshot; ``wall_s``:
+    wall time since the core started [s] (for the real-time factor)."""
+    stale, rej = snap.stale, snap.rejections
+    rtf = snap.sim_s / wall_s if wall_s > 0 and snap.started else 0.0
+    tm = node.timing.summary()
+    rec = node.recorder
+    inputs = {"level": 1 if stale else 0, "name": f"{NODE_NAME}: inputs",
+              "message": ("stale: " + ", ".join(stale)) if stale else
+                         ("waiting for inputs" if not snap.started else "fresh"),
+              "values": {"stale": ",".join(stale), "rejected_total": sum(rej.values()),
+                         "queued_sim_events": len(node.orderer),
+                         **{f"rejected_{k}": v for k, v in rej.items()}, "rejected_by_topic": snap.by_topic,
+                         "last_rejection": snap.last_rejection, "accel_clamped": snap.accel_clamped,
+                         "time_jumps": snap.time_jumps, "handler_errors": node.handler_errors}}
+    timing = {"level": 1 if tm["deadline_misses"] else 0, "name": f"{NODE_NAME}: timing",
+              "message": f"real-time factor {rtf:.3f}, {tm['deadline_misses']} deadline misses",
+              "values": {"real_time_factor": f"{rtf:.6f}", "sim_time_s": f"{snap.sim_s:.6f}",
+                         "restarts": snap.restarts, "mode": "sim_time" if node.sim_time else "wall_time",
+                         **{k: (f"{v:.6f}" if isinstance(v, float) else v) for k, v in tm.items()}}}
+    values: dict[str, Any] = {
+        "healthy": snap.healthy, "diverged": snap.diverged, "on_divergence": node.on_divergence,
+        "divergences": node.divergences, "last_divergence": node.failure,
+        "vehicle": node.vehicle, "friction_variant": node.variant,
+        "damper_oil_level": ",".join(f"{x:g}" for x in snap.oil), "published_samples": node.published,
+        "recording_dropped": rec.dropped if rec else 0, "recording_error": rec.error if rec else "",
+        "tick_errors": node.tick_errors}
+    model = {"level": 0 if snap.healthy else 2, "name": f"{NODE_NAME}: model",
+             "message": "numerically healthy" if snap.healthy else
+                        (snap.diverged or "numerically unhealthy: stepping stopped"), "values": values}
+    if snap.healthy and rec is not None and (rec.error or rec.dropped):
+        model["level"] = 1
+        model["message"] = "numerically healthy; recording " + (
+            f"stopped: {rec.error}" if rec.error else f"dropped {rec.dropped} messages")
+    with node.lock:  # semi-active damper and ride metrics: added values of the model status
+        values.update(node.semiactive.values(node.core))
+    return [inputs, timing, model]
+
+
+def log_stale_changes(logger: Any, before: set[str], stale: list[str], timeout_ns: int) -> set[str]:
+    """Log the inputs that went stale (warning) or fresh again (info) since ``before``; returns the
+    stale set now. ``timeout_ns``: the input timeout [ns]."""
+    for topic in set(stale) - before:
+        logger.warning(f"input {topic} is stale (no message for more than {timeout_ns * 1e-9:g} s); "
+                       "holding its last value")
+    for topic in before - set(stale):
+        logger.info(f"input {topic} is fresh again")
+    return set(stale)
