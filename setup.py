@@ -34,7 +34,7 @@ setup(
     description="Real-time five-mass vehicle model with phenomenological suspension friction for ROS 2",
     license="Apache-2.0",
     extras_require={
-        "test": ["pytest", "hypothesis", "rosbags", "asammdf", "pyopencrg"],
+        "test": ["pytest", "hypothesis", "rosbags", "asammdf", "pyopencrg", "ruff>=0.15,<0.18", "mypy>=2.0,<3"],
         # susp import: ASAM MDF4 drives (asammdf) and OpenCRG roads (pyopencrg)
         "import": ["asammdf", "pyopencrg"],
         "bench": ["commonroad-vehicle-models"],

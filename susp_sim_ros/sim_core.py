@@ -415,7 +415,9 @@ class SimCore:
     # -- stepping -------------------------------------------------------------------------------------
     def _step_until(self, t_ns: int) -> bool:
         """Step to ``t_ns``; False (and :attr:`diverged` set) if the state left the envelope."""
-        target = (t_ns - self.t_start_ns) // self.step_ns
+        t0 = self.t_start_ns
+        assert t0 is not None, "stepping before the core started"
+        target = (t_ns - t0) // self.step_ns
         n = target - self.steps_done
         if n > 0:
             self._check_command_fresh(t_ns)
@@ -448,7 +450,7 @@ class SimCore:
         divergence nothing is stepped or returned any more (the time is still followed) until a restart.
         """
         t_ns = int(t_ns)
-        if self.t_start_ns is None:
+        if self.t_start_ns is None or self.t_ns is None:
             self.start(t_ns)
             return []
         if t_ns < self.t_ns:
