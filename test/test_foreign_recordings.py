@@ -10,9 +10,6 @@ mapped topics exit 2 with a named error, never a traceback.
 """
 from __future__ import annotations
 
-import contextlib
-import io
-import json
 import logging
 import shutil
 from pathlib import Path
@@ -21,7 +18,7 @@ import numpy as np
 import pytest
 
 from _foreign_corpus import CAR_MAP, bare_db3, car_mcap, car_messages, car_rosbags, car_split_dir, _mcap
-from susp_sim_ros.cli.main import main
+from _cli_helpers import cli_json, run_cli
 from susp_sim_ros.errors import NotRos2RecordingError, RecordingError, UnknownMessageTypeError
 from susp_sim_ros.io import messages as M
 from susp_sim_ros.io.drive import read_drive
@@ -30,19 +27,6 @@ from susp_sim_ros.io.reader import read_recording
 BAGS = Path(__file__).resolve().parents[1] / "bags"
 BUMP = BAGS / "bump_crossing_intact.mcap"
 LAYOUTS = ("noindex_zstd.mcap", "lz4.mcap", "split", "rosbags_mcap", "rosbags_db3", "bare.db3")
-
-
-def _run(argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = main([str(a) for a in argv])
-    return rc, out.getvalue(), err.getvalue()
-
-
-def _json(argv) -> dict:
-    rc, out, err = _run(argv + ["--json"])
-    assert rc == 0, err
-    return json.loads(out)
 
 
 @pytest.fixture(scope="module")
@@ -56,8 +40,8 @@ def corpus(tmp_path_factory):
              "rosbags_db3": car_rosbags(d / "rosbags_db3", drive, "sqlite3"),
              "bare.db3": bare_db3(d / "bare.db3", drive)}
     own_sim = d / "own_sim.mcap"
-    _json(["sim", "--drive", BUMP, "--out", own_sim])
-    own = _json(["validate", "--measured", BUMP, "--simulated", own_sim])
+    cli_json(["sim", "--drive", BUMP, "--out", own_sim])
+    own = cli_json(["validate", "--measured", BUMP, "--simulated", own_sim])
     return d, paths, own_sim, own
 
 
@@ -85,7 +69,7 @@ def test_every_layout_reads_as_the_interface_layout(corpus):
 @pytest.mark.parametrize("layout", LAYOUTS)
 def test_validate_gives_the_same_numbers_through_the_topic_map(corpus, layout):
     d, paths, own_sim, own = corpus
-    res = _json(["validate", "--measured", paths[layout], "--topic-map", CAR_MAP, "--simulated", own_sim])
+    res = cli_json(["validate", "--measured", paths[layout], "--topic-map", CAR_MAP, "--simulated", own_sim])
     assert _metrics(res) == _metrics(own)  # same samples in, same figures out, exactly
     assert res["rmse_deg_s"]["bump"]["pitch_rate"] == own["rmse_deg_s"]["bump"]["pitch_rate"] > 0
 
@@ -94,9 +78,9 @@ def test_validate_gives_the_same_numbers_through_the_topic_map(corpus, layout):
 def test_sim_from_a_foreign_layout_equals_sim_from_the_interface_layout(corpus, layout):
     d, paths, own_sim, own = corpus
     out = d / f"sim_{layout.replace('.', '_')}.mcap"
-    sim = _json(["sim", "--drive", paths[layout], "--topic-map", CAR_MAP, "--out", out])
+    sim = cli_json(["sim", "--drive", paths[layout], "--topic-map", CAR_MAP, "--out", out])
     assert sim["ok"] and sim["samples"] > 0
-    res = _json(["validate", "--measured", paths[layout], "--topic-map", CAR_MAP, "--simulated", out])
+    res = cli_json(["validate", "--measured", paths[layout], "--topic-map", CAR_MAP, "--simulated", out])
     assert _metrics(res) == _metrics(own)
     np.testing.assert_array_equal(read_drive(out, imu_topic="/sim/imu/data").imu.gyro,
                                   read_drive(own_sim, imu_topic="/sim/imu/data").imu.gyro)
@@ -105,8 +89,8 @@ def test_sim_from_a_foreign_layout_equals_sim_from_the_interface_layout(corpus, 
 def test_degree_steering_through_the_map_simulates_the_same_sine_steer(tmp_path):
     src = BAGS / "sine_steer_intact.mcap"
     foreign = car_mcap(tmp_path / "sine.mcap", read_drive(src), index=False)
-    a = _json(["sim", "--drive", src, "--out", tmp_path / "a.mcap"])
-    b = _json(["sim", "--drive", foreign, "--topic-map", CAR_MAP, "--out", tmp_path / "b.mcap"])
+    a = cli_json(["sim", "--drive", src, "--out", tmp_path / "a.mcap"])
+    b = cli_json(["sim", "--drive", foreign, "--topic-map", CAR_MAP, "--out", tmp_path / "b.mcap"])
     # the steering differs by a rounding of deg -> rad (1e-16 relative): the roll rate peak agrees to 1e-9
     assert b["peak_roll_rate_deg_s"] == pytest.approx(a["peak_roll_rate_deg_s"], rel=1e-9)
     assert a["peak_roll_rate_deg_s"] > 1.0
@@ -125,11 +109,11 @@ def test_mounted_imu_is_rotated_back_onto_body_axes(tmp_path):
 @pytest.mark.parametrize("layout", LAYOUTS)
 def test_diagnose_and_replay_read_every_layout(corpus, layout):
     d, paths, _, _ = corpus
-    own_r = _json(["replay", BUMP, "--dry-run"])
-    r = _json(["replay", paths[layout], "--dry-run", "--topic-map", CAR_MAP])
+    own_r = cli_json(["replay", BUMP, "--dry-run"])
+    r = cli_json(["replay", paths[layout], "--dry-run", "--topic-map", CAR_MAP])
     assert r["counts"] == own_r["counts"]  # the mapped inputs, played on the interface's topics
-    dg = _json(["diagnose", paths[layout], "--dry-run", "--topic-map", CAR_MAP])
-    own_dg = _json(["diagnose", BUMP, "--dry-run"])
+    dg = cli_json(["diagnose", paths[layout], "--dry-run", "--topic-map", CAR_MAP])
+    own_dg = cli_json(["diagnose", BUMP, "--dry-run"])
     assert dg["drives"][0]["imu_samples"] == own_dg["drives"][0]["imu_samples"]
     assert dg["drives"][0]["duration_s"] == own_dg["drives"][0]["duration_s"]
 
@@ -138,8 +122,8 @@ def test_inspect_reads_a_foreign_layout_through_the_map(corpus):
     """The damper inspection of the split rosbag2 directory (odometry speed, degree steering, FRD IMU)
     read through the car map equals the inspection of the same drive in the interface's layout."""
     d, paths, _, _ = corpus
-    own = _json(["inspect", BUMP])
-    r = _json(["inspect", paths["split"], "--topic-map", CAR_MAP])
+    own = cli_json(["inspect", BUMP])
+    r = cli_json(["inspect", paths["split"], "--topic-map", CAR_MAP])
     for w, e in own["wheels"].items():
         assert r["wheels"][w]["state"] == e["state"]
         assert r["wheels"][w]["oil_level"] == pytest.approx(e["oil_level"], abs=1e-6)
@@ -149,7 +133,7 @@ def test_inspect_reads_a_foreign_layout_through_the_map(corpus):
 def test_replay_without_map_reads_rosbag2_containers(corpus):
     d, paths, _, _ = corpus
     for layout in ("split", "rosbags_db3", "bare.db3"):
-        r = _json(["replay", paths[layout], "--dry-run"])
+        r = cli_json(["replay", paths[layout], "--dry-run"])
         assert set(r["topics"]) == {"/odom", "/can/steering_wheel_angle", "/imu/data_raw", "/road/profile"}
 
 
@@ -164,7 +148,7 @@ def test_diagnose_cases_through_the_map_equal_the_interface_cases(corpus):
 
 def test_identity_map_changes_nothing(corpus):
     d, paths, own_sim, own = corpus
-    res = _json(["validate", "--measured", BUMP, "--topic-map", "interface", "--simulated", own_sim])
+    res = cli_json(["validate", "--measured", BUMP, "--topic-map", "interface", "--simulated", own_sim])
     assert _metrics(res) == _metrics(own)
 
 
@@ -174,7 +158,7 @@ def _every_command_refuses(p, needle, own_sim, topic_map=CAR_MAP, replay=True):
     for argv in (["sim", "--drive", p, *tm], ["validate", "--measured", p, "--simulated", own_sim, *tm],
                  ["diagnose", p, "--dry-run", *tm], ["inspect", p, *tm],
                  *([["replay", p, "--dry-run", *tm]] if replay else [])):
-        rc, out, err = _run(argv)
+        rc, out, err = run_cli(argv)
         assert rc == 2 and needle in err and "Traceback" not in err, (argv, rc, err)
 
 

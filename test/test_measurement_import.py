@@ -5,9 +5,6 @@ convert to SI / REP-103 as documented and the conversion is kept in the metadata
 a named error."""
 from __future__ import annotations
 
-import contextlib
-import io
-import json
 from pathlib import Path
 
 import numpy as np
@@ -16,24 +13,11 @@ import pytest
 asammdf = pytest.importorskip("asammdf")
 pyopencrg = pytest.importorskip("pyopencrg")
 
-from susp_sim_ros.cli.main import main  # noqa: E402
+from _cli_helpers import cli_json, run_cli  # noqa: E402
 from susp_sim_ros.io.drive import ImuSeries, Series, TestDrive, read_drive  # noqa: E402
 
 BUMP = Path(__file__).resolve().parents[1] / "bags" / "bump_crossing_intact.mcap"
 G = 9.80665  # m/s^2 per g (the unit the test's "measurement system" records accelerations in)
-
-
-def _run(argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = main([str(a) for a in argv])
-    return rc, out.getvalue(), err.getvalue()
-
-
-def _json(argv) -> dict:
-    rc, out, err = _run(argv + ["--json"])
-    assert rc == 0, err
-    return json.loads(out)
 
 
 @pytest.fixture(scope="module")
@@ -115,8 +99,8 @@ def test_mdf4_import_validates_exactly_as_the_csv_import(common, tmp_path):
     csv = _write_csv(tmp_path / "drive.csv", common)
     road = _write_road_csv(tmp_path / "road.csv", common.road)
     mf4 = _write_mdf_csv_names(tmp_path / "drive.mf4", common)
-    a = _json(["import", csv, "--road", road, "--out", tmp_path / "csv.mcap"])
-    b = _json(["import", mf4, "--road", road, "--out", tmp_path / "mf4.mcap"])
+    a = cli_json(["import", csv, "--road", road, "--out", tmp_path / "csv.mcap"])
+    b = cli_json(["import", mf4, "--road", road, "--out", tmp_path / "mf4.mcap"])
     assert a["samples"] == b["samples"] == len(common.imu)
     x, y = read_drive(tmp_path / "csv.mcap"), read_drive(tmp_path / "mf4.mcap")
     for s in ("speed", "steering"):
@@ -124,21 +108,22 @@ def test_mdf4_import_validates_exactly_as_the_csv_import(common, tmp_path):
         np.testing.assert_array_equal(getattr(x, s).t_ns, getattr(y, s).t_ns)
     np.testing.assert_array_equal(x.imu.gyro, y.imu.gyro)
     np.testing.assert_array_equal(x.road.zl, y.road.zl)
-    _json(["sim", "--drive", tmp_path / "csv.mcap", "--out", tmp_path / "sim.mcap"])
-    va = _json(["validate", "--measured", tmp_path / "csv.mcap", "--simulated", tmp_path / "sim.mcap"])
-    vb = _json(["validate", "--measured", tmp_path / "mf4.mcap", "--simulated", tmp_path / "sim.mcap"])
+    cli_json(["sim", "--drive", tmp_path / "csv.mcap", "--out", tmp_path / "sim.mcap"])
+    va = cli_json(["validate", "--measured", tmp_path / "csv.mcap", "--simulated", tmp_path / "sim.mcap"])
+    vb = cli_json(["validate", "--measured", tmp_path / "mf4.mcap", "--simulated", tmp_path / "sim.mcap"])
     assert _metrics(va) == _metrics(vb) and va["rmse_deg_s"]["bump"]["pitch_rate"] > 0
     # a logger's file: other names and units, the FRD IMU and the inputs in separate channel groups
     bus = _write_mdf_vehicle_bus(tmp_path / "bus.mf4", common)
     (tmp_path / "map.yaml").write_text(VEHICLE_MAP)
-    c = _json(["import", bus, "--channel-map", tmp_path / "map.yaml", "--road", road, "--out", tmp_path / "bus.mcap"])
+    c = cli_json(["import", bus, "--channel-map", tmp_path / "map.yaml", "--road", road,
+                  "--out", tmp_path / "bus.mcap"])
     z = read_drive(tmp_path / "bus.mcap")
     # deg/s -> rad/s, g -> m/s^2, FRD -> FLU: equal up to the unit conversions' rounding
     np.testing.assert_allclose(z.imu.gyro, x.imu.gyro, rtol=1e-12, atol=1e-18)
     np.testing.assert_allclose(z.imu.accel, x.imu.accel, rtol=1e-12)
     np.testing.assert_allclose(z.speed.values, x.speed.values, rtol=1e-12)
     assert "sae_j670" in c["metadata"]["frame_conversion"] and "km/h" in c["metadata"]["unit_conversion"]
-    vc = _json(["validate", "--measured", tmp_path / "bus.mcap", "--simulated", tmp_path / "sim.mcap"])
+    vc = cli_json(["validate", "--measured", tmp_path / "bus.mcap", "--simulated", tmp_path / "sim.mcap"])
     for w, sigs in _metrics(va).items():
         for s, m in sigs.items():
             assert vc["windows"][w]["signals"][s]["rmse_deg_s"] == pytest.approx(m["rmse_deg_s"], rel=1e-9)
@@ -154,21 +139,21 @@ def test_opencrg_road_round_trip(common, tmp_path, fmt):
     crg = tmp_path / f"road_{fmt}.crg"
     road.save(str(crg), fmt=fmt)
     csv = _write_csv(tmp_path / "drive.csv", common)
-    res = _json(["import", csv, "--road", crg, "--road-start-u", "0", "--out", tmp_path / "d.mcap"])
+    res = cli_json(["import", csv, "--road", crg, "--road-start-u", "0", "--out", tmp_path / "d.mcap"])
     got = read_drive(tmp_path / "d.mcap").road
     tol = {"KDBI": 1e-15, "KRBI": 1e-8, "LDFI": 1e-7}[fmt]  # double, float32, text digits (m)
     np.testing.assert_allclose(got.s, r.s, rtol=0, atol=1e-9)
     np.testing.assert_allclose(got.zl, r.zl, rtol=0, atol=tol)
     np.testing.assert_allclose(got.zr, 0.5 * r.zr, rtol=0, atol=tol)
     assert "OpenCRG" in res["metadata"]["road_source"] and "v = +-0.79 m" in res["metadata"]["road_source"]
-    default = read_drive(Path(_json(["import", csv, "--road", crg, "--out", tmp_path / "e.mcap"])["out"])).road
+    default = read_drive(Path(cli_json(["import", csv, "--road", crg, "--out", tmp_path / "e.mcap"])["out"])).road
     np.testing.assert_allclose(default.s, r.s - r.s[0], atol=1e-9)  # default: the road starts under the axle
 
 
 def test_import_csv_alias_is_the_same_import(common, tmp_path):
     csv = _write_csv(tmp_path / "drive.csv", common)
-    a = _json(["import-csv", csv, "--out", tmp_path / "a.mcap"])
-    b = _json(["import", csv, "--out", tmp_path / "b.mcap"])
+    a = cli_json(["import-csv", csv, "--out", tmp_path / "a.mcap"])
+    b = cli_json(["import", csv, "--out", tmp_path / "b.mcap"])
     assert {k: v for k, v in a.items() if k not in ("out", "summary")} == \
         {k: v for k, v in b.items() if k not in ("out", "summary")}
     assert (tmp_path / "a.mcap").read_bytes() == (tmp_path / "b.mcap").read_bytes()
@@ -194,6 +179,6 @@ def test_bad_measurement_files_are_named_errors(common, tmp_path):
          "--channel-map applies to MDF4"),
     ]
     for argv, needle in cases:
-        rc, out, err = _run(argv + ["--out", tmp_path / "out.mcap"])
+        rc, out, err = run_cli(argv + ["--out", tmp_path / "out.mcap"])
         assert rc == 2 and needle in err and "Traceback" not in err, (argv, rc, err)
         assert not (tmp_path / "out.mcap").exists()

@@ -11,7 +11,6 @@ Corrupted chunk CRCs, undecodable chunks and unknown schemas/encodings give name
 """
 from __future__ import annotations
 
-import contextlib
 import io
 import json
 import logging
@@ -25,7 +24,7 @@ import pytest
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.records import Chunk, Message
 
-from susp_sim_ros.cli.main import main
+from _cli_helpers import run_cli
 from susp_sim_ros.errors import RecordingError
 from susp_sim_ros.io import messages as M
 from susp_sim_ros.io.drive import ImuSeries, Series, TestDrive, drive_messages, read_drive
@@ -127,13 +126,6 @@ def test_reader_at_every_byte_offset(small, tmp_path):
           f"{len(chunk_ends)} chunks), read_drive at {len(drive_offsets)} of them: {outcomes}")
 
 
-def _run(argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = main(argv)
-    return rc, out.getvalue(), err.getvalue()
-
-
 def test_entry_points_at_every_64th_byte_and_every_record_boundary(small, tmp_path):
     p, data, recs, chunk_ends, full = small
     offsets = sorted(set(range(0, len(data) + 1, STRIDE)) | {e for _, e, _ in recs} |
@@ -149,7 +141,7 @@ def test_entry_points_at_every_64th_byte_and_every_record_boundary(small, tmp_pa
             for cmd, argv in (("validate", ["validate", "--measured", str(cut), "--simulated", str(cut), "--json"]),
                               ("replay", ["replay", str(cut), "--dry-run", "--json"]),
                               ("diagnose", ["diagnose", str(cut), "--dry-run", "--json"])):
-                rc, out, err = _run(argv)
+                rc, out, err = run_cli(argv)
                 assert rc in (0, 2) and "Traceback" not in err, (cmd, n, rc, err)
                 if rc == 2:
                     assert f"susp {cmd}: error:" in err and "cut.mcap" in err, (cmd, n, err)
@@ -188,7 +180,7 @@ def _all_entry_points_refuse(path: Path, needle: str) -> None:
     for cmd, argv in (("validate", ["validate", "--measured", str(path), "--simulated", str(path)]),
                       ("replay", ["replay", str(path), "--dry-run"]),
                       ("diagnose", ["diagnose", str(path), "--dry-run"])):
-        rc, out, err = _run(argv)
+        rc, out, err = run_cli(argv)
         assert rc == 2 and path.name in err and needle in err and "Traceback" not in err, (cmd, rc, err)
 
 
@@ -218,7 +210,7 @@ def test_corrupted_chunk_crc_is_a_named_error(tmp_path):
     (tmp_path / "zgarbage.mcap").write_bytes(bad)
     _all_entry_points_refuse(tmp_path / "zgarbage.mcap", "corrupt MCAP")
     # susp recover salvages the chunks before the damage into a clean file
-    rc, out, err = _run(["recover", str(tmp_path / "payload.mcap"), "--out", str(tmp_path / "fixed.mcap"), "--json"])
+    rc, out, err = run_cli(["recover", str(tmp_path / "payload.mcap"), "--out", str(tmp_path / "fixed.mcap"), "--json"])
     res = json.loads(out)
     assert rc == 0 and res["was_corrupt"] and 0 < res["messages"]
     assert read_recording(tmp_path / "fixed.mcap").finalised
@@ -282,11 +274,11 @@ def test_unknown_extra_topics_are_ignored_or_skipped(tmp_path):
                             [(1_000_000_000, b"\x00\x01\x00\x00\x00\x00\x00\x00")])]
     p = _raw_mcap(tmp_path / "extra.mcap", ch)
     assert read_drive(p).speed.values.size == 40
-    rc, out, err = _run(["replay", str(p), "--dry-run", "--json"])
+    rc, out, err = run_cli(["replay", str(p), "--dry-run", "--json"])
     assert rc == 0 and json.loads(out)["skipped_topics"] == ["/camera/blob"] and "acme_msgs/msg/Blob" in err
-    rc, out, err = _run(["replay", str(p), "--dry-run", "--topics", "/camera/blob"])
+    rc, out, err = run_cli(["replay", str(p), "--dry-run", "--topics", "/camera/blob"])
     assert rc == 2 and "/camera/blob" in err and "unknown schema" in err
-    rc, out, err = _run(["diagnose", str(p), "--dry-run"])
+    rc, out, err = run_cli(["diagnose", str(p), "--dry-run"])
     assert rc == 0, err
 
 

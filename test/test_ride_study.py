@@ -5,26 +5,13 @@ import json
 
 import pytest
 
+from _cli_helpers import Interrupt, stop_after
 from susp_sim_ros.analysis.sweep import InProcessExecutor, load_study, make_executor, run_study, study_from_dict
 from susp_sim_ros.errors import ConfigError
 
 SMALL = {"name": "ride_small", "kind": "ride", "speed_kmh": 80, "duration_s": 5, "seed": 7,
          "parameters": {"controller": ["passive", "skyhook"], "oil": [[1, 1, 1, 1], [1, 1, 0, 0]],
                         "road_class": ["C"], "variant": ["full"]}}
-
-
-class Interrupt(Exception):
-    pass
-
-
-def _stop_after(n):
-    seen = []
-
-    def hook(cid):
-        seen.append(cid)
-        if len(seen) == n:
-            raise Interrupt()
-    return hook
 
 
 def test_bundled_study_expands_to_the_full_grid():
@@ -60,7 +47,7 @@ def test_ride_study_on_dask_resumes_and_equals_a_plain_run(tmp_path):
     ex = make_executor("local", 1)
     try:
         with pytest.raises(Interrupt):
-            run_study(spec, out, ex, progress=False, on_chunk=_stop_after(2))
+            run_study(spec, out, ex, progress=False, on_chunk=stop_after(2))
         assert len(list((out / "chunks").glob("d*.json"))) == 2 and not (out / "ride.csv").exists()
         res = run_study(spec, out, ex, progress=False)
     finally:

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 import yaml
 
+from _cli_helpers import Interrupt, stop_after
 from susp_sim_ros.analysis.sweep import (InProcessExecutor, drives_study, load_study,
                                          run_study, study_from_dict)
 from susp_sim_ros.analysis.sweep import engine
@@ -287,20 +288,6 @@ def test_reference_runs_ride_in_the_task_batch_and_give_the_given_trace_results(
         assert res["ok"].tolist() == given["ok"]
 
 
-class Interrupt(Exception):
-    pass
-
-
-def _stop_after(n):
-    seen = []
-
-    def hook(cid):
-        seen.append(cid)
-        if len(seen) == n:
-            raise Interrupt()
-    return hook
-
-
 def _check_log_after_resume(out: Path, n_chunks: int, first: set):
     log = [json.loads(x) for x in (out / "chunks" / "log.jsonl").read_text().splitlines()]
     ids = [e["chunk"] for e in log]
@@ -315,7 +302,7 @@ def test_interrupted_dask_study_resumes_without_repeating_or_losing_chunks(tmp_p
     spec = study_from_dict(data, "tiny.yaml")
     out = tmp_path / "out"
     with pytest.raises(Interrupt):
-        run_study(spec, out, dask_executor, progress=False, on_chunk=_stop_after(2))
+        run_study(spec, out, dask_executor, progress=False, on_chunk=stop_after(2))
     first = {int(p.stem[1:]) for p in (out / "chunks").glob("c*.csv")}
     assert len(first) == 2 and not (out / "results.csv").exists()
     res = run_study(spec, out, dask_executor, progress=False)
