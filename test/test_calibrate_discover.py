@@ -198,7 +198,8 @@ def test_backward_elimination_drops_a_term_a_later_one_made_redundant(monkeypatc
 
         def fake_fit(ev, s, x0, idx, max_nfev):
             missing = set(st.names) - set(s.names)
-            return SimpleNamespace(structure=s, x=x0, bic=bic_without[missing.pop()], rss=60.0)
+            bic = 300.0 if len(missing) > 1 else bic_without[next(iter(missing))]  # neither term: far worse
+            return SimpleNamespace(structure=s, x=x0, bic=bic, rss=60.0)
 
         monkeypatch.setattr(fm, "fit_structure", fake_fit)
         path, accepted = [{}], [{"name": n} for n in st.names]
