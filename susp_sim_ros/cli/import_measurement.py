@@ -17,9 +17,15 @@ def add_arguments(p) -> None:
                    help="road: OpenCRG file (wheel tracks at +-track/2) or road CSV (default: flat road)")
     p.add_argument("--road-start-u", type=float, default=None, metavar="U",
                    help="OpenCRG u [m] under the front axle when the drive starts (default: the road's first u)")
+    add_output_arguments(p)
+
+
+def add_output_arguments(p) -> None:
+    """The output file and the ``test_drive`` metadata of an import (``susp import``, ``susp import-csv``)."""
     p.add_argument("--out", required=True, help="output MCAP (refuses to overwrite without --overwrite)")
-    p.add_argument("--vehicle", default="passat_b8_like", help="vehicle parameter set name (metadata; its "
-                                                               "front track places the CRG wheel tracks)")
+    p.add_argument("--vehicle", default="passat_b8_like", help="vehicle parameter set name (metadata; with an "
+                                                               "OpenCRG road its front track places the wheel "
+                                                               "tracks)")
     p.add_argument("--maneuver", default="", help="maneuver text, e.g. bump_crossing_8kmh or sine_steer_50kmh")
     p.add_argument("--oil", default="1,1,1,1", help="damper oil levels FL,FR,RL,RR in [0, 1]")
     p.add_argument("--source", default="measured", help="metadata source (default: measured)")
