@@ -150,3 +150,23 @@ def test_controller_in_the_lockstep_loop_is_recorded_and_replays(model_full, tmp
     np.testing.assert_array_equal(again.outputs, r.outputs)
     passive = run_lockstep(d, model=model_full)
     assert not np.array_equal(passive["F_DAMPER_FL"], r["F_DAMPER_FL"])
+
+
+def test_passive_kernel_gives_the_semi_capable_kernels_numbers_bit_for_bit():
+    """Passive batches run a kernel compiled without the semi-active code (it halved batch throughput);
+    on passive vehicles it must give exactly the numbers of the full kernel: a bump crossing in three oil
+    states on both kernels, every output, bit for bit."""
+    import numpy as np
+
+    from susp_sim_ros.model import Model, simulate_batch
+    from susp_sim_ros.model.maneuvers import bump_crossing
+    model = Model("passat_b8_like", "full")
+    man = bump_crossing()
+    U = man.to_inputs(0.001)
+    P = np.array([model.params(o) for o in ((1, 1, 1, 1), (1, 1, 0, 0), (0, 0, 1, 1))])
+    _, y_passive, done_p = simulate_batch(model, P, U, dt=0.001, roads=[man.road])
+    assert model._kernel_passive is not None  # the passive batch took the passive kernel
+    model._kernel_passive = model.kernel       # now force the semi-capable kernel
+    _, y_full, done_f = simulate_batch(model, P, U, dt=0.001, roads=[man.road])
+    assert np.array_equal(done_p, done_f)
+    assert np.array_equal(y_passive, y_full) and np.any(y_full != 0)

@@ -73,6 +73,10 @@ MASK_ALL = 3
 
 # vehicles per block: AVX-512 holds 8 doubles, AVX2 4; 16 lets the compiler unroll the vector loops
 LANES = 16
+#: whether the step carries the semi-active damper (command clamp, valve lag, curve family). The generator
+#: (:mod:`.kernel`) sets it per kernel: passive batches run a kernel without that code, which keeps the
+#: corner loop as fast as before the semi-active damper (numba removes the dead branches).
+SEMI_ACTIVE_CODE = True
 # scratch rows per block: per corner (W[_W_x + i]), then per vehicle
 _W_ZR, _W_ZRD, _W_SLOPE, _W_D, _W_DD, _W_FZ, _W_WF, _W_FX, _W_FS = 0, 4, 8, 12, 16, 20, 24, 28, 32
 _W_V, _W_AX, _W_DELTA, _W_ZDD, _W_AY, _W_OK = 36, 37, 38, 39, 40, 41
@@ -284,7 +288,8 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
             W[_W_ZR + i, l] = zr
             W[_W_ZRD + i, l] = zrd
             W[_W_SLOPE + i, l] = slope
-            W[_W_CMD + i, l] = min(max(U[u, k, _U_CMD + i], 0.0), 1.0)
+            if SEMI_ACTIVE_CODE:
+                W[_W_CMD + i, l] = min(max(U[u, k, _U_CMD + i], 0.0), 1.0)
 
     # -- corner kinematics, tyre loads and horizontal wheel forces ----------------------------------
     for i in range(4):
@@ -322,7 +327,7 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
             dd = W[_W_DD + i, l]
             fill_context(p, dv, i, c, d, dd, W[_W_FX + i, l], S[_FYT + i, l], W[_W_FZ + i, l], W[_W_V, l])
             f_spring = spring_force(p, dv, i, d)
-            if p[P_SEMI_ACTIVE] > 0.5:
+            if SEMI_ACTIVE_CODE and p[P_SEMI_ACTIVE] > 0.5:
                 # first-order valve lag, exact over the step; the force uses the setting at the step's end
                 valve = S[_VALVE + i, l] + dv[_D_VALVE_ALPHA] * (W[_W_CMD + i, l] - S[_VALVE + i, l])
                 S[_VALVE + i, l] = valve

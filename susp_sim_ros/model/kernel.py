@@ -90,18 +90,22 @@ def _dependency_digest(terms: tuple[PhysicsTerm, ...]) -> str:
     return h.hexdigest()[:16]
 
 
-def kernel_source(terms: tuple[PhysicsTerm, ...]) -> str:
-    """Source text of the kernel module for ``terms`` (the template with its TERMS block filled)."""
+def kernel_source(terms: tuple[PhysicsTerm, ...], semi_active: bool = True) -> str:
+    """Source text of the kernel module for ``terms`` (the template with its TERMS block filled);
+    ``semi_active=False`` leaves the semi-active damper code out (a passive-only kernel)."""
     text = _TEMPLATE.read_text()
+    if not semi_active:
+        text = text.replace("\nSEMI_ACTIVE_CODE = True\n", "\nSEMI_ACTIVE_CODE = False\n", 1)
     head, rest = text.split(_BEGIN, 1)
     _, tail = rest.split(_END, 1)
     block = _terms_block(terms, KernelLayout.for_terms(terms))
     return f"{head}{_BEGIN}\n# dependencies: {_dependency_digest(terms)}\n{block}\n{_END}{tail}"
 
 
-def load_kernel(terms: tuple[PhysicsTerm, ...]) -> ModuleType:
-    """The compiled kernel module for ``terms`` (generated, cached on disk, imported once per process)."""
-    source = kernel_source(terms)
+def load_kernel(terms: tuple[PhysicsTerm, ...], semi_active: bool = True) -> ModuleType:
+    """The compiled kernel module for ``terms`` (generated, cached on disk, imported once per process);
+    ``semi_active=False``: the passive-only kernel (:func:`kernel_source`)."""
+    source = kernel_source(terms, semi_active)
     key = hashlib.sha256(source.encode()).hexdigest()[:16]
     with _lock:
         mod = _loaded.get(key)

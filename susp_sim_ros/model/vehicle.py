@@ -13,6 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from collections.abc import Iterable, Sequence
 
+from types import ModuleType
+
 import numpy as np
 
 from ..errors import SuspInputError
@@ -85,6 +87,15 @@ class Model:
         self.terms: tuple[PhysicsTerm, ...] = BUILTIN_TERMS + tuple(t.term for t in self.variant.terms)
         self.layout = KernelLayout.for_terms(self.terms)
         self.kernel = load_kernel(self.terms)
+        self._kernel_passive: ModuleType | None = None
+
+    @property
+    def kernel_passive(self):
+        """The kernel without the semi-active damper code, for batches of passive vehicles (the same
+        numbers as :attr:`kernel` on them, faster: benchmarks/RESULTS.md, "Model speed")."""
+        if self._kernel_passive is None:
+            self._kernel_passive = load_kernel(self.terms, semi_active=False)
+        return self._kernel_passive
 
     @property
     def dampers(self):
@@ -333,7 +344,8 @@ def simulate_batch(model: Model, P: np.ndarray, U: np.ndarray | Sequence[np.ndar
     labels, sel = _selection(outputs)
     Y = np.zeros((B, U.shape[1] // decim, len(sel)))
     done = np.zeros(B, np.int64)
-    model.kernel.run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done)
+    kernel = model.kernel if bool(np.any(P[:, P_SEMI_ACTIVE] > 0.5)) else model.kernel_passive
+    kernel.run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done)
     t = dt * decim * np.arange(1, Y.shape[1] + 1)
     return t, Y, done
 
