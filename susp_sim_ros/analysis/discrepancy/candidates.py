@@ -10,7 +10,7 @@ model (design choice, see also the package docstring):
   a scaling switched off is first rewritten with the switch on at its neutral value (plateau 1, ratio 1,
   slope 0), which is exactly the same model; the candidate then frees the continuous parameters;
 - ``friction_amplitude``, ``extra_viscous_damping`` and ``damper_gas_preload`` are registered physics
-  terms (:mod:`susp_sim_ros.analysis.synthetic`, :mod:`susp_sim_ros.model.extra_terms`) added to the
+  terms (:mod:`susp_sim_ros.model.amplitude_friction`, :mod:`susp_sim_ros.model.extra_terms`) added to the
   model at zero effect;
 - ``mass_error``, ``inertia_error``, ``spring_rate_error``, ``tyre_relaxation_error`` scale vehicle
   parameters;
@@ -114,6 +114,17 @@ def _term_axles(name, param):
     return apply
 
 
+def _amplitude(P, P0, x, model):
+    """Extra level per axle, one onset and one memory: the level grows with the peak deflection from the
+    static position, forgotten with the memory time constant (a stroke amplitude seen through the
+    joints' elastomers), and follows the axle friction's horizontal-force scaling (the extra friction
+    sits in the same joints)."""
+    _term_axles("friction_amplitude", "extra_level")(P, P0, x, model)
+    P[:, model.term_param_slice("friction_amplitude", "onset")] = x[2]
+    P[:, model.term_param_slice("friction_amplitude", "memory")] = x[3]
+    P[:, model.term_param_slice("friction_amplitude", "horizontal")] = 1.0
+
+
 def _gas(P, P0, x, model):
     P[:, model.term_param_slice("damper_gas_preload", "f0")] = x[0]
     P[:, model.term_param_slice("damper_gas_preload", "k")] = x[1]
@@ -174,12 +185,14 @@ LIBRARY: tuple[Candidate, ...] = (
                CandParam("ky_rear", "1/kN", 0.0, 0.0, 3.0, 0.3, "relative growth per kN |Fy|, rear")),
               _lateral, ("front", "rear"), SINE, "lateral"),
     Candidate("friction_amplitude", PHYSICS,
-              "suspension friction grows with deflection amplitude (extra Dahl element above 5 mm stroke)",
+              "suspension friction grows with deflection amplitude (extra Dahl element above an onset stroke)",
               (CandParam("extra_front", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, front"),
-               CandParam("extra_rear", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, rear")),
-              _term_axles("friction_amplitude", "extra_level"), ("front", "rear"),
+               CandParam("extra_rear", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, rear"),
+               CandParam("onset", "m", 0.005, 0.0, 0.02, 0.002, "stroke amplitude where the extra sets in"),
+               CandParam("memory", "s", 1.0, 0.05, 5.0, 0.2, "how long the peak deflection is remembered")),
+              _amplitude, ("front", "rear", None, None),
               "a bump crossing (strokes of several cm), best with oil-empty dampers", "bump",
-              "susp_sim_ros.analysis.synthetic"),
+              "susp_sim_ros.model.amplitude_friction"),
     Candidate("damper_gas_preload", PHYSICS,
               "gas-spring force of a pressurised damper: preload change plus gas stiffness",
               (CandParam("f0", "N", 0.0, -500.0, 500.0, 20.0, "force change at static deflection"),

@@ -230,7 +230,8 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
     if "friction_amplitude" in st.names:
         p = st.part(x, "friction_amplitude")
         var["terms"].append({"name": "friction_amplitude", "module": BY_NAME["friction_amplitude"].term_module,
-                             "params": {"extra_level": _axle_map(p[0], p[1])}})
+                             "params": {"extra_level": _axle_map(p[0], p[1]), "onset": _axle_map(p[2], p[2]),
+                                        "memory": _axle_map(p[3], p[3]), "horizontal": _axle_map(1.0, 1.0)}})
     if "extra_viscous_damping" in st.names:
         p = st.part(x, "extra_viscous_damping")
         var["terms"].append({"name": "extra_viscous_damping", "module": BY_NAME["extra_viscous_damping"].term_module,
