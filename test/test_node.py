@@ -144,6 +144,11 @@ def test_parameters_are_described_read_only_and_ranged(driver):
     rate = desc["publish_rate_hz"].floating_point_range[0]
     assert (rate.from_value, rate.to_value) == (0.0, 1000.0)
     assert desc["on_divergence"].additional_constraints == "exit or hold"
+    prio = desc["realtime_priority"].integer_range[0]
+    assert (prio.from_value, prio.to_value) == (0, 98)  # SCHED_FIFO 1..99, the tick thread one above
+    assert all(desc[n].floating_point_range[0].from_value == 0.0
+               for n in ("step_s", "input_timeout_s", "max_time_jump_s", "diagnostics_rate_hz",
+                         "record_flush_interval_s", "sim_reorder_window_s"))
     for name, value in (("publish_rate_hz", 50.0), ("record_path", "x.mcap"), ("realtime_priority", 0),
                         ("use_sim_time", False)):
         res = node.set_parameters([Parameter(name, value=value)])
@@ -305,3 +310,24 @@ def test_recording_thread_writes_in_log_time_order(jitter):
     q.close()
     assert rec.closed and [w[0] for w in rec.written] == sorted(times)
     assert len(rec.written) == len(times)
+
+
+@pytest.mark.parametrize("module,ros_args,expected", [
+    ("susp_sim_ros.ros.node", ["-p", "realtime_priority:=99"], "realtime_priority"),    # descriptor range
+    ("susp_sim_ros.ros.node", ["-p", "step_s:=-0.001"], "step_s"),                      # descriptor range
+    ("susp_sim_ros.ros.node", ["-p", "diagnostics_rate_hz:=0.0"], "diagnostics_rate_hz"),
+    ("susp_sim_ros.ros.node", ["-p", "on_divergence:=explode"], "on_divergence"),
+    ("susp_sim_ros.ros.controller_node", ["-p", "sample_time_s:=0.5"], "sample_time_s"),
+])
+def test_entry_points_refuse_a_bad_parameter_with_exit_code_2(module, ros_args, expected, capsys):
+    """Both nodes' ``main`` (the shared run_node): a bad parameter is one line on stderr naming it, exit
+    code 2, no traceback, and rclpy is shut down again."""
+    import importlib
+    import rclpy
+    from _ros_helpers import ros_env
+    ros_env()
+    main = importlib.import_module(module).main
+    assert main(["prog", "--ros-args", *ros_args]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and "Traceback" not in err and err.count("error:") == 1
+    assert not rclpy.ok()

@@ -8,26 +8,47 @@ and is then applied.
 
 :class:`InputCallbacks` is mixed into :class:`~.node.SuspSimNode` and uses its ``core``, ``lock``,
 ``sim_time``, ``orderer``, ``semiactive``, ``tick``, ``now_ns``, ``_start_core``, ``_publish_samples``,
-``_record``, ``_check_failure`` and subscriptions (``_input_subs``, ``_sim_clock_sub``).
+``_record`` and ``_check_failure``; :meth:`InputCallbacks._subscribe_inputs` creates the subscriptions.
 """
 from __future__ import annotations
 
 import time
 
+from rclpy.clock import Clock as RosClock, ClockType
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64, Float64MultiArray
 
 from ..io import messages as M
 from ..sim_core import DAMPER_COMMAND
 from .conversion import input_cdr, layout_dims
-from .rclpy_workarounds import take_pending
+from .qos import CLOCK_QOS, INPUT_QOS, LATCHED_QOS
+from .rclpy_workarounds import guard_time_source, take_pending
 from .sim_time import CLOCK, INPUT
+
+DRAIN_PERIOD_S = 0.002  # sim time: how often the reorder queue is checked for due events (steady clock) [s]
 
 
 class InputCallbacks:
     """Subscription callbacks ``on_*(message, info)``: ``info`` is rclpy's message info (its
     ``source_timestamp`` orders sim-time events) or None; tests may call them directly. (``info`` has no
     default: rclpy passes it only to callbacks that cannot be called with the message alone.)"""
+
+    def _subscribe_inputs(self) -> None:
+        """The input subscriptions; in sim time also ``/clock`` and the timer that drains the reorder queue."""
+        self._sim_clock_sub = None
+        if self.sim_time:
+            guard_time_source(self)
+            # Our own /clock subscription, reliable and deep (rclpy's time source keeps only the latest
+            # /clock, so a busy node would see the clock skip ahead of queued inputs): every clock value
+            # is seen, in order, and each one steps the core exactly that far.
+            self._sim_clock_sub = self.create_subscription(Clock, "/clock", self.on_clock, CLOCK_QOS)
+            self.create_timer(DRAIN_PERIOD_S, self._drain, clock=RosClock(clock_type=ClockType.STEADY_TIME))
+        self._input_subs = [
+            self.create_subscription(Float64, "/vehicle/speed", self.on_speed, INPUT_QOS),
+            self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self.on_steering, INPUT_QOS),
+            self.create_subscription(Float64MultiArray, "/road/profile", self.on_profile, LATCHED_QOS),
+            self.create_subscription(Float64MultiArray, "/road/wheel_heights", self.on_wheel_heights, INPUT_QOS),
+            self.create_subscription(Float64MultiArray, DAMPER_COMMAND, self.on_damper_command, INPUT_QOS)]
 
     def _input(self, topic: str, msgtype: str, msg, apply, info=None, latched: bool = False) -> None:
         """An input message. Wall time: stamped with its arrival time and handed to the tick, which steps
