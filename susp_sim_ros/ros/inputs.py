@@ -23,7 +23,7 @@ from ..sim_core import DAMPER_COMMAND
 from .conversion import input_cdr, layout_dims
 from .qos import CLOCK_QOS, INPUT_QOS, LATCHED_QOS
 from .rclpy_workarounds import guard_time_source, take_pending
-from .sim_time import CLOCK, INPUT
+from .sim_time import CLOCK, INPUT, SimTimeOrderer
 
 DRAIN_PERIOD_S = 0.002  # sim time: how often the reorder queue is checked for due events (steady clock) [s]
 
@@ -33,8 +33,15 @@ class InputCallbacks:
     ``source_timestamp`` orders sim-time events) or None; tests may call them directly. (``info`` has no
     default: rclpy passes it only to callbacks that cannot be called with the message alone.)"""
 
-    def _subscribe_inputs(self) -> None:
-        """The input subscriptions; in sim time also ``/clock`` and the timer that drains the reorder queue."""
+    def _subscribe_inputs(self, reorder_window_s: float) -> None:
+        """The input state and subscriptions; in sim time also ``/clock`` and the timer that drains the
+        reorder queue (``reorder_window_s``: :class:`~.sim_time.SimTimeOrderer`'s window [s])."""
+        self._sim_now = 0
+        self.inputs_received = 0  # applied
+        self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
+        self._wall_inputs: list = []  # wall time: (arrival ns, input) for the next tick
+        self.orderer = SimTimeOrderer(int(round(reorder_window_s * 1e9)))
+        self._pulling = False  # taking queued messages straight from DDS (see _pull_pending)
         self._sim_clock_sub = None
         if self.sim_time:
             guard_time_source(self)

@@ -31,7 +31,6 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 
-from ..errors import SuspInputError
 from ..io import messages as M
 from ..lockstep import simulated_metadata
 from ..model.vehicle import Model, check_oil
@@ -39,11 +38,10 @@ from ..ride_diagnostics import SemiActiveDiagnostics
 from ..sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
 from .conversion import diagnostic_array, fill
 from .inputs import InputCallbacks
-from .parameters import ON_DIVERGENCE, RuntimeChange, RuntimeParameters, declare_parameters, warm_up
+from .parameters import RuntimeChange, RuntimeParameters, declare_parameters, warm_up
 from .qos import OUTPUT_QOS
 from .recording import RecordingQueue, open_recording
 from .run import run_node
-from .sim_time import SimTimeOrderer
 from .status import NODE_NAME, CoreSnapshot, log_stale_changes, node_status
 from .timing import TickThread, TimingStats, raise_priority
 
@@ -63,8 +61,6 @@ class SuspSimNode(InputCallbacks, Node):
         self.vehicle, self.variant = str(p["vehicle"]), str(p["friction_variant"])
         model = Model(self.vehicle, self.variant)
         self.on_divergence = str(p["on_divergence"])
-        if self.on_divergence not in ON_DIVERGENCE:
-            raise SuspInputError(f"parameter on_divergence: expected exit or hold, got {self.on_divergence!r}")
         self.core = SimCore(model, step_s=float(p["step_s"]), publish_rate_hz=float(p["publish_rate_hz"]),
                             oil=oil, input_timeout_s=float(p["input_timeout_s"]),
                             max_time_jump_s=float(p["max_time_jump_s"]))
@@ -75,12 +71,6 @@ class SuspSimNode(InputCallbacks, Node):
         self.rejection_log = RateLimitedLog(lambda text: self.get_logger().warning(text),
                                             REJECTION_LOG_INTERVAL_S)
         self.core.on_reject = self.rejection_log  # every rejection, once per cause and interval
-        self._sim_now = 0
-        self.inputs_received = 0  # applied
-        self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
-        self._wall_inputs: list = []  # wall time: (arrival ns, input) for the next tick
-        self.orderer = SimTimeOrderer(int(round(float(p["sim_reorder_window_s"]) * 1e9)))
-        self._pulling = False  # taking queued messages straight from DDS (see _pull_pending)
         warm_up(model)
         self.timing = TimingStats(self.core.period_ns)
         self.recorder: RecordingQueue | None = None
@@ -94,7 +84,7 @@ class SuspSimNode(InputCallbacks, Node):
         self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
         self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
         self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
-        self._subscribe_inputs()
+        self._subscribe_inputs(float(p["sim_reorder_window_s"]))
         self.semiactive = SemiActiveDiagnostics(model, self.core.period_ns)
         self.parameters = RuntimeParameters(self, lambda: (self.vehicle, self.variant), self._apply_change)
         self._stale: set[str] = set()

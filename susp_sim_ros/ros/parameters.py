@@ -4,7 +4,7 @@ validation of run-time changes.
 Only :data:`RUNTIME` may change while the node runs; every other parameter is declared read-only, so
 rclpy refuses a change before any callback runs. The ranges rclpy can check (scalars, closed intervals)
 are in the descriptors and checked by rclpy at start and on every change; the strict bounds (a step or a
-rate of 0) are checked by :class:`~susp_sim_ros.sim_core.SimCore` and :func:`check_positive`, the
+rate of 0) are checked by :class:`~susp_sim_ros.sim_core.SimCore` and :func:`check_start_values`, the
 per-element range of ``damper_oil_level`` (in its descriptor for ``ros2 param describe``) by
 :func:`~susp_sim_ros.model.vehicle.check_oil` (rclpy checks ranges of scalar parameters only).
 
@@ -51,14 +51,14 @@ DEFAULTS: dict[str, tuple[Any, str]] = {
 RUNTIME = ("damper_oil_level", "friction_variant", "vehicle")
 INF = float("inf")
 #: closed ranges (from, to) in the descriptors; the strict lower bounds (> 0) are checked by SimCore
-#: (step, publish rate, timeout, time jump) and :func:`check_positive` (diagnostics rate)
+#: (step, publish rate, timeout, time jump) and :func:`check_start_values` (diagnostics rate)
 RANGES: dict[str, tuple[float, float]] = {
     "publish_rate_hz": (0.0, 1000.0),    # SimCore: (0, 1000] Hz
     "damper_oil_level": (0.0, 1.0),      # per element (checked by check_oil, see the module docstring)
     "step_s": (0.0, INF),                # SimCore: (0, publish period]
     "input_timeout_s": (0.0, INF),       # SimCore: > 0
     "max_time_jump_s": (0.0, INF),       # SimCore: > 0
-    "diagnostics_rate_hz": (0.0, INF),   # check_positive: > 0
+    "diagnostics_rate_hz": (0.0, INF),   # check_start_values: > 0
     "record_flush_interval_s": (0.0, INF),
     "sim_reorder_window_s": (0.0, INF),
 }
@@ -92,15 +92,18 @@ def declare_parameters(node) -> dict[str, Any]:
         if not node.has_parameter(name):
             node.declare_parameter(name, default, descriptor(name))
     values = {name: node.get_parameter(name).value for name in DEFAULTS}
-    check_positive(values)
+    check_start_values(values)
     return values
 
 
-def check_positive(values: dict[str, Any]) -> None:
-    """Raise ``SuspInputError`` naming the parameter when one of :data:`POSITIVE` is not > 0."""
+def check_start_values(values: dict[str, Any]) -> None:
+    """What the descriptors cannot say: :data:`POSITIVE` > 0, ``on_divergence`` one of
+    :data:`ON_DIVERGENCE`. Raises ``SuspInputError`` naming the parameter."""
     for name in POSITIVE:
         if not float(values[name]) > 0:
             raise SuspInputError(f"parameter {name}: expected a value > 0, got {values[name]}")
+    if values["on_divergence"] not in ON_DIVERGENCE:
+        raise SuspInputError(f"parameter on_divergence: expected exit or hold, got {values['on_divergence']!r}")
 
 
 def warm_up(model: Model) -> None:
