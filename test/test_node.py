@@ -317,7 +317,9 @@ def test_recording_thread_writes_in_log_time_order(jitter):
     ("susp_sim_ros.ros.node", ["-p", "step_s:=-0.001"], "step_s"),                      # descriptor range
     ("susp_sim_ros.ros.node", ["-p", "diagnostics_rate_hz:=0.0"], "diagnostics_rate_hz"),
     ("susp_sim_ros.ros.node", ["-p", "on_divergence:=explode"], "on_divergence"),
-    ("susp_sim_ros.ros.controller_node", ["-p", "sample_time_s:=0.5"], "sample_time_s"),
+    ("susp_sim_ros.ros.controller_node", ["-p", "sample_time_s:=0.5"], "sample_time_s"),  # descriptor range
+    ("susp_sim_ros.ros.controller_node", ["-p", "sample_time_s:=0.0"], "sample_time_s"),
+    ("susp_sim_ros.ros.controller_node", ["-p", "controller:=no_such_law"], "no_such_law"),
 ])
 def test_entry_points_refuse_a_bad_parameter_with_exit_code_2(module, ros_args, expected, capsys):
     """Both nodes' ``main`` (the shared run_node): a bad parameter is one line on stderr naming it, exit
@@ -331,3 +333,28 @@ def test_entry_points_refuse_a_bad_parameter_with_exit_code_2(module, ros_args, 
     err = capsys.readouterr().err
     assert expected in err and "Traceback" not in err and err.count("error:") == 1
     assert not rclpy.ok()
+
+
+def test_controller_parameters_are_read_only_and_ranged():
+    """The controller reads its parameters at start only: rclpy refuses a change instead of accepting one
+    that would have no effect; the sample period's range is in its descriptor."""
+    import rclpy
+    from rclpy.parameter import Parameter
+    from _ros_helpers import ros_env
+    from susp_sim_ros.ros.controller_node import MAX_SAMPLE_TIME_S, DamperControllerNode
+    ros_env()
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    try:
+        node = DamperControllerNode(context=ctx)
+        desc = dict(zip(("controller", "sample_time_s", "vehicle"),
+                        node.describe_parameters(["controller", "sample_time_s", "vehicle"])))
+        assert all(d.read_only for d in desc.values())
+        period = desc["sample_time_s"].floating_point_range[0]
+        assert (period.from_value, period.to_value) == (0.0, MAX_SAMPLE_TIME_S)
+        assert "groundhook" in desc["controller"].additional_constraints
+        res = node.set_parameters([Parameter("controller", value="groundhook")])
+        assert not res[0].successful and node.get_parameter("controller").value == "skyhook"
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)

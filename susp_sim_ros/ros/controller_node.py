@@ -18,7 +18,7 @@ import dataclasses
 import sys
 
 import numpy as np
-from rcl_interfaces.msg import ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.node import Node
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
@@ -33,6 +33,7 @@ from .qos import OUTPUT_QOS as QOS  # the same profile as the simulation's outpu
 from .run import run_node
 
 NODE_NAME = "susp_damper_controller"
+MAX_SAMPLE_TIME_S = 0.1  # a sample period longer than this is no semi-active control any more [s]
 _Q = len(SUSPENSION_QUANTITIES)
 _DEFL, _DEFL_VEL = SUSPENSION_QUANTITIES.index("deflection"), SUSPENSION_QUANTITIES.index("deflection_velocity")
 
@@ -40,15 +41,20 @@ _DEFL, _DEFL_VEL = SUSPENSION_QUANTITIES.index("deflection"), SUSPENSION_QUANTIT
 class DamperControllerNode(Node):
     def __init__(self, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
-        decl = {"controller": ("skyhook", "damper controller: " + ", ".join(CONTROLLERS)),
-                "sample_time_s": (0.01, "period of the /sim samples [s] (the simulation's publish period)"),
-                "vehicle": ("passat_b8_like", "vehicle parameter set (corner geometry)")}
-        for name, (default, text) in decl.items():
-            self.declare_parameter(name, default, ParameterDescriptor(description=text))
+        # read at start only, so read-only; rclpy checks the range, the strict lower bound is checked here
+        period = [FloatingPointRange(from_value=0.0, to_value=MAX_SAMPLE_TIME_S, step=0.0)]
+        self.declare_parameter("controller", "skyhook", ParameterDescriptor(
+            description="damper controller", read_only=True, additional_constraints=", ".join(CONTROLLERS)))
+        self.declare_parameter("sample_time_s", 0.01, ParameterDescriptor(
+            description="period of the /sim samples [s] (the simulation's publish period)", read_only=True,
+            floating_point_range=period))
+        self.declare_parameter("vehicle", "passat_b8_like", ParameterDescriptor(
+            description="vehicle parameter set (corner geometry)", read_only=True))
         name = str(self.get_parameter("controller").value)
         dt = float(self.get_parameter("sample_time_s").value)
-        if not (np.isfinite(dt) and 0 < dt <= 0.1):
-            raise SuspInputError(f"parameter sample_time_s: expected a period in (0, 0.1] s, got {dt}")
+        if not (np.isfinite(dt) and 0 < dt <= MAX_SAMPLE_TIME_S):
+            raise SuspInputError(f"parameter sample_time_s: expected a period in (0, {MAX_SAMPLE_TIME_S:g}] s, "
+                                 f"got {dt}")
         params = dataclasses.replace(load_controller_params(), sample_time=dt)
         self.controller = make_controller(name, load_vehicle(str(self.get_parameter("vehicle").value)),
                                           load_damper_family(), params)
