@@ -46,6 +46,7 @@ from .status import NODE_NAME, CoreSnapshot, log_stale_changes, node_status
 from .timing import TickThread, TimingStats, raise_priority
 
 REJECTION_LOG_INTERVAL_S = 10.0
+ERROR_DIAGNOSTIC_GRACE_S = 0.5  # after a divergence, spin this long before exiting so the ERROR is heard [s]
 
 
 class SuspSimNode(InputCallbacks, Node):
@@ -241,7 +242,7 @@ def _exit_code(node: SuspSimNode, spin_for) -> int:
     """1 after a divergence (once the ERROR diagnostic has had time to reach its subscribers), else 0."""
     if not node.failure:
         return 0
-    spin_for(0.5)
+    spin_for(ERROR_DIAGNOSTIC_GRACE_S)
     print(f"{NODE_NAME}: stopped: {node.failure}", file=sys.stderr)
     return 1
 

@@ -11,6 +11,10 @@
   subscription per round, so an input published before the clock could otherwise be applied after it.
   rclpy Jazzy has no public way to take a message outside the executor (rclcpp has
   ``Subscription::take``; rclpy has none, and an executor cannot be spun from inside its own callback).
+  Checked against rclpy 7.1.5: ``raw=True`` only changes what a callback receives (CDR bytes), the
+  ``MessageInfo`` (its ``source_timestamp`` orders the queue) reaches callbacks only, and
+  :mod:`rclpy.serialization` converts bytes but takes nothing from DDS; a second node with its own executor
+  would move the input subscriptions off ``susp_sim_node`` in the ROS graph.
 """
 from __future__ import annotations
 
