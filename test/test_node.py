@@ -358,3 +358,16 @@ def test_controller_parameters_are_read_only_and_ranged():
         node.destroy_node()
     finally:
         rclpy.try_shutdown(context=ctx)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(-2**31, 2**31 - 1), st.integers(0, 2**32 - 1))
+def test_clock_time_is_read_or_refused(sec, nanosec):
+    """One reading of /clock for rclpy's time source guard and the node's own /clock callback: a valid
+    time in ns, None for a negative second or nanoseconds outside [0, 1e9)."""
+    from rosgraph_msgs.msg import Clock
+    from susp_sim_ros.ros.conversion import clock_time_ns
+    m = Clock()
+    m.clock.sec, m.clock.nanosec = sec, nanosec
+    valid = sec >= 0 and nanosec < 1_000_000_000
+    assert clock_time_ns(m) == (sec * 1_000_000_000 + nanosec if valid else None)

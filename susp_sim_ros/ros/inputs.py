@@ -20,7 +20,7 @@ from std_msgs.msg import Float64, Float64MultiArray
 
 from ..io import messages as M
 from ..sim_core import DAMPER_COMMAND
-from .conversion import input_cdr, layout_dims
+from .conversion import clock_time_ns, input_cdr, layout_dims
 from .qos import CLOCK_QOS, INPUT_QOS, LATCHED_QOS
 from .rclpy_workarounds import guard_time_source, take_pending
 from .sim_time import CLOCK, INPUT, SimTimeOrderer
@@ -145,10 +145,10 @@ class InputCallbacks:
         self._input(DAMPER_COMMAND, M.FLOAT64_ARRAY, msg, apply, info)
 
     def on_clock(self, msg: Clock, info) -> None:
-        sec, nsec = int(msg.clock.sec), int(msg.clock.nanosec)
-        if sec < 0 or not 0 <= nsec < 1_000_000_000 or (sec == 0 and nsec == 0):
+        t_ns = clock_time_ns(msg)
+        if not t_ns:  # invalid, or 0 (no time yet)
             with self.lock:
-                self.core.reject("/clock", "clock_invalid", f"/clock: rejected invalid time sec={sec} "
-                                 f"nanosec={nsec} (need sec >= 0, 0 <= nanosec < 1e9, not 0)")
+                self.core.reject("/clock", "clock_invalid", f"/clock: rejected invalid time sec={msg.clock.sec} "
+                                 f"nanosec={msg.clock.nanosec} (need sec >= 0, 0 <= nanosec < 1e9, not 0)")
             return
-        self._push(info, CLOCK, sec * 1_000_000_000 + nsec)
+        self._push(info, CLOCK, t_ns)

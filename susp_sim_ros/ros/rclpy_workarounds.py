@@ -25,6 +25,8 @@ from rclpy.node import Node
 from rclpy.subscription import Subscription
 from rosgraph_msgs.msg import Clock
 
+from .conversion import clock_time_ns
+
 
 def guard_time_source(node: Node) -> int:
     """Wrap the callbacks of the node's existing ``/clock`` subscriptions (rclpy's time source: call this
@@ -36,7 +38,7 @@ def guard_time_source(node: Node) -> int:
         inner = sub.callback
 
         def guarded(msg: Clock, inner=inner) -> None:
-            if msg.clock.sec >= 0 and msg.clock.nanosec < 1_000_000_000:
+            if clock_time_ns(msg) is not None:
                 inner(msg)
         sub.callback = guarded
         wrapped += 1
