@@ -43,7 +43,7 @@ setup(
         "console_scripts": [
             "susp = susp_sim_ros.cli.main:main",
             "susp_sim_node = susp_sim_ros.ros.node:main",
-            "susp_damper_controller = susp_sim_ros.controller_node:main",
+            "susp_damper_controller = susp_sim_ros.ros.controller_node:main",
         ],
     },
 )

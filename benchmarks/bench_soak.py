@@ -61,7 +61,7 @@ def ros_env() -> dict[str, str]:
 def start_node(record_path: str | Path, params: dict | None = None, env: dict | None = None,
                log=None) -> subprocess.Popen:
     """``susp_sim_node`` in a subprocess recording to ``record_path`` (``params``: more -p overrides)."""
-    args = [sys.executable, "-c", "import sys; from susp_sim_ros.node import main; sys.exit(main())",
+    args = [sys.executable, "-c", "import sys; from susp_sim_ros.ros.node import main; sys.exit(main())",
             "--ros-args", "-p", f"record_path:={record_path}"]
     for k, v in (params or {}).items():
         args += ["-p", f"{k}:={v}"]
@@ -107,7 +107,7 @@ class Probe:
         self._stop = threading.Event()
         self._pub: threading.Thread | None = None
         if realtime:
-            from susp_sim_ros.node import raise_priority
+            from susp_sim_ros.ros.timing import raise_priority
             note = raise_priority(5)
             if note:
                 print(f"soak probe: {note}", file=sys.stderr)

@@ -57,7 +57,8 @@ def _flag(text: str, name: str) -> bool:
     return text.lower() == "true"
 
 
-def _actions(context):
+def launch_actions(context):
+    """The launch's actions for the launch arguments in ``context`` (node, optional replay and recorder)."""
     arg = {name: LaunchConfiguration(name).perform(context).strip() for name in ARGUMENTS}
     bag = arg["bag"]
     sim_time = bool(bag) if arg["use_sim_time"].lower() == "auto" else _flag(arg["use_sim_time"], "use_sim_time")
@@ -96,4 +97,4 @@ def generate_launch_description() -> LaunchDescription:
     return LaunchDescription(
         [DeclareLaunchArgument(name, default_value=default, description=text)
          for name, (default, text) in ARGUMENTS.items()]
-        + [OpaqueFunction(function=_actions)])
+        + [OpaqueFunction(function=launch_actions)])

@@ -1,107 +1,14 @@
-"""``susp_damper_controller``: a reference semi-active damper controller as its own ROS 2 node (issue 15).
-
-Subscribes ``/sim/imu/data`` (body rates and specific force at the centre of gravity) and
-``/sim/suspension`` (deflection and its rate per corner) of ``susp_sim_node`` and, on every suspension
-sample, publishes ``/vehicle/damper_command`` (``std_msgs/msg/Float64MultiArray``, [FL, FR, RL, RR] in
-[0, 1]) from one of the library controllers (:mod:`susp_sim_ros.control.controllers`)::
-
-    susp_damper_controller --ros-args -p controller:=skyhook
-
-Parameters: ``controller`` (skyhook, skyhook_onoff, groundhook, add, sh_add; passive publishes nothing),
-``sample_time_s`` (the period of the samples it gets: the simulation node's publish period, default
-0.01 s), ``vehicle`` (geometry of the corners; default passat_b8_like). A thin shell: the control law is
-the same code the offline ride runs and studies use.
-"""
+"""The old import path of the damper-controller node: it lives in the package :mod:`susp_sim_ros.ros`
+(:mod:`susp_sim_ros.ros.controller_node`, entry point ``susp_damper_controller =
+susp_sim_ros.ros.controller_node:main``). Kept so that console scripts installed before the move and
+``python -m susp_sim_ros.controller_node`` keep working; new code imports from :mod:`susp_sim_ros.ros`."""
 from __future__ import annotations
 
-import dataclasses
 import sys
 
-import numpy as np
-import rclpy
-from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import Imu
-from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+from .ros.controller_node import NODE_NAME, DamperControllerNode, main
 
-from .control.controllers import CONTROLLERS, Measurement, load_controller_params, make_controller
-from .errors import SuspInputError
-from .io.messages import SUSPENSION_QUANTITIES
-from .model.params import load_vehicle
-from .model.semiactive import load_damper_family
-from .sim_core import DAMPER_COMMAND, SIM_IMU, SIM_SUSPENSION
-
-NODE_NAME = "susp_damper_controller"
-QOS = QoSProfile(depth=50, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE)
-_Q = len(SUSPENSION_QUANTITIES)
-_DEFL, _DEFL_VEL = SUSPENSION_QUANTITIES.index("deflection"), SUSPENSION_QUANTITIES.index("deflection_velocity")
-
-
-class DamperControllerNode(Node):
-    def __init__(self, **kwargs):
-        super().__init__(NODE_NAME, **kwargs)
-        decl = {"controller": ("skyhook", "damper controller: " + ", ".join(CONTROLLERS)),
-                "sample_time_s": (0.01, "period of the /sim samples [s] (the simulation's publish period)"),
-                "vehicle": ("passat_b8_like", "vehicle parameter set (corner geometry)")}
-        for name, (default, text) in decl.items():
-            self.declare_parameter(name, default, ParameterDescriptor(description=text))
-        name = str(self.get_parameter("controller").value)
-        dt = float(self.get_parameter("sample_time_s").value)
-        if not (np.isfinite(dt) and 0 < dt <= 0.1):
-            raise SuspInputError(f"parameter sample_time_s: expected a period in (0, 0.1] s, got {dt}")
-        params = dataclasses.replace(load_controller_params(), sample_time=dt)
-        self.controller = make_controller(name, load_vehicle(str(self.get_parameter("vehicle").value)),
-                                          load_damper_family(), params)
-        self._imu: Imu | None = None
-        self.commands = 0
-        self.pub = self.create_publisher(Float64MultiArray, DAMPER_COMMAND, QOS)
-        self.create_subscription(Imu, SIM_IMU, self._on_imu, QOS)
-        self.create_subscription(Float64MultiArray, SIM_SUSPENSION, self._on_suspension, QOS)
-        self._msg = Float64MultiArray()
-        self._msg.layout.dim = [MultiArrayDimension(label="wheel", size=4, stride=4)]
-        self.get_logger().info(f"{NODE_NAME}: {name} at {dt * 1e3:g} ms samples")
-
-    def _on_imu(self, msg: Imu) -> None:
-        self._imu = msg
-
-    def _on_suspension(self, msg: Float64MultiArray) -> None:
-        if self._imu is None or len(msg.data) != 4 * _Q:
-            return
-        d = np.asarray(msg.data, float).reshape(4, _Q)
-        imu = self._imu
-        m = Measurement(imu.linear_acceleration.z, imu.angular_velocity.x, imu.angular_velocity.y,
-                        d[:, _DEFL], d[:, _DEFL_VEL])
-        cmd = self.controller(m)
-        if cmd is None:
-            return
-        self._msg.data = [float(x) for x in cmd]
-        self.pub.publish(self._msg)
-        self.commands += 1
-
-
-def main(args: list[str] | None = None) -> int:
-    """Console entry point ``susp_damper_controller [--ros-args ...]``. Exit 0 on SIGINT/SIGTERM."""
-    rclpy.init(args=args if args is not None else sys.argv)
-    node = None
-    try:
-        node = DamperControllerNode()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.1)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except SuspInputError as exc:
-        print(f"{NODE_NAME}: error: {exc}", file=sys.stderr)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
-
+__all__ = ["NODE_NAME", "DamperControllerNode", "main"]
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -1,4 +1,5 @@
-"""Launch-free ROS 2 test helpers: isolated environment, private context, a sim-time driver.
+"""Launch-free ROS 2 test helpers: isolated environment, private context, a sim-time driver, and for the
+tests over real DDS a node in its own process and a probe node that talks to it.
 
 The driver publishes ``/clock`` and the input topics from a second node in the same private context and
 spins a ``SingleThreadedExecutor`` until the node under test has taken each message. In sim time the node
@@ -9,10 +10,15 @@ from __future__ import annotations
 
 import os
 import random
+import signal
+import subprocess
+import sys
 import tempfile
 import time
 
 import numpy as np
+
+STOP_TIMEOUT_S = 20.0  # a node process must end this long after SIGINT, else it is killed [s]
 
 
 def ros_env() -> None:
@@ -20,6 +26,86 @@ def ros_env() -> None:
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(1, 101)))
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     os.environ.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="susp-roslog-"))
+
+
+def latched_qos():
+    """The profile publisher's QoS, as a replay of a recorded drive offers it (transient local, reliable)."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    return QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def profile_msg(s, zl, zr):
+    """A ``/road/profile`` message (``std_msgs/Float64MultiArray``, [channel 3, sample N]) for path
+    coordinates ``s`` [m] and elevations ``zl``, ``zr`` [m]."""
+    from std_msgs.msg import Float64MultiArray
+    from susp_sim_ros.io.messages import road_profile_msg
+    from susp_sim_ros.ros.conversion import fill
+    return fill(Float64MultiArray(), road_profile_msg(s, zl, zr))
+
+
+def start_node_process(log_path, module: str, *ros_args: str) -> subprocess.Popen:
+    """``module``'s ``main`` (a node entry point) in its own process with ``--ros-args *ros_args``, in the
+    isolated environment of :func:`ros_env`; stdout and stderr go to ``log_path``."""
+    ros_env()
+    log = open(log_path, "w")
+    code = f"import sys; from {module} import main; sys.exit(main())"
+    return subprocess.Popen([sys.executable, "-c", code, "--ros-args", *ros_args], stdout=log,
+                            stderr=subprocess.STDOUT, env=dict(os.environ))
+
+
+def stop_process(proc: subprocess.Popen) -> int:
+    """SIGINT (as Ctrl-C), then its exit code; killed (-9) when it does not end in ``STOP_TIMEOUT_S``."""
+    proc.send_signal(signal.SIGINT)
+    try:
+        return proc.wait(timeout=STOP_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        return -9
+
+
+class Probe:
+    """A plain rclpy node in a private context with its executor, publishing the test-drive inputs
+    (``speed``, ``steer``, the latched ``profile``) to a node in another process."""
+
+    def __init__(self, name: str):
+        ros_env()
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from std_msgs.msg import Float64, Float64MultiArray
+        self.rclpy, self.Float64 = rclpy, Float64
+        self.ctx = rclpy.Context()
+        rclpy.init(context=self.ctx)
+        self.node = rclpy.create_node(name, context=self.ctx)
+        self.steer = self.node.create_publisher(Float64, "/vehicle/steering_wheel_angle", 10)
+        self.speed = self.node.create_publisher(Float64, "/vehicle/speed", 10)
+        self.profile = self.node.create_publisher(Float64MultiArray, "/road/profile", latched_qos())
+        self.ex = SingleThreadedExecutor(context=self.ctx)
+        self.ex.add_node(self.node)
+
+    def wait_for(self, ready, procs: dict, timeout: float, what: str) -> None:
+        """Spin until ``ready()``; fails with the log of a process of ``procs`` (log path -> process)
+        that ended, or after ``timeout`` [s]."""
+        end = time.monotonic() + timeout
+        while not ready():
+            for log, proc in procs.items():
+                assert proc.poll() is None, log.read_text()
+            assert time.monotonic() < end, what
+            self.ex.spin_once(timeout_sec=0.05)
+
+    def drive(self, seconds: float, speed: float, steer: float) -> None:
+        """Publish ``speed`` [m/s] and ``steer`` [rad] about every 10 ms for ``seconds`` [s], spinning."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.steer.publish(self.Float64(data=float(steer)))
+            self.speed.publish(self.Float64(data=float(speed)))
+            self.ex.spin_once(timeout_sec=0.01)
+
+    def close(self) -> None:
+        try:
+            self.ex.shutdown()
+            self.node.destroy_node()
+        finally:
+            self.rclpy.try_shutdown(context=self.ctx)
 
 
 class SimDriver:
@@ -30,7 +116,6 @@ class SimDriver:
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.parameter import Parameter
-        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import Imu
         from std_msgs.msg import Float64, Float64MultiArray
@@ -43,8 +128,7 @@ class SimDriver:
         overrides += [Parameter(k, value=v) for k, v in (params or {}).items()]
         self.node = SuspSimNode(context=self.ctx, parameter_overrides=overrides, start_thread=False)
         self.drv = rclpy.create_node("test_driver", context=self.ctx)
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                             reliability=ReliabilityPolicy.RELIABLE)
+        latched = latched_qos()
         self.pub_clock = self.drv.create_publisher(Clock, "/clock", 100)
         steer = "/vehicle/steering_wheel_angle"
         self.pub = {"/vehicle/speed": self.drv.create_publisher(Float64, "/vehicle/speed", 100),
@@ -100,13 +184,7 @@ class SimDriver:
         self.send(topic, self.Float64(data=float(value)))
 
     def send_profile(self, s, zl, zr) -> None:
-        from std_msgs.msg import MultiArrayDimension
-        m = self.Float64MultiArray()
-        n = len(s)
-        m.layout.dim = [MultiArrayDimension(label="channel", size=3, stride=3 * n),
-                        MultiArrayDimension(label="sample", size=n, stride=n)]
-        m.data = [float(x) for x in np.concatenate([s, zl, zr])]
-        self.send("/road/profile", m)
+        self.send("/road/profile", profile_msg(s, zl, zr))
 
     def wait_samples(self, n: int, timeout: float = 10.0) -> None:
         self.spin_until(lambda: len(self.imu) >= n, timeout)

@@ -144,6 +144,11 @@ def test_parameters_are_described_read_only_and_ranged(driver):
     rate = desc["publish_rate_hz"].floating_point_range[0]
     assert (rate.from_value, rate.to_value) == (0.0, 1000.0)
     assert desc["on_divergence"].additional_constraints == "exit or hold"
+    prio = desc["realtime_priority"].integer_range[0]
+    assert (prio.from_value, prio.to_value) == (0, 98)  # SCHED_FIFO 1..99, the tick thread one above
+    assert all(desc[n].floating_point_range[0].from_value == 0.0
+               for n in ("step_s", "input_timeout_s", "max_time_jump_s", "diagnostics_rate_hz",
+                         "record_flush_interval_s", "sim_reorder_window_s"))
     for name, value in (("publish_rate_hz", 50.0), ("record_path", "x.mcap"), ("realtime_priority", 0),
                         ("use_sim_time", False)):
         res = node.set_parameters([Parameter(name, value=value)])
@@ -305,3 +310,64 @@ def test_recording_thread_writes_in_log_time_order(jitter):
     q.close()
     assert rec.closed and [w[0] for w in rec.written] == sorted(times)
     assert len(rec.written) == len(times)
+
+
+@pytest.mark.parametrize("module,ros_args,expected", [
+    ("susp_sim_ros.ros.node", ["-p", "realtime_priority:=99"], "realtime_priority"),    # descriptor range
+    ("susp_sim_ros.ros.node", ["-p", "step_s:=-0.001"], "step_s"),                      # descriptor range
+    ("susp_sim_ros.ros.node", ["-p", "diagnostics_rate_hz:=0.0"], "diagnostics_rate_hz"),
+    ("susp_sim_ros.ros.node", ["-p", "on_divergence:=explode"], "on_divergence"),
+    ("susp_sim_ros.ros.controller_node", ["-p", "sample_time_s:=0.5"], "sample_time_s"),  # descriptor range
+    ("susp_sim_ros.ros.controller_node", ["-p", "sample_time_s:=0.0"], "sample_time_s"),
+    ("susp_sim_ros.ros.controller_node", ["-p", "controller:=no_such_law"], "no_such_law"),
+])
+def test_entry_points_refuse_a_bad_parameter_with_exit_code_2(module, ros_args, expected, capsys):
+    """Both nodes' ``main`` (the shared run_node): a bad parameter is one line on stderr naming it, exit
+    code 2, no traceback, and rclpy is shut down again."""
+    import importlib
+    import rclpy
+    from _ros_helpers import ros_env
+    ros_env()
+    main = importlib.import_module(module).main
+    assert main(["prog", "--ros-args", *ros_args]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and "Traceback" not in err and err.count("error:") == 1
+    assert not rclpy.ok()
+
+
+def test_controller_parameters_are_read_only_and_ranged():
+    """The controller reads its parameters at start only: rclpy refuses a change instead of accepting one
+    that would have no effect; the sample period's range is in its descriptor."""
+    import rclpy
+    from rclpy.parameter import Parameter
+    from _ros_helpers import ros_env
+    from susp_sim_ros.ros.controller_node import MAX_SAMPLE_TIME_S, DamperControllerNode
+    ros_env()
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    try:
+        node = DamperControllerNode(context=ctx)
+        desc = dict(zip(("controller", "sample_time_s", "vehicle"),
+                        node.describe_parameters(["controller", "sample_time_s", "vehicle"])))
+        assert all(d.read_only for d in desc.values())
+        period = desc["sample_time_s"].floating_point_range[0]
+        assert (period.from_value, period.to_value) == (0.0, MAX_SAMPLE_TIME_S)
+        assert "groundhook" in desc["controller"].additional_constraints
+        res = node.set_parameters([Parameter("controller", value="groundhook")])
+        assert not res[0].successful and node.get_parameter("controller").value == "skyhook"
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(-2**31, 2**31 - 1), st.integers(0, 2**32 - 1))
+def test_clock_time_is_read_or_refused(sec, nanosec):
+    """One reading of /clock for rclpy's time source guard and the node's own /clock callback: a valid
+    time in ns, None for a negative second or nanoseconds outside [0, 1e9)."""
+    from rosgraph_msgs.msg import Clock
+    from susp_sim_ros.ros.conversion import clock_time_ns
+    m = Clock()
+    m.clock.sec, m.clock.nanosec = sec, nanosec
+    valid = sec >= 0 and nanosec < 1_000_000_000
+    assert clock_time_ns(m) == (sec * 1_000_000_000 + nanosec if valid else None)

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -11,72 +10,31 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from _ros_helpers import ros_env
+from _ros_helpers import Probe, latched_qos, profile_msg, ros_env, start_node_process, stop_process
 
 pytestmark = pytest.mark.slow
-
-
-def _start_node(tmp_path, *args):
-    ros_env()
-    log = open(tmp_path / "node.log", "w")
-    run_node = "import sys; from susp_sim_ros.ros.node import main; sys.exit(main())"
-    proc = subprocess.Popen([sys.executable, "-c", run_node, "--ros-args", *args], stdout=log,
-                            stderr=subprocess.STDOUT, env=dict(os.environ))
-    return proc
-
-
-def _stop(proc) -> int:
-    proc.send_signal(signal.SIGINT)
-    try:
-        return proc.wait(timeout=20)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        return -9
+NODE = "susp_sim_ros.ros.node"
 
 
 def test_node_in_another_process_turns_left_and_records(tmp_path):
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import Imu
-    from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
     rec = tmp_path / "live.mcap"
-    proc = _start_node(tmp_path, "-p", f"record_path:={rec}")
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    node = rclpy.create_node("dds_probe", context=ctx)
-    got = []
-    node.create_subscription(Imu, "/sim/imu/data", got.append, 100)
-    steer = node.create_publisher(Float64, "/vehicle/steering_wheel_angle", 10)
-    speed = node.create_publisher(Float64, "/vehicle/speed", 10)
-    prof = node.create_publisher(Float64MultiArray, "/road/profile", QoSProfile(
-        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE))
-    ex = SingleThreadedExecutor(context=ctx)
-    ex.add_node(node)
+    log = tmp_path / "node.log"
+    proc = start_node_process(log, NODE, "-p", f"record_path:={rec}")
+    probe = Probe("dds_probe")
+    got: list = []
+    probe.node.create_subscription(Imu, "/sim/imu/data", got.append, 100)
     try:
-        end = time.monotonic() + 30
-        while speed.get_subscription_count() == 0 or node.count_publishers("/sim/imu/data") == 0:
-            assert proc.poll() is None, (tmp_path / "node.log").read_text()
-            assert time.monotonic() < end, "node not discovered"
-            ex.spin_once(timeout_sec=0.05)
-        m = Float64MultiArray()
-        m.layout.dim = [MultiArrayDimension(label="channel", size=3, stride=6),
-                        MultiArrayDimension(label="sample", size=2, stride=2)]
-        m.data = [0.0, 1000.0, 0.0, 0.0, 0.0, 0.0]
-        prof.publish(m)
+        probe.wait_for(lambda: probe.speed.get_subscription_count() > 0
+                       and probe.node.count_publishers("/sim/imu/data") > 0, {log: proc}, 30, "node not discovered")
+        probe.profile.publish(profile_msg([0.0, 1000.0], [0.0, 0.0], [0.0, 0.0]))
         got.clear()
-        end = time.monotonic() + 5.0
-        while time.monotonic() < end:
-            steer.publish(Float64(data=0.5))
-            speed.publish(Float64(data=50 / 3.6))
-            ex.spin_once(timeout_sec=0.01)
+        probe.drive(5.0, speed=50 / 3.6, steer=0.5)
     finally:
-        rc = _stop(proc)
-        ex.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown(context=ctx)
-    assert rc == 0, (tmp_path / "node.log").read_text()
+        rc = stop_process(proc)
+        probe.close()
+    assert rc == 0, log.read_text()
     assert len(got) >= 400  # 100 Hz for 5 s
     stamps = np.array([g.header.stamp.sec + 1e-9 * g.header.stamp.nanosec for g in got])
     assert np.allclose(np.diff(stamps), 0.01, atol=1e-6)  # every tick, on the 10 ms grid
@@ -104,7 +62,7 @@ def test_replay_with_clock_equals_lockstep(tmp_path, rate, loaded):
     src = tmp_path / "drive.mcap"
     write_drive(src, drive)
     rec = tmp_path / "node.mcap"
-    proc = _start_node(tmp_path, "-p", "use_sim_time:=true", "-p", f"record_path:={rec}",
+    proc = start_node_process(tmp_path / "node.log", NODE, "-p", "use_sim_time:=true", "-p", f"record_path:={rec}",
                        "-p", "damper_oil_level:=[1.0, 1.0, 0.0, 0.0]")
     hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(2 if loaded else 0)]
     try:
@@ -118,7 +76,7 @@ def test_replay_with_clock_equals_lockstep(tmp_path, rate, loaded):
         for h in hogs:
             h.kill()
             h.wait()
-        rc = _stop(proc)
+        rc = stop_process(proc)
     assert rc == 0, (tmp_path / "node.log").read_text()
     node = read_imu(rec, "/sim/imu/data")
     ls = run_lockstep(drive)
@@ -134,7 +92,6 @@ def test_replay_loops_and_latches(tmp_path):
     import threading
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from rosgraph_msgs.msg import Clock
     from std_msgs.msg import Float64, Float64MultiArray
     from susp_sim_ros.io import write_drive
@@ -151,8 +108,7 @@ def test_replay_loops_and_latches(tmp_path):
     speeds, clocks, profiles = [], [], []
     node.create_subscription(Float64, "/vehicle/speed", speeds.append, 1000)
     node.create_subscription(Clock, "/clock", lambda m: clocks.append(m.clock.sec * 10**9 + m.clock.nanosec), 1000)
-    node.create_subscription(Float64MultiArray, "/road/profile", profiles.append, QoSProfile(
-        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE))
+    node.create_subscription(Float64MultiArray, "/road/profile", profiles.append, latched_qos())
     ex = SingleThreadedExecutor(context=ctx)
     ex.add_node(node)
     spin = threading.Thread(target=ex.spin, daemon=True)

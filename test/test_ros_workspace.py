@@ -219,7 +219,7 @@ def test_launch_logic_node_replay_recorder(monkeypatch, tmp_path):
     assert [a.args[0] for a in declared] == list(mod.ARGUMENTS)
     defaults = {name: d for name, (d, _) in mod.ARGUMENTS.items()}
 
-    node_only = mod._actions(defaults)
+    node_only = mod.launch_actions(defaults)
     assert [type(a).__name__ for a in node_only] == ["Node"]
     params = node_only[0].kwargs["parameters"]
     assert params[0] == str(tmp_path / "install" / "share" / PACKAGE / "config" / "susp_sim_node.yaml")
@@ -227,7 +227,7 @@ def test_launch_logic_node_replay_recorder(monkeypatch, tmp_path):
 
     ctx = dict(defaults, bag="drive.mcap", rate="2.5", loop="true", vehicle="my_car.yaml",
                damper_oil_level="1,1,0,0.5", rosbag_out=str(tmp_path / "bag"))
-    acts = mod._actions(ctx)
+    acts = mod.launch_actions(ctx)
     kinds = [type(a).__name__ for a in acts]
     assert kinds == ["Node", "ExecuteProcess", "RegisterEventHandler", "ExecuteProcess"]
     assert acts[0].kwargs["parameters"][1] == {"use_sim_time": True, "vehicle": "my_car.yaml",
@@ -242,9 +242,9 @@ def test_launch_logic_node_replay_recorder(monkeypatch, tmp_path):
     assert rec[:7] == ["ros2", "bag", "record", "-s", "mcap", "-o", str(tmp_path / "bag")]
     assert "--use-sim-time" in rec and set(rec[rec.index("--topics") + 1:]) == set(mod.RECORDED_TOPICS)
 
-    assert mod._actions(dict(ctx, use_sim_time="false"))[0].kwargs["parameters"][1]["use_sim_time"] is False
-    assert len(mod._actions(dict(ctx, shutdown_after_replay="false", rosbag_out=""))) == 2
+    assert mod.launch_actions(dict(ctx, use_sim_time="false"))[0].kwargs["parameters"][1]["use_sim_time"] is False
+    assert len(mod.launch_actions(dict(ctx, shutdown_after_replay="false", rosbag_out=""))) == 2
     with pytest.raises(ValueError, match="loop:='yes'"):
-        mod._actions(dict(ctx, loop="yes"))
+        mod.launch_actions(dict(ctx, loop="yes"))
     with pytest.raises(ValueError, match="damper_oil_level:='1,1,empty'"):
-        mod._actions(dict(ctx, damper_oil_level="1,1,empty"))
+        mod.launch_actions(dict(ctx, damper_oil_level="1,1,empty"))

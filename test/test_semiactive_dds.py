@@ -4,59 +4,31 @@ ride metrics on /diagnostics, and falls back to the passive damper when the cont
 from __future__ import annotations
 
 import json
-import os
-import signal
-import subprocess
-import sys
 import time
 
 import pytest
 
-from _ros_helpers import ros_env
+from _ros_helpers import Probe, profile_msg, start_node_process, stop_process
 
 pytestmark = pytest.mark.slow
-
-
-def _start(tmp_path, name, module, *args):
-    ros_env()
-    log = open(tmp_path / f"{name}.log", "w")
-    return subprocess.Popen([sys.executable, "-c", f"import sys; from {module} import main; sys.exit(main())",
-                             "--ros-args", *args], stdout=log, stderr=subprocess.STDOUT, env=dict(os.environ))
-
-
-def _stop(proc) -> int:
-    proc.send_signal(signal.SIGINT)
-    try:
-        return proc.wait(timeout=20)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        return -9
+SPEED = 80 / 3.6  # [m/s]
 
 
 def test_controller_in_its_own_process_drives_the_dampers(tmp_path):
-    import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
+    from std_msgs.msg import Float64MultiArray
 
     from susp_sim_ros.model.iso8608 import faded_road
 
-    sim = _start(tmp_path, "node", "susp_sim_ros.ros.node", "-p", "diagnostics_rate_hz:=2.0")
-    ctl = _start(tmp_path, "controller", "susp_sim_ros.controller_node", "-p", "controller:=skyhook")
-    ctx = rclpy.Context()
-    rclpy.init(context=ctx)
-    node = rclpy.create_node("semiactive_probe", context=ctx)
+    node_log, ctl_log = tmp_path / "node.log", tmp_path / "controller.log"
+    sim = start_node_process(node_log, "susp_sim_ros.ros.node", "-p", "diagnostics_rate_hz:=2.0")
+    ctl = start_node_process(ctl_log, "susp_sim_ros.ros.controller_node", "-p", "controller:=skyhook")
+    probe = Probe("semiactive_probe")
+    node = probe.node
     diags: list = []
     commands: list = []
     node.create_subscription(DiagnosticArray, "/diagnostics", diags.append, 50)
     node.create_subscription(Float64MultiArray, "/vehicle/damper_command", commands.append, 100)
-    steer = node.create_publisher(Float64, "/vehicle/steering_wheel_angle", 10)
-    speed = node.create_publisher(Float64, "/vehicle/speed", 10)
-    prof = node.create_publisher(Float64MultiArray, "/road/profile", QoSProfile(
-        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE))
-    ex = SingleThreadedExecutor(context=ctx)
-    ex.add_node(node)
 
     def status():
         for d in reversed(diags):
@@ -66,44 +38,29 @@ def test_controller_in_its_own_process_drives_the_dampers(tmp_path):
         return None
 
     def drive(seconds):
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            steer.publish(Float64(data=0.0))
-            speed.publish(Float64(data=80 / 3.6))
-            ex.spin_once(timeout_sec=0.01)
+        probe.drive(seconds, speed=SPEED, steer=0.0)
 
     try:
-        end = time.monotonic() + 40
-        while speed.get_subscription_count() == 0 or node.count_publishers("/vehicle/damper_command") == 0:
-            assert sim.poll() is None, (tmp_path / "node.log").read_text()
-            assert ctl.poll() is None, (tmp_path / "controller.log").read_text()
-            assert time.monotonic() < end, "nodes not discovered"
-            ex.spin_once(timeout_sec=0.05)
+        probe.wait_for(lambda: probe.speed.get_subscription_count() > 0
+                       and node.count_publishers("/vehicle/damper_command") > 0,
+                       {node_log: sim, ctl_log: ctl}, 40, "nodes not discovered")
         road = faded_road("C", 400.0, seed=7, spacing=0.05)
-        m = Float64MultiArray()
-        n = len(road)
-        m.layout.dim = [MultiArrayDimension(label="channel", size=3, stride=3 * n),
-                        MultiArrayDimension(label="sample", size=n, stride=n)]
-        m.data = road.to_flat_array().tolist()
-        prof.publish(m)
+        probe.profile.publish(profile_msg(road.s, road.zl, road.zr))
         end = time.monotonic() + 30      # until the controller's commands arrive (start-up on a busy host)
         while (status() or {}).get("damper_mode") != "semi_active":
-            assert time.monotonic() < end, ((tmp_path / "node.log").read_text()
-                                            + (tmp_path / "controller.log").read_text())
+            assert time.monotonic() < end, node_log.read_text() + ctl_log.read_text()
             drive(0.2)
         drive(6.0)
         on = status()
-        ctl_rc = _stop(ctl)           # the controller goes away: the node must fall back to passive
+        ctl_rc = stop_process(ctl)    # the controller goes away: the node must fall back to passive
         drive(2.0)
         off = status()
     finally:
-        rc = _stop(sim)
+        rc = stop_process(sim)
         if ctl.poll() is None:
-            _stop(ctl)
-        ex.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown(context=ctx)
-    assert rc == 0 and ctl_rc == 0, (tmp_path / "node.log").read_text() + (tmp_path / "controller.log").read_text()
+            stop_process(ctl)
+        probe.close()
+    assert rc == 0 and ctl_rc == 0, node_log.read_text() + ctl_log.read_text()
     assert on is not None and off is not None
     assert on["damper_mode"] == "semi_active" and int(on["commands_applied"]) > 300
     assert len(commands) > 300 and any(0.0 < c.data[0] < 1.0 for c in commands)  # continuous skyhook

@@ -162,16 +162,15 @@ def run(args) -> dict:
 
     import rclpy
     from rclpy.executors import ExternalShutdownException
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from rosgraph_msgs.msg import Clock
+
+    from ..ros.qos import INPUT_QOS, LATCHED_QOS  # the profiles the node subscribes with
 
     rclpy.init(args=["--ros-args"])
     node = rclpy.create_node("susp_replay")
     pubs = {}
     for topic in sorted(play):
-        latched = rec.latched(topic)
-        qos = QoSProfile(depth=1 if latched else 100, reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+        qos = LATCHED_QOS if rec.latched(topic) else INPUT_QOS
         pubs[topic] = node.create_publisher(_msg_class(topics[topic], topic), topic, qos)
     clock_pub = None if args.no_clock else node.create_publisher(Clock, "/clock", 100)
     # wait until every topic (and /clock) has a subscriber, so nothing early is lost to discovery

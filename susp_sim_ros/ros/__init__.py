@@ -1,7 +1,9 @@
-"""The ROS 2 shell around :class:`~susp_sim_ros.sim_core.SimCore` (with
-``controller_node.py`` the only code importing rclpy).
+"""The ROS 2 shell around :class:`~susp_sim_ros.sim_core.SimCore` (with ``susp replay`` the only code
+importing rclpy).
 
 - :mod:`.node`: ``SuspSimNode`` and the ``susp_sim_node`` entry point ``main``;
+- :mod:`.controller_node`: ``DamperControllerNode``, the ``susp_damper_controller`` entry point;
+- :mod:`.run`: :func:`~.run.run_node`, the entry points' common init/spin/shutdown and exit codes;
 - :mod:`.inputs`: the subscription callbacks and when an input takes effect (wall time, sim time);
 - :mod:`.parameters`: the node's parameters with their ``ParameterDescriptor`` (read-only, ranges) and the
   validation of run-time changes;

@@ -10,6 +10,17 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from ..io import messages as M
 
+NS_PER_S = 1_000_000_000
+
+
+def clock_time_ns(msg) -> int | None:
+    """The time of a ``rosgraph_msgs/Clock`` message [ns], None when it is no valid time (sec < 0 or
+    nanosec outside [0, 1e9))."""
+    sec, nsec = int(msg.clock.sec), int(msg.clock.nanosec)
+    if sec < 0 or not 0 <= nsec < NS_PER_S:
+        return None
+    return sec * NS_PER_S + nsec
+
 
 def fill(msg, d: dict):
     """Copy a plain-dict message (io.messages builders) into an rclpy message object."""

@@ -8,26 +8,54 @@ and is then applied.
 
 :class:`InputCallbacks` is mixed into :class:`~.node.SuspSimNode` and uses its ``core``, ``lock``,
 ``sim_time``, ``orderer``, ``semiactive``, ``tick``, ``now_ns``, ``_start_core``, ``_publish_samples``,
-``_record``, ``_check_failure`` and subscriptions (``_input_subs``, ``_sim_clock_sub``).
+``_record`` and ``_check_failure``; :meth:`InputCallbacks._subscribe_inputs` creates the subscriptions.
 """
 from __future__ import annotations
 
 import time
 
+from rclpy.clock import Clock as RosClock, ClockType
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Float64, Float64MultiArray
 
 from ..io import messages as M
 from ..sim_core import DAMPER_COMMAND
-from .conversion import input_cdr, layout_dims
-from .rclpy_workarounds import take_pending
-from .sim_time import CLOCK, INPUT
+from .conversion import clock_time_ns, input_cdr, layout_dims
+from .qos import CLOCK_QOS, INPUT_QOS, LATCHED_QOS
+from .rclpy_workarounds import guard_time_source, take_pending
+from .sim_time import CLOCK, INPUT, SimTimeOrderer
+
+DRAIN_PERIOD_S = 0.002  # sim time: how often the reorder queue is checked for due events (steady clock) [s]
 
 
 class InputCallbacks:
     """Subscription callbacks ``on_*(message, info)``: ``info`` is rclpy's message info (its
     ``source_timestamp`` orders sim-time events) or None; tests may call them directly. (``info`` has no
     default: rclpy passes it only to callbacks that cannot be called with the message alone.)"""
+
+    def _subscribe_inputs(self, reorder_window_s: float) -> None:
+        """The input state and subscriptions; in sim time also ``/clock`` and the timer that drains the
+        reorder queue (``reorder_window_s``: :class:`~.sim_time.SimTimeOrderer`'s window [s])."""
+        self._sim_now = 0
+        self.inputs_received = 0  # applied
+        self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
+        self._wall_inputs: list = []  # wall time: (arrival ns, input) for the next tick
+        self.orderer = SimTimeOrderer(int(round(reorder_window_s * 1e9)))
+        self._pulling = False  # taking queued messages straight from DDS (see _pull_pending)
+        self._sim_clock_sub = None
+        if self.sim_time:
+            guard_time_source(self)
+            # Our own /clock subscription, reliable and deep (rclpy's time source keeps only the latest
+            # /clock, so a busy node would see the clock skip ahead of queued inputs): every clock value
+            # is seen, in order, and each one steps the core exactly that far.
+            self._sim_clock_sub = self.create_subscription(Clock, "/clock", self.on_clock, CLOCK_QOS)
+            self.create_timer(DRAIN_PERIOD_S, self._drain, clock=RosClock(clock_type=ClockType.STEADY_TIME))
+        self._input_subs = [
+            self.create_subscription(Float64, "/vehicle/speed", self.on_speed, INPUT_QOS),
+            self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self.on_steering, INPUT_QOS),
+            self.create_subscription(Float64MultiArray, "/road/profile", self.on_profile, LATCHED_QOS),
+            self.create_subscription(Float64MultiArray, "/road/wheel_heights", self.on_wheel_heights, INPUT_QOS),
+            self.create_subscription(Float64MultiArray, DAMPER_COMMAND, self.on_damper_command, INPUT_QOS)]
 
     def _input(self, topic: str, msgtype: str, msg, apply, info=None, latched: bool = False) -> None:
         """An input message. Wall time: stamped with its arrival time and handed to the tick, which steps
@@ -117,10 +145,10 @@ class InputCallbacks:
         self._input(DAMPER_COMMAND, M.FLOAT64_ARRAY, msg, apply, info)
 
     def on_clock(self, msg: Clock, info) -> None:
-        sec, nsec = int(msg.clock.sec), int(msg.clock.nanosec)
-        if sec < 0 or not 0 <= nsec < 1_000_000_000 or (sec == 0 and nsec == 0):
+        t_ns = clock_time_ns(msg)
+        if not t_ns:  # invalid, or 0 (no time yet)
             with self.lock:
-                self.core.reject("/clock", "clock_invalid", f"/clock: rejected invalid time sec={sec} "
-                                 f"nanosec={nsec} (need sec >= 0, 0 <= nanosec < 1e9, not 0)")
+                self.core.reject("/clock", "clock_invalid", f"/clock: rejected invalid time sec={msg.clock.sec} "
+                                 f"nanosec={msg.clock.nanosec} (need sec >= 0, 0 <= nanosec < 1e9, not 0)")
             return
-        self._push(info, CLOCK, sec * 1_000_000_000 + nsec)
+        self._push(info, CLOCK, t_ns)

@@ -19,43 +19,34 @@ Parameters: :mod:`.parameters` (``--ros-args --params-file config/susp_sim_node.
 """
 from __future__ import annotations
 
-import gc
 import sys
 import threading
 import time
 
-import rclpy
-from rcl_interfaces.msg import SetParametersResult
-from rclpy.clock import Clock as RosClock, ClockType
-from rclpy.exceptions import InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.serialization import serialize_message
 
 from diagnostic_msgs.msg import DiagnosticArray
-from rosgraph_msgs.msg import Clock
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Imu
-from std_msgs.msg import Float64, Float64MultiArray
+from std_msgs.msg import Float64MultiArray
 
-from ..errors import SuspInputError
 from ..io import messages as M
 from ..lockstep import simulated_metadata
 from ..model.vehicle import Model, check_oil
 from ..ride_diagnostics import SemiActiveDiagnostics
-from ..sim_core import DAMPER_COMMAND, DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
+from ..sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
 from .conversion import diagnostic_array, fill
 from .inputs import InputCallbacks
-from .parameters import ON_DIVERGENCE, RUNTIME, RuntimeChange, declare_parameters, prepare_change, warm_up
-from .rclpy_workarounds import guard_time_source
-from .qos import CLOCK_QOS, INPUT_QOS, LATCHED_QOS, OUTPUT_QOS
+from .parameters import RuntimeChange, RuntimeParameters, declare_parameters, warm_up
+from .qos import OUTPUT_QOS
 from .recording import RecordingQueue, open_recording
-from .sim_time import SimTimeOrderer
+from .run import run_node
 from .status import NODE_NAME, CoreSnapshot, log_stale_changes, node_status
-from .timing import SWITCH_INTERVAL_S, TickThread, TimingStats, raise_priority
+from .timing import TickThread, TimingStats, raise_priority
 
 REJECTION_LOG_INTERVAL_S = 10.0
-DRAIN_PERIOD_S = 0.002  # sim time: how often the reorder queue is checked for due events (steady clock) [s]
+ERROR_DIAGNOSTIC_GRACE_S = 0.5  # after a divergence, spin this long before exiting so the ERROR is heard [s]
 
 
 class SuspSimNode(InputCallbacks, Node):
@@ -71,8 +62,6 @@ class SuspSimNode(InputCallbacks, Node):
         self.vehicle, self.variant = str(p["vehicle"]), str(p["friction_variant"])
         model = Model(self.vehicle, self.variant)
         self.on_divergence = str(p["on_divergence"])
-        if self.on_divergence not in ON_DIVERGENCE:
-            raise SuspInputError(f"parameter on_divergence: expected exit or hold, got {self.on_divergence!r}")
         self.core = SimCore(model, step_s=float(p["step_s"]), publish_rate_hz=float(p["publish_rate_hz"]),
                             oil=oil, input_timeout_s=float(p["input_timeout_s"]),
                             max_time_jump_s=float(p["max_time_jump_s"]))
@@ -83,13 +72,6 @@ class SuspSimNode(InputCallbacks, Node):
         self.rejection_log = RateLimitedLog(lambda text: self.get_logger().warning(text),
                                             REJECTION_LOG_INTERVAL_S)
         self.core.on_reject = self.rejection_log  # every rejection, once per cause and interval
-        self._sim_now = 0
-        self.inputs_received = 0  # applied
-        self.inputs_taken = 0     # taken from DDS (in sim time possibly waiting for the next /clock)
-        self._wall_inputs: list = []  # wall time: (arrival ns, input) for the next tick
-        self.orderer = SimTimeOrderer(int(round(float(p["sim_reorder_window_s"]) * 1e9)))
-        self._pulling = False  # taking queued messages straight from DDS (see _pull_pending)
-        self._change: RuntimeChange | None = None  # validated, not yet applied parameter change
         warm_up(model)
         self.timing = TimingStats(self.core.period_ns)
         self.recorder: RecordingQueue | None = None
@@ -103,23 +85,9 @@ class SuspSimNode(InputCallbacks, Node):
         self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
         self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
         self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
-        self._sim_clock_sub = None
-        if self.sim_time:
-            guard_time_source(self)
-            # Our own /clock subscription, reliable and deep (rclpy's time source keeps only the latest
-            # /clock, so a busy node would see the clock skip ahead of queued inputs): every clock value
-            # is seen, in order, and each one steps the core exactly that far.
-            self._sim_clock_sub = self.create_subscription(Clock, "/clock", self.on_clock, CLOCK_QOS)
-            self.create_timer(DRAIN_PERIOD_S, self._drain, clock=RosClock(clock_type=ClockType.STEADY_TIME))
-        self._input_subs = [
-            self.create_subscription(Float64, "/vehicle/speed", self.on_speed, INPUT_QOS),
-            self.create_subscription(Float64, "/vehicle/steering_wheel_angle", self.on_steering, INPUT_QOS),
-            self.create_subscription(Float64MultiArray, "/road/profile", self.on_profile, LATCHED_QOS),
-            self.create_subscription(Float64MultiArray, "/road/wheel_heights", self.on_wheel_heights, INPUT_QOS),
-            self.create_subscription(Float64MultiArray, DAMPER_COMMAND, self.on_damper_command, INPUT_QOS)]
+        self._subscribe_inputs(float(p["sim_reorder_window_s"]))
         self.semiactive = SemiActiveDiagnostics(model, self.core.period_ns)
-        self.add_on_set_parameters_callback(self._validate_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        self.parameters = RuntimeParameters(self, lambda: (self.vehicle, self.variant), self._apply_change)
         self._stale: set[str] = set()
         self._wall0 = time.monotonic()
         self.published = 0
@@ -218,33 +186,14 @@ class SuspSimNode(InputCallbacks, Node):
             self.recorder.close()
 
     # -- parameters -----------------------------------------------------------------------------------
-    def _validate_parameters(self, params) -> SetParametersResult:
-        """On-set callback: read-only parameters and ranges are refused by rclpy (descriptors) before
-        this; validate run-time changes (a new model is built and compiled here) for the post-set
-        callback to apply."""
-        new = {p.name: p.value for p in params}
-        if new.get("use_sim_time", self.sim_time) != self.sim_time:
-            return SetParametersResult(successful=False, reason="parameter use_sim_time is fixed after start; "
-                                                                f"run-time changes: {', '.join(RUNTIME)}")
-        try:
-            self._change = prepare_change({k: v for k, v in new.items() if k in RUNTIME},
-                                          self.vehicle, self.variant)
-        except (SuspInputError, ValueError, TypeError) as exc:
-            self.get_logger().warning(f"rejected parameter change: {exc}")
-            return SetParametersResult(successful=False, reason=str(exc))
-        return SetParametersResult(successful=True)
-
-    def _apply_parameters(self, params) -> None:
-        """Post-set callback: apply the change validated by :meth:`_validate_parameters`."""
-        change, self._change = self._change, None
-        if change is not None:
-            with self.lock:
-                if change.oil is not None:
-                    self.core.set_oil(change.oil)
-                if change.model is not None:
-                    self.core.set_model(change.model)
-                    self.vehicle, self.variant = change.vehicle, change.variant
-        self.get_logger().info(f"parameters changed: {', '.join(f'{p.name}={p.value}' for p in params)}")
+    def _apply_change(self, change: RuntimeChange) -> None:
+        """Apply a run-time parameter change validated by :class:`.parameters.RuntimeParameters`."""
+        with self.lock:
+            if change.oil is not None:
+                self.core.set_oil(change.oil)
+            if change.model is not None:
+                self.core.set_model(change.model)
+                self.vehicle, self.variant = change.vehicle, change.variant
 
     # -- diagnostics ----------------------------------------------------------------------------------
     def diagnostics(self) -> list[dict]:
@@ -284,32 +233,18 @@ class SuspSimNode(InputCallbacks, Node):
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``susp_sim_node [--ros-args ...]``. Exit 0 on SIGINT/SIGTERM, 2 on a bad
     parameter, 1 when the divergence guard stopped the simulation (``on_divergence: exit``)."""
-    sys.setswitchinterval(SWITCH_INTERVAL_S)
-    rclpy.init(args=args if args is not None else sys.argv)
-    node = None
-    try:
-        node = SuspSimNode()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        gc.freeze()  # start-up objects out of the collector's way: shorter pauses in real time
-        while rclpy.ok() and not (node.failure and node.on_divergence == "exit"):
-            executor.spin_once(timeout_sec=0.1)
-        if node.failure:
-            end = time.monotonic() + 0.5  # let the ERROR diagnostic reach its subscribers
-            while rclpy.ok() and time.monotonic() < end:
-                executor.spin_once(timeout_sec=0.05)
-            print(f"{NODE_NAME}: stopped: {node.failure}", file=sys.stderr)
-            return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (SuspInputError, InvalidParameterValueException) as exc:
-        print(f"{NODE_NAME}: error: {exc}", file=sys.stderr)
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(SuspSimNode, NODE_NAME, args, realtime=True,
+                    stop_when=lambda node: bool(node.failure) and node.on_divergence == "exit",
+                    finish=_exit_code)
+
+
+def _exit_code(node: SuspSimNode, spin_for) -> int:
+    """1 after a divergence (once the ERROR diagnostic has had time to reach its subscribers), else 0."""
+    if not node.failure:
+        return 0
+    spin_for(ERROR_DIAGNOSTIC_GRACE_S)
+    print(f"{NODE_NAME}: stopped: {node.failure}", file=sys.stderr)
+    return 1
 
 
 if __name__ == "__main__":

@@ -11,6 +11,10 @@
   subscription per round, so an input published before the clock could otherwise be applied after it.
   rclpy Jazzy has no public way to take a message outside the executor (rclcpp has
   ``Subscription::take``; rclpy has none, and an executor cannot be spun from inside its own callback).
+  Checked against rclpy 7.1.5: ``raw=True`` only changes what a callback receives (CDR bytes), the
+  ``MessageInfo`` (its ``source_timestamp`` orders the queue) reaches callbacks only, and
+  :mod:`rclpy.serialization` converts bytes but takes nothing from DDS; a second node with its own executor
+  would move the input subscriptions off ``susp_sim_node`` in the ROS graph.
 """
 from __future__ import annotations
 
@@ -20,6 +24,8 @@ from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
 from rclpy.subscription import Subscription
 from rosgraph_msgs.msg import Clock
+
+from .conversion import clock_time_ns
 
 
 def guard_time_source(node: Node) -> int:
@@ -32,7 +38,7 @@ def guard_time_source(node: Node) -> int:
         inner = sub.callback
 
         def guarded(msg: Clock, inner=inner) -> None:
-            if msg.clock.sec >= 0 and msg.clock.nanosec < 1_000_000_000:
+            if clock_time_ns(msg) is not None:
                 inner(msg)
         sub.callback = guarded
         wrapped += 1

@@ -1,0 +1,64 @@
+"""The console entry points' common part: run one node in its own context until SIGINT/SIGTERM.
+
+:func:`run_node` is ``main`` of ``susp_sim_node`` and ``susp_damper_controller``: init rclpy, build the
+node, spin a ``SingleThreadedExecutor``, turn a bad parameter into a one-line error and exit code 2 (never
+a traceback), destroy the node and shut rclpy down on every path.
+"""
+from __future__ import annotations
+
+import gc
+import sys
+import time
+from collections.abc import Callable
+from typing import TypeVar
+
+import rclpy
+from rclpy.exceptions import InvalidParameterValueException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+
+from ..errors import SuspInputError
+from .timing import SWITCH_INTERVAL_S
+
+N = TypeVar("N", bound=Node)
+SPIN_TIMEOUT_S = 0.1  # the loop checks ``rclpy.ok()`` and ``stop_when`` at least this often [s]
+
+
+def run_node(make_node: Callable[[], N], name: str, args: list[str] | None = None, *, realtime: bool = False,
+             stop_when: Callable[[N], bool] = lambda node: False,
+             finish: Callable[[N, Callable[[float], None]], int] = lambda node, spin_for: 0) -> int:
+    """Run the node ``make_node()`` (``name`` in error messages) with the command line ``args`` (default
+    ``sys.argv``) until SIGINT/SIGTERM or ``stop_when(node)``; then return ``finish(node, spin_for)``
+    (``spin_for(seconds)`` keeps the node spinning a little longer, e.g. so a last message reaches its
+    subscribers). Returns 0 on SIGINT/SIGTERM, 2 when the node refuses a parameter (message on stderr).
+
+    ``realtime``: a shorter interpreter switch interval (:data:`.timing.SWITCH_INTERVAL_S`) and the
+    start-up objects frozen out of the garbage collector's way (shorter pauses in real time)."""
+    if realtime:
+        sys.setswitchinterval(SWITCH_INTERVAL_S)
+    rclpy.init(args=args if args is not None else sys.argv)
+    node = None
+    try:
+        node = make_node()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        if realtime:
+            gc.freeze()
+        while rclpy.ok() and not stop_when(node):
+            executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+
+        def spin_for(seconds: float) -> None:
+            end = time.monotonic() + seconds
+            while rclpy.ok() and time.monotonic() < end:
+                executor.spin_once(timeout_sec=0.05)
+        return finish(node, spin_for)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (SuspInputError, InvalidParameterValueException) as exc:
+        print(f"{name}: error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
