@@ -518,11 +518,14 @@ class DiscrepancyFinder:
 
     def _heldout(self, ev: Evaluator, final: FitResult) -> dict:
         """Leave-one-drive-out: the final structure (calibration included) refitted without each drive
-        predicts it; against the base model. Per signal and for the primary gyro signals [deg/s]."""
+        predicts it; against the base model. Per signal and for the primary gyro signals [deg/s].
+        Calibration values that only the held-out drive informs keep the joint fit's value
+        (:func:`_informed_only_by`)."""
         R = len(ev.cases)
         if R == 1:
             return self._heldout_halves(ev, final)
         folds = []
+        edges = np.cumsum([0] + [ev.n_res[q] for q in final.idx])
         before_sig: dict[str, list] = {}
         after_sig: dict[str, list] = {}
         prim_b = prim_a = prim_n = 0.0
@@ -530,6 +533,10 @@ class DiscrepancyFinder:
             train = tuple(r for r in range(R) if r != h)
             if final.structure.n_params and train:
                 x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV).x
+                held = np.zeros(len(final.residual), bool)
+                held[edges[h]:edges[h + 1]] = True
+                keep = _informed_only_by(final, held)
+                x[keep] = final.x[keep]
             else:
                 x = final.x
             e_after = ev.case_residuals(final.structure, x, [h])[h]
@@ -624,6 +631,21 @@ def _warm(st: Structure, cur: FitResult, o) -> np.ndarray:
     return np.clip(x, lo, hi)
 
 
+def _informed_only_by(fit: FitResult, held: np.ndarray) -> list[int]:
+    """Calibration parameters (with a prior) that the rows outside ``held`` inform less than their prior
+    does (the oil-empty damper of the only drive with an empty damper). A leave-one-drive-out refit keeps
+    them at the joint fit's value: no other drive can predict them, and reverting them to the prior would
+    judge the prior, not the model."""
+    if fit.jac is None or not len(fit.x):
+        return []
+    tr = ~held
+    pidx, _, psd = fit.structure.prior()
+    ne_t = max(fit.n_eff * tr.sum() / len(held), 1.0)
+    pw = math.sqrt(tr.sum() / ne_t) * fit.structure.prior_gain
+    info = np.einsum("ij,ij->j", fit.jac[tr], fit.jac[tr])
+    return [int(j) for j, sd in zip(pidx, psd) if info[j] < (pw / sd) ** 2]
+
+
 def _fold_refit(fit: FitResult, held: np.ndarray) -> tuple[float, float]:
     """Squared whitened residual on the ``held`` rows and on the others after refitting ``fit`` on the
     others only: one Gauss-Newton step from the joint fit with the priors, clipped to the bounds."""
@@ -636,11 +658,7 @@ def _fold_refit(fit: FitResult, held: np.ndarray) -> tuple[float, float]:
     lo, hi = st.bounds()
     ne_t = max(fit.n_eff * tr.sum() / len(r), 1.0)
     pw = math.sqrt(tr.sum() / ne_t) * st.prior_gain
-    # a calibration parameter the training drives hardly inform (less than its prior does: the oil-empty
-    # damper of the only drive with an empty damper) stays at its joint value in both structures:
-    # reverting it to its prior would judge the prior, not the term under test
-    info = np.einsum("ij,ij->j", J[tr], J[tr])
-    fixed = {int(j) for j, sd in zip(pidx, psd) if info[j] < (pw / sd) ** 2}
+    fixed = set(_informed_only_by(fit, held))
     free = [j for j in range(len(x)) if j not in fixed]
     A, b = J[tr][:, free], -r[tr]
     pr = prior_rows(free, x, pidx, pmu, psd, pw)
