@@ -23,7 +23,7 @@ __version__ = "0.1.0"
 #: public name -> module that defines it
 _API = {
     "Model": "susp_sim_ros.model",
-    "SimResult": "susp_sim_ros.model",
+    "Response": "susp_sim_ros.model",
     "load_vehicle": "susp_sim_ros.model",
     "load_variant": "susp_sim_ros.model",
     "make_inputs": "susp_sim_ros.model",
@@ -33,7 +33,6 @@ _API = {
     "read_drive": "susp_sim_ros.io.drive",
     "write_drive": "susp_sim_ros.io.drive",
     "run_lockstep": "susp_sim_ros.lockstep",
-    "LockstepResult": "susp_sim_ros.lockstep",
     "validate": "susp_sim_ros.analysis.validation",
     "DiscrepancyFinder": "susp_sim_ros.analysis.discrepancy",
     "inspect_drives": "susp_sim_ros.analysis.inspection",
