@@ -35,7 +35,7 @@ def test_readme_physics_term_example_compiles_and_damps(tmp_path, monkeypatch):
         oil = vehicle_state("front_empty")
 
         def pitch(m):
-            return simulate(m, man.to_inputs(DT), dt=DT, road=man.road, oil=oil, outputs=["PITCH_RATE"]).y[:, 0]
+            return simulate(m, man.to_inputs(DT), dt=DT, road=man.road, oil=oil, outputs=["pitch_rate"])["pitch_rate"]
 
         k0 = int((man.road.s[-1] + model.vehicle.wheelbase) / man.speed / DT)  # rear axle leaves the bump
         ring = slice(k0, k0 + 1500)

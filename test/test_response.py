@@ -55,7 +55,11 @@ def test_simulate_returns_labelled_si_signals(model_full, bump_run):
     j = OUTPUT_LABELS.index("PITCH_RATE")
     assert np.shares_memory(r["pitch_rate"], r.values) and np.array_equal(r["pitch_rate"], r.values[:, j])
     assert np.array_equal(r["PITCH_RATE"], r["pitch_rate"]) and "PITCH_RATE" in r and "pitch" in r
-    assert r.units["pitch_rate"] == "rad/s" and list(r.signals) == list(r.labels) == list(r)
+    assert r.units["pitch_rate"] == "rad/s" and list(r.signals) == list(r.labels)
+    with pytest.raises(TypeError, match="not a tuple"):  # the old batch tuple's unpacking fails loudly
+        _, _, _ = r
+    with pytest.raises(TypeError, match="signal name"):
+        r[0]
     # physics: the bump makes the body pitch by a fraction of a rad/s and the rear dampers work
     assert 0.01 < np.max(np.abs(r["pitch_rate"])) < 1.0
     assert np.max(np.abs(r["damper_force_rl"])) > 100.0

@@ -41,15 +41,17 @@ _SIGNAL_STEM = {
 
 
 def _stem_and_wheel(label: str) -> tuple[str, str]:
+    """``('F_DAMPER', 'RL')`` of ``'F_DAMPER_RL'``, ``('PITCH_RATE', '')`` of a scalar output."""
     for w in WHEELS:
-        if label.endswith("_" + w) and label[:-3] in _SIGNAL_STEM:
+        if label.endswith("_" + w) and label[:-3] in OUTPUT_UNITS:
             return label[:-3], w
     return label, ""
 
 
 def _signal_of(label: str) -> str:
+    """Signal name of a kernel output (an output without an entry above: its name in lower case)."""
     stem, wheel = _stem_and_wheel(label)
-    return _SIGNAL_STEM[stem] + (f"_{wheel.lower()}" if wheel else "")
+    return _SIGNAL_STEM.get(stem, stem.lower()) + (f"_{wheel.lower()}" if wheel else "")
 
 
 #: every kernel output in layout order, as signal names (the labels of a full response)
@@ -139,6 +141,9 @@ class Response:
     # -- signals -------------------------------------------------------------------------------------
     def __getitem__(self, label: str) -> np.ndarray:
         """The samples of one signal: (n,) or (B, n) for a batch (a view, no copy)."""
+        if not isinstance(label, str):
+            raise TypeError(f"a Response is indexed by signal name, not {label!r}; recorded: "
+                            f"{', '.join(self.labels)}")
         try:
             j = self._column[signal_name(label)]
         except KeyError:
@@ -152,8 +157,9 @@ class Response:
             return False
 
     def __iter__(self) -> Iterator[str]:
-        """The labels (as iterating a mapping does)."""
-        return iter(self.labels)
+        """Not iterable: ``simulate_batch`` returned a ``(t, Y, done)`` tuple before it returned a
+        Response, and unpacking one must fail loudly rather than bind labels."""
+        raise TypeError("a Response is not a tuple: use .t, .values, .steps_done (or .labels, .signals)")
 
     @property
     def signals(self) -> dict[str, np.ndarray]:
