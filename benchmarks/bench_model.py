@@ -54,8 +54,9 @@ def bench_batch(model, man, n: int) -> float:
     best = math.inf
     for _ in range(1 if n >= 10000 else 3):
         t = time.perf_counter()
-        _, _, done = simulate_batch(model, P, U, dt=DT, roads=[man.road], decim=10,
-                                    outputs=["ROLL_RATE", "PITCH_RATE", "YAW_RATE"])
+        res = simulate_batch(model, P, U, dt=DT, roads=[man.road], decim=10,
+                             outputs=["ROLL_RATE", "PITCH_RATE", "YAW_RATE"])
+        done = res.steps_done
         best = min(best, time.perf_counter() - t)
         assert np.all(done == U.shape[0])
     return n * DURATION / best

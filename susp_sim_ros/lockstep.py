@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import logging
 import os
-from dataclasses import dataclass, field
 from collections.abc import Sequence
 
 import numpy as np
@@ -19,6 +18,7 @@ from .io import messages as M
 from .io.drive import DAMPER_COMMAND, ROAD_PROFILE, SPEED, STEERING, WHEEL_HEIGHTS, ImuSeries, Series, TestDrive
 from .io.recorder import McapRecorder
 from .model.layout import OUTPUT_LABELS, output_index
+from .model.response import Response
 from .model.maneuvers import Maneuver
 from .model.vehicle import Model
 from .sim_core import SimCore, sample_messages
@@ -29,25 +29,6 @@ _GYRO = [output_index(k) for k in ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")]
 _ACC = [output_index(k) for k in ("AX_SF", "AY_SF", "AZ_SF")]
 
 _ROAD, _SPEED, _STEER, _WH, _CMD = 0, 1, 2, 3, 4
-
-
-@dataclass
-class LockstepResult:
-    """Outputs at the publish ticks: ``t_ns`` (n,), ``outputs`` (n, len(OUTPUT_LABELS)), ``imu`` (the
-    ``/sim/imu/data`` samples)."""
-
-    t_ns: np.ndarray
-    outputs: np.ndarray
-    imu: ImuSeries
-    metadata: dict[str, str]
-    healthy: bool = True
-    rejections: dict[str, int] = field(default_factory=dict)
-    out_path: str | None = None
-    diverged: str = ""  # the divergence guard's reason when the run was stopped (SimCore.diverged)
-    labels: tuple[str, ...] = OUTPUT_LABELS
-
-    def __getitem__(self, label: str) -> np.ndarray:
-        return self.outputs[:, output_index(label)]
 
 
 def simulated_metadata(drive_meta: dict[str, str], vehicle: str, variant: str,
@@ -79,13 +60,18 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
                  oil: Sequence[float] | None = None, step_s: float = 0.001, publish_rate_hz: float = 100.0,
                  out_path: str | os.PathLike | None = None, overwrite: bool = False,
                  input_timeout_s: float = 0.5, model: Model | None = None,
-                 controller: str | None = None) -> LockstepResult:
+                 controller: str | None = None) -> Response:
     """Run ``drive`` through a :class:`SimCore` as fast as possible (see the module docstring).
 
     ``controller``: a damper controller (:mod:`susp_sim_ros.control`) in the loop, as the
     ``susp_damper_controller`` node would run it: on every output sample it computes a command that is
     applied at that sample's time (and recorded as ``/vehicle/damper_command``); ``None`` or
     ``"passive"``: the drive's own commands, if any.
+
+    Returns a :class:`~susp_sim_ros.model.response.Response` of every output at the publish ticks:
+    ``t`` [s] since the drive's first input, ``t_ns`` the ROS times, ``imu`` the ``/sim/imu/data``
+    samples, ``metadata`` the simulated recording's ``test_drive`` record, ``rejections`` the refused
+    inputs by topic. ``drive`` is never modified.
 
     If the divergence guard stops the core, the result ends at the last good sample, ``healthy`` is
     False and ``diverged`` says why (the output file, if any, holds the samples up to there)."""
@@ -157,8 +143,9 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
     t_arr = np.array(ts, dtype=np.int64)
     Y = np.array(ys).reshape(-1, len(OUTPUT_LABELS))
     imu = ImuSeries(t_arr, Y[:, _GYRO], Y[:, _ACC])
-    return LockstepResult(t_arr, Y, imu, meta, core.healthy, dict(core.rejections),
-                          None if out_path is None else str(out_path), diverged=core.diverged)
+    return Response((t_arr - drive.t0_ns) * 1e-9, Y, OUTPUT_LABELS, t_ns=t_arr, metadata=meta,
+                    healthy=core.healthy, diverged=core.diverged, rejections=dict(core.rejections),
+                    out_path=None if out_path is None else str(out_path), imu=imu)
 
 
 def maneuver_drive(maneuver: Maneuver, oil: Sequence[float] = (1.0, 1.0, 1.0, 1.0), *,
@@ -178,4 +165,4 @@ def maneuver_drive(maneuver: Maneuver, oil: Sequence[float] = (1.0, 1.0, 1.0, 1.
                      road, None, None, {})
 
 
-__all__ = ["LockstepResult", "run_lockstep", "maneuver_drive", "simulated_metadata"]
+__all__ = ["run_lockstep", "maneuver_drive", "simulated_metadata"]

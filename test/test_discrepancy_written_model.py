@@ -117,8 +117,9 @@ def test_written_model_reproduces_the_fitted_rmse_on_every_drive(diagnosed):
     m = Model(*_files(paths))
     P = np.stack([m.params(c.oil) for c in ev.cases])
     rows = np.arange(len(ev.cases))
-    _, Y, done = simulate_batch(m, P, ev.U, dt=ev.dt, roads=ev.roads, u_row=rows, road_row=rows,
-                                outputs=SIGNAL_OUTPUT)
+    res = simulate_batch(m, P, ev.U, dt=ev.dt, roads=ev.roads, u_row=rows, road_row=rows,
+                         outputs=SIGNAL_OUTPUT)
+    Y, done = res.values, res.steps_done
     assert np.all(done == ev.U.shape[1])
     Y = Y * _TO_REPORT_UNITS
     for r, c in enumerate(ev.cases):
@@ -152,8 +153,9 @@ def test_written_model_through_the_lockstep_runner_is_the_fitted_model(diagnosed
         U, _ = make_inputs_from_drive(c.drive, ev.dt, hold=True)
         Uh = np.empty((1, ev.n_max, U.shape[1]))
         Uh[0, :len(U)], Uh[0, len(U):] = U, U[-1]
-        _, Yh, _ = simulate_batch(ev.model, ev.rows(st, x, [r]), Uh, dt=ev.dt, roads=[c.road],
-                                  u_row=np.array([0]), road_row=np.array([0]), outputs=SIGNAL_OUTPUT)
+        res = simulate_batch(ev.model, ev.rows(st, x, [r]), Uh, dt=ev.dt, roads=[c.road],
+                             u_row=np.array([0]), road_row=np.array([0]), outputs=SIGNAL_OUTPUT)
+        Yh = res.values
         held = Yh[0] * _TO_REPORT_UNITS
         np.testing.assert_allclose(rates[:c.n_steps], held[:c.n_steps], rtol=0, atol=TOL, err_msg=c.name)
         rm = _residual_rmse(f, r, rates)

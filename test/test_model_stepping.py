@@ -33,8 +33,9 @@ def test_batch_equals_single_runs(model_full):
     U = man.to_inputs(DT)
     oils = [(1, 1, 1, 1), (0, 0, 1, 1), (1, 1, 0, 0), (0.3, 0.7, 0.2, 0.9)]
     P = np.stack([model_full.params(o) for o in oils])
-    t, Y, done = simulate_batch(model_full, P, U, dt=DT, roads=[man.road], decim=5,
-                                outputs=["ROLL_RATE", "YAW_RATE"])
+    res = simulate_batch(model_full, P, U, dt=DT, roads=[man.road], decim=5,
+                         outputs=["ROLL_RATE", "YAW_RATE"])
+    t, Y, done = res.t, res.values, res.steps_done
     assert np.all(done == U.shape[0])
     for b, oil in enumerate(oils):
         single = simulate(model_full, U, dt=DT, road=man.road, oil=oil, decim=5, outputs=["ROLL_RATE", "YAW_RATE"])
@@ -54,15 +55,16 @@ def test_batch_blocks_equal_single_runs_and_a_diverging_vehicle_stops_alone(mode
     bad = model_full.kernel.LANES + 4
     P[bad, P_INDEX["M_S"]] = 1e-300  # absurd: this body explodes
     S = np.tile(model_full.initial_state(), (n, 1))
-    _, Y, done = simulate_batch(model_full, P, U, dt=DT, roads=[man.road], decim=10,
-                                outputs=["PITCH_RATE", "DEFL_RL"], S=S)
+    res = simulate_batch(model_full, P, U, dt=DT, roads=[man.road], decim=10,
+                         outputs=["PITCH_RATE", "DEFL_RL"], S=S)
+    Y, done = res.values, res.steps_done
     assert done[bad] < U.shape[0] and np.all(np.delete(done, bad) == U.shape[0])
     for b in range(n):
         single = simulate(model_full, U, dt=DT, road=man.road, P=P[b].copy(), decim=10,
                           outputs=["PITCH_RATE", "DEFL_RL"])
         assert single.steps_done == done[b]
         np.testing.assert_array_equal(Y[b], single.y)
-        np.testing.assert_array_equal(S[b], single.state)
+        np.testing.assert_array_equal(res.state[b], single.state)
 
 
 def test_batch_mixes_drives_and_roads(model_full):
@@ -70,8 +72,9 @@ def test_batch_mixes_drives_and_roads(model_full):
     n = min(bump.n_steps(DT), sine.n_steps(DT))
     U = np.stack([bump.to_inputs(DT)[:n], sine.to_inputs(DT)[:n]])
     P = np.tile(model_full.params(), (2, 1))
-    _, Y, _ = simulate_batch(model_full, P, U, dt=DT, roads=[bump.road, sine.road], u_row=[0, 1],
-                             road_row=[0, 1], outputs=["PITCH_RATE"])
+    res = simulate_batch(model_full, P, U, dt=DT, roads=[bump.road, sine.road], u_row=[0, 1],
+                         road_row=[0, 1], outputs=["PITCH_RATE"])
+    Y = res.values
     for b, man in enumerate((bump, sine)):
         single = simulate(model_full, U[b], dt=DT, road=man.road, outputs=["PITCH_RATE"])
         np.testing.assert_array_equal(Y[b], single.y)

@@ -35,7 +35,7 @@ def test_readme_physics_term_example_compiles_and_damps(tmp_path, monkeypatch):
         oil = vehicle_state("front_empty")
 
         def pitch(m):
-            return simulate(m, man.to_inputs(DT), dt=DT, road=man.road, oil=oil, outputs=["PITCH_RATE"]).y[:, 0]
+            return simulate(m, man.to_inputs(DT), dt=DT, road=man.road, oil=oil, outputs=["pitch_rate"])["pitch_rate"]
 
         k0 = int((man.road.s[-1] + model.vehicle.wheelbase) / man.speed / DT)  # rear axle leaves the bump
         ring = slice(k0, k0 + 1500)
@@ -56,21 +56,38 @@ def test_public_api_is_importable_and_lazy():
     assert int(r.stdout) >= 5
 
 
-def test_package_docstring_example_runs():
-    """The example in ``susp_sim_ros.__doc__`` runs as printed on the bundled drive."""
+def _docstring_example() -> str:
     import susp_sim_ros
-    block = "\n".join(line[4:] for line in susp_sim_ros.__doc__.split("::", 1)[1].strip("\n").split("\n")
-                      if line.startswith("    "))
+    return "\n".join(line[4:] for line in susp_sim_ros.__doc__.split("::", 1)[1].strip("\n").split("\n")
+                     if line.startswith("    ") or not line.strip())
+
+
+def test_readme_api_example_is_the_package_docstring_example():
+    """README's Python API example is the package docstring's (which the next test runs)."""
+    assert _blocks("Python API")["python"].strip() == _docstring_example().strip()
+
+
+def test_package_docstring_example_runs():
+    """The example in ``susp_sim_ros.__doc__`` (and README's Python API section) runs as printed on the
+    bundled drive and gives what its comments say."""
+    import os
+
+    from susp_sim_ros.model import Response
     ns: dict = {}
     root = Path(__file__).resolve().parents[1]
-    import os
     cwd = os.getcwd()
     os.chdir(root)
     try:
-        exec(compile(block, "susp_sim_ros.__doc__", "exec"), ns)
+        exec(compile(_docstring_example(), "susp_sim_ros.__doc__", "exec"), ns)
     finally:
         os.chdir(cwd)
+    resp, sim, pred = ns["resp"], ns["sim"], ns["pred"]
+    assert all(isinstance(r, Response) for r in (resp, sim, pred))
+    assert resp.units["pitch_rate"] == "rad/s" and 0.01 < ns["peak"] < 1.0
+    assert list(ns["table"].columns) == list(resp.labels) and ns["table"].index.name == "time_s"
+    assert len(sim.t_ns) > 100 and 0.0 < ns["rmse"] < 1.0  # deg/s: the model follows the drive
     rep = ns["report"]
     assert rep["verdict"] in ("missing_physics", "no_significant_discrepancy", "unexplained_residual")
     assert rep["heldout_rmse_after_deg_s"] <= rep["heldout_rmse_before_deg_s"]
-    assert len(ns["sim"].t_ns) > 100
+    assert 0.0 < ns["score"] <= 1.0 and "pitch_rate" in pred
+    assert ns["summary"]["runs_ok"] == ns["summary"]["n_runs"] == len(ns["study"].runs)

@@ -164,9 +164,11 @@ def test_passive_kernel_gives_the_semi_capable_kernels_numbers_bit_for_bit():
     man = bump_crossing()
     U = man.to_inputs(0.001)
     P = np.array([model.params(o) for o in ((1, 1, 1, 1), (1, 1, 0, 0), (0, 0, 1, 1))])
-    _, y_passive, done_p = simulate_batch(model, P, U, dt=0.001, roads=[man.road])
+    res = simulate_batch(model, P, U, dt=0.001, roads=[man.road])
+    y_passive, done_p = res.values, res.steps_done
     assert model._kernel_passive is not None  # the passive batch took the passive kernel
     model._kernel_passive = model.kernel       # now force the semi-capable kernel
-    _, y_full, done_f = simulate_batch(model, P, U, dt=0.001, roads=[man.road])
+    res = simulate_batch(model, P, U, dt=0.001, roads=[man.road])
+    y_full, done_f = res.values, res.steps_done
     assert np.array_equal(done_p, done_f)
     assert np.array_equal(y_passive, y_full) and np.any(y_full != 0)

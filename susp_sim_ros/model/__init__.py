@@ -5,9 +5,10 @@ from .layout import OUTPUT_LABELS, WHEELS
 from .params import FrictionVariant, VehicleParams, config_dir, load_variant, load_vehicle
 from .road import RoadProfile, cosine_bump
 from .terms import PhysicsTerm, TermParam, get_term, register_term
-from .vehicle import Model, SimResult, Stepper, make_inputs, simulate, simulate_batch
+from .response import Response
+from .vehicle import Model, Stepper, make_inputs, simulate, simulate_batch
 
 __all__ = ["OUTPUT_LABELS", "WHEELS", "FrictionVariant", "VehicleParams", "config_dir", "load_variant",
            "load_vehicle", "RoadProfile", "cosine_bump", "PhysicsTerm", "TermParam", "get_term",
-           "register_term", "Model", "SimResult", "Stepper", "make_inputs", "simulate",
+           "register_term", "Model", "Response", "Stepper", "make_inputs", "simulate",
            "simulate_batch"]

@@ -221,8 +221,9 @@ def eusama_bench(model: Model, oil=(1.0, 1.0, 1.0, 1.0), wheels=WHEELS,
         U[r, :, U_INDEX["ZR_IN"] + WHEELS.index(w)] = pm.z
     P = np.repeat((model.params(oil) if P is None else P)[None], len(wheels), axis=0)
     labels = [f"F_Z_{w}" for w in wheels]
-    _, Y, done = simulate_batch(model, P, U, dt=dt, roads=(None,), u_row=np.arange(len(wheels)),
-                                outputs=labels)
+    res = simulate_batch(model, P, U, dt=dt, roads=(None,), u_row=np.arange(len(wheels)),
+                         outputs=labels)
+    Y, done = res.values, res.steps_done
     if np.any(done < pm.t.size):
         raise RuntimeError("EUSAMA bench: the simulation diverged")
     fz0 = model.vehicle.static_wheel_loads()

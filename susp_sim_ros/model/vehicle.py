@@ -10,7 +10,6 @@ Units SI, axes REP-103, wheel order FL, FR, RL, RR.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from collections.abc import Iterable, Sequence
 
 from types import ModuleType
@@ -21,8 +20,9 @@ from ..errors import SuspInputError
 from .kernel import load_kernel
 from .layout import (DAMPER_GRID, N_GRID, N_U, OUTPUT_LABELS, P_GRID, P_H_EMPTY, P_H_HARD,
                      P_H_INTACT, P_H_SOFT, P_INDEX, P_SEMI_ACTIVE, P_VALVE_TAU, S_INDEX, U_INDEX,
-                     KernelLayout, output_index)
+                     KernelLayout)
 from .params import CORNER_AXLE, FrictionVariant, VehicleParams, load_variant, load_vehicle
+from .response import Response, selected_labels
 from .road import RoadProfile
 from .terms import AXLE_FRICTION, BUILTIN_TERMS, DAMPER_FRICTION, PhysicsTerm
 
@@ -260,64 +260,41 @@ def make_inputs(n_steps: int, speed, steering, accel=None, wheel_heights=None,
     return U
 
 
-@dataclass
-class SimResult:
-    """Outputs of a run: times [s] of the recorded steps and the selected output columns."""
-
-    t: np.ndarray
-    y: np.ndarray
-    labels: tuple[str, ...]
-    steps_done: int
-    steps_requested: int
-    state: np.ndarray = field(repr=False)
-
-    @property
-    def ok(self) -> bool:
-        return self.steps_done == self.steps_requested
-
-    def __getitem__(self, label: str) -> np.ndarray:
-        try:
-            return self.y[:, self.labels.index(label)]
-        except ValueError:
-            raise KeyError(f"output {label!r} not recorded; recorded: {', '.join(self.labels)}") from None
-
-
-def _selection(outputs: Sequence[str] | None) -> tuple[tuple[str, ...], np.ndarray]:
-    labels = tuple(outputs) if outputs is not None else OUTPUT_LABELS
-    return labels, np.array([output_index(x) for x in labels], dtype=np.int64)
-
-
 def simulate(model: Model, U: np.ndarray, *, dt: float, road: RoadProfile | None = None,
              oil: Sequence[float] | np.ndarray = INTACT, P: np.ndarray | None = None, S: np.ndarray | None = None,
-             decim: int = 1, outputs: Sequence[str] | None = None, t0: float = 0.0) -> SimResult:
+             decim: int = 1, outputs: Sequence[str] | None = None, t0: float = 0.0) -> Response:
     """Run one vehicle over the input rows ``U`` at step ``dt`` [s]; record every ``decim``-th step.
 
     Road: a :class:`RoadProfile`, or ``None`` for per-wheel heights taken from ``U`` (four-poster).
+    ``P``/``S``: parameters and initial state instead of ``model.params(oil)`` and rest; never written
+    (the state after the last step is the response's ``state``). ``outputs``: signal names (or kernel
+    labels) to record, default all. Returns a :class:`Response` of (n, k) values.
     """
     P = model.params(oil) if P is None else P
-    S = model.initial_state() if S is None else S
+    S = model.initial_state() if S is None else np.array(S, dtype=float)
     rs, rzl, rzr, rn = (road or RoadProfile.flat()).kernel_arrays()
     mode = 0 if road is not None else 1
     if mode == 1:
         S[S_INDEX["ZR_PREV"]:S_INDEX["ZR_PREV"] + 4] = U[0, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4]
     if P[P_SEMI_ACTIVE] > 0.5 and U.shape[0]:
         S[S_INDEX["VALVE"]:S_INDEX["VALVE"] + 4] = np.clip(U[0, U_INDEX["CMD"]:U_INDEX["CMD"] + 4], 0.0, 1.0)
-    labels, sel = _selection(outputs)
+    labels, sel = selected_labels(outputs)
     Y = np.zeros((U.shape[0] // decim, len(sel)))
     done = model.kernel.run_one(P, S, np.ascontiguousarray(U), rs, rzl, rzr, rn, mode, dt, decim, sel, Y)
     t = t0 + dt * decim * np.arange(1, Y.shape[0] + 1)
-    return SimResult(t, Y, labels, int(done), U.shape[0], S)
+    return Response(t, Y, labels, int(done), U.shape[0], S)
 
 
 def simulate_batch(model: Model, P: np.ndarray, U: np.ndarray | Sequence[np.ndarray], *, dt: float,
                    roads: Sequence[RoadProfile | None] = (None,), u_row: np.ndarray | None = None,
                    road_row: np.ndarray | None = None, decim: int = 1,
-                   outputs: Sequence[str] | None = None, S: np.ndarray | None = None):
+                   outputs: Sequence[str] | None = None, S: np.ndarray | None = None) -> Response:
     """Run ``B = len(P)`` vehicles in parallel.
 
     ``P``: (B, n_p) parameters. ``U``: (R, n_steps, N_U) input sets (or a list of equal-length arrays);
-    vehicle ``b`` uses ``U[u_row[b]]`` and ``roads[road_row[b]]`` (default row 0). Returns
-    ``(t, Y, done)`` with ``Y`` (B, n_out, n_sel).
+    vehicle ``b`` uses ``U[u_row[b]]`` and ``roads[road_row[b]]`` (default row 0). ``S``: (B, n_s)
+    initial states (default rest), never written. Returns a batch :class:`Response`: ``values``
+    (B, n_out, n_sel), ``steps_done`` (B,), ``state`` (B, n_s) after the last step.
     """
     P = np.ascontiguousarray(np.atleast_2d(P), dtype=float)
     B = P.shape[0]
@@ -338,16 +315,16 @@ def simulate_batch(model: Model, P: np.ndarray, U: np.ndarray | Sequence[np.ndar
         RS[k, len(rs):] = rs[-1]
         mode_r[k] = 0 if r is not None else 1
     mode = mode_r[road_row]
-    S = np.zeros((B, model.layout.n_s)) if S is None else S
+    S = np.zeros((B, model.layout.n_s)) if S is None else np.array(S, dtype=float)
     for b in np.nonzero(mode == 1)[0]:
         S[b, S_INDEX["ZR_PREV"]:S_INDEX["ZR_PREV"] + 4] = U[u_row[b], 0, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4]
-    labels, sel = _selection(outputs)
+    labels, sel = selected_labels(outputs)
     Y = np.zeros((B, U.shape[1] // decim, len(sel)))
     done = np.zeros(B, np.int64)
     kernel = model.kernel if bool(np.any(P[:, P_SEMI_ACTIVE] > 0.5)) else model.kernel_passive
     kernel.run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done)
     t = dt * decim * np.arange(1, Y.shape[1] + 1)
-    return t, Y, done
+    return Response(t, Y, labels, done, U.shape[1], S)
 
 
 class Stepper:

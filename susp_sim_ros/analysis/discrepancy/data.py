@@ -9,6 +9,7 @@ crossings, steering window / roll rate for sine steering, as in the paper's tabl
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,6 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...errors import RecordingError, SuspInputError
+from ...io.drive import TestDrive
 from ...model.layout import N_U, U_INDEX
 from .. import validation as va
 from ..study import classify_maneuver, classify_state
@@ -226,6 +228,33 @@ def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.0
             case.name = f"{case.name}_{len(names)}"
         names.add(case.name)
         cases.append(case)
+    return cases
+
+
+def as_cases(drives, *, wheelbase: float, dt: float = 0.001, topic_map=None) -> list[DriveCase]:
+    """Drives given as data -- paths of recordings, read :class:`~susp_sim_ros.io.drive.TestDrive`
+    objects or prepared :class:`DriveCase` objects, one or a sequence, mixed -- as cases of their own:
+    a case given is copied (the finder marks and narrows its cases; the caller's stay as they were). A
+    read drive is named after its ``maneuver`` metadata and position."""
+    items = [drives] if isinstance(drives, (str, Path, TestDrive, DriveCase)) else list(drives)
+    if not items:
+        raise SuspInputError("give at least one recorded test drive (MCAP)")
+    cases = []
+    for k, d in enumerate(items):
+        if isinstance(d, DriveCase):
+            cases.append(dataclasses.replace(d))
+        elif isinstance(d, TestDrive):
+            name = f"drive{k}_{d.metadata.get('maneuver') or 'unnamed'}"
+            case = prepare_case(Path(name), d, wheelbase=wheelbase, dt=dt)
+            case.name = name
+            cases.append(case)
+        else:
+            cases.extend(load_cases([d], wheelbase=wheelbase, dt=dt, topic_map=topic_map))
+    names: set[str] = set()
+    for c in cases:
+        if c.name in names:
+            c.name = f"{c.name}_{len(names)}"
+        names.add(c.name)
     return cases
 
 

@@ -156,8 +156,9 @@ class Evaluator:
             for m, x in enumerate(X):
                 U[m * R:(m + 1) * R, :, U_INDEX["SWA"]] -= st.steer_offset(x)
             u_row = np.arange(M * R)
-        _, Y, done = simulate_batch(self.model, P, U, dt=self.dt, roads=self.roads, u_row=u_row,
-                                    road_row=np.tile(np.array(idx), M), outputs=SIGNAL_OUTPUT)
+        res = simulate_batch(self.model, P, U, dt=self.dt, roads=self.roads, u_row=u_row,
+                             road_row=np.tile(np.array(idx), M), outputs=SIGNAL_OUTPUT)
+        Y, done = res.values, res.steps_done
         bad = done < U.shape[1]
         Y[bad] = 1e3  # a diverged run: a huge residual, never a crash
         self.vehicle_seconds += M * R * self.n_max * self.dt

@@ -36,6 +36,7 @@ import numpy as np
 from ...errors import SuspInputError
 from ...model import Model, load_variant, load_vehicle
 from ...model.layout import U_INDEX
+from ...model.response import Response
 from ...model.params import TermSetting
 from ...model.terms import get_term
 from .calibration import (STEP_OF_SD, calibration_candidate, calibration_entries, calibration_params,
@@ -43,6 +44,7 @@ from .calibration import (STEP_OF_SD, calibration_candidate, calibration_entries
                           vehicle_at)
 from .candidates import BY_NAME, CALIBRATION, LIBRARY, PHYSICS, SWITCH_OF
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
+from .data import SIGNAL_UNIT, as_cases
 from .engine import Evaluator, Structure
 from .fit import FitResult, debias, fit_structure, prior_rows, raw_residuals, screen
 from .locate import base_outputs, locate, noise_floor
@@ -141,8 +143,13 @@ class DiscrepancyFinder:
         return out, skip, in_base
 
     # -- fit -----------------------------------------------------------------------------------------
-    def fit(self, drives: Sequence[str | Path] | Sequence[DriveCase]) -> "DiscrepancyFinder":
+    def fit(self, drives) -> "DiscrepancyFinder":
+        """Diagnose ``drives``: recordings (paths), read :class:`~susp_sim_ros.io.drive.TestDrive` objects
+        or prepared :class:`~.data.DriveCase` objects (:func:`~.data.as_cases`; never modified). Returns
+        the finder, fitted."""
         t_start = time.perf_counter()
+        vp = self.vehicle if not isinstance(self.vehicle, (str, Path)) else load_vehicle(self.vehicle)
+        drives = as_cases(drives, wheelbase=vp.wheelbase)
         bar = None
         if self.progress:
             from ...progress import progress
@@ -594,21 +601,52 @@ class DiscrepancyFinder:
                 "by_signal": by_signal, "folds": [fold], "method": "held-out halves of the one drive"}
 
     # -- estimator API ------------------------------------------------------------------------------
-    def predict(self, drive: int | str = 0) -> tuple[np.ndarray, np.ndarray]:
-        """Grid times [s] and the fitted model's rates [deg/s] (incl. time offset and bias) of a fitted
-        drive (index or name)."""
+    def _new_data(self, drives) -> tuple[Evaluator, np.ndarray]:
+        """An evaluator of the fitted model over new drives (any form :func:`~.data.as_cases` takes)
+        and their base-model signals (R, n_max, 6), quiet lead-ins marked as in :meth:`fit`."""
+        ev = Evaluator(self.model_, as_cases(drives, wheelbase=self.model_.vehicle.wheelbase))
+        sims = ev.simulate(Structure([]), np.zeros((1, 0)))[0]
+        for r, c in enumerate(ev.cases):
+            mark_quiet(c, sims[r][:, :3])
+        return ev, sims
+
+    def predict(self, drive=0) -> Response:
+        """The fitted model's IMU signals of one drive at its measured sample times in its analysis
+        window (time offset and sensor bias included), as a :class:`~susp_sim_ros.model.Response` (SI:
+        rates [rad/s], specific forces [m/s^2]; ``t`` [s] since the drive's first input).
+
+        ``drive``: new data -- a recording's path, a :class:`~susp_sim_ros.io.drive.TestDrive` or a
+        :class:`~.data.DriveCase`, simulated with the fitted model as fitted -- or the index or name of
+        a drive given to :meth:`fit`."""
         self._check_fitted()
-        r = drive if isinstance(drive, int) else [c.name for c in self.cases_].index(drive)
-        ev, st, x = self.evaluator_, self.result_.structure, self.result_.x
+        names = [c.name for c in self.cases_]
+        if isinstance(drive, (int, np.integer)) or (isinstance(drive, str) and drive in names):
+            ev, r = self.evaluator_, int(drive) if not isinstance(drive, str) else names.index(drive)
+        else:
+            ev, r = self._new_data(drive)[0], 0
+        st, x = self.result_.structure, self.result_.x
         rates = ev.simulate(st, x[None], [r])[0, 0]
         e = ev.case_residual(r, rates, st.lag(x), st.bias)
-        c = self.cases_[r]
-        return c.t_grid_s, c.y_meas + e
+        return _signals_response(ev.cases[r], ev.cases[r].y_meas + e)
 
-    def score(self) -> float:
-        """Held-out (leave-one-drive-out) fraction of the base model's residual mean square explained
-        (1 = perfect, 0 = no better than the base model); in-sample when held-out was switched off."""
+    def score(self, drives=None) -> float:
+        """Fraction of the base model's residual mean square the fitted model explains on the primary
+        gyro signal(s) (1 = perfect, 0 = no better than the base model, below 0 = worse).
+
+        With ``drives`` (new data: paths, TestDrive or DriveCase objects): on those drives, simulated with
+        the fitted model as fitted (no refit). Without: held-out (leave-one-drive-out) on the fitted
+        drives; in-sample when held-out was switched off."""
         self._check_fitted()
+        if drives is not None:
+            ev, sims = self._new_data(drives)
+            st, x = self.result_.structure, self.result_.x
+            rates = ev.simulate(st, x[None])[0]
+            before = after = 0.0
+            for r, c in enumerate(ev.cases):
+                pj = [j for j, s in enumerate(c.signals) if s in primary_signals(c.maneuver)]
+                before += float(np.sum(ev.case_residual(r, sims[r], 0.0, False)[:, pj] ** 2))
+                after += float(np.sum(ev.case_residual(r, rates[r], st.lag(x), st.bias)[:, pj] ** 2))
+            return 1.0 - after / max(before, 1e-12)
         if self.heldout_:
             return 1.0 - (self.heldout_["after_deg_s"] / max(self.heldout_["before_deg_s"], 1e-12)) ** 2
         return 1.0 - self.result_.rss / max(self.base_fit_.rss, 1e-12)
@@ -701,3 +739,10 @@ def _whitened(ev: Evaluator, st: Structure, x: np.ndarray, r: int) -> float:
     """Whitened residual sum of squares of drive ``r`` at ``x``."""
     e = ev.case_residuals(st, x, [r])[r] * ev.weights[r]
     return float(np.sum(e * e))
+
+
+def _signals_response(c: DriveCase, y: np.ndarray) -> Response:
+    """IMU signals ``y`` (n_grid, n_sig; rates [deg/s], specific forces [m/s^2]) of drive ``c`` at its
+    comparison times as a :class:`Response` in SI units."""
+    to_si = np.array([math.radians(1.0) if SIGNAL_UNIT[a] == "deg/s" else 1.0 for a in c.axes])
+    return Response(c.t_grid_s, y * to_si, c.signals, t_ns=c.grid_ns, metadata=dict(c.metadata))

@@ -116,7 +116,8 @@ def simulate_groups(data: Mapping, runs: Sequence[Mapping], threads: int | None 
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
     out = []
     for b in batch_inputs(data, runs):
-        _, Y, done = simulate_batch(*b["args"], **b["kw"])
+        res = simulate_batch(*b["args"], **b["kw"])
+        Y, done = res.values, res.steps_done
         ok = (done == b["n_steps"]) & np.isfinite(Y).all(axis=(1, 2))
         out.append((b["idx"], Y, ok, b["t_after"], data["step_s"] * data["decim"]))
     return out
