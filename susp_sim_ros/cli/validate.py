@@ -12,7 +12,7 @@ cover, the simulated recording's ride and road-holding metrics from its IMU and 
 (static tyre loads of its vehicle) and the measured drive's Wk comfort from its IMU (a measured drive has
 no suspension travel or tyre loads).
 
-The second form (see :mod:`susp_sim_ros.analysis.study`) simulates every drive in the folder with all four
+The second form (see :mod:`susp_sim_ros.analysis.validation_study`) simulates every drive in the folder with all four
 friction variants in lockstep and writes tables, overlay plots and a Markdown report. Its JSON holds
 ``{"tables": {MANEUVER: {STATE: {VARIANT: rmse_deg_s}}}, "elapsed_s": ..., ...}`` (interface.md).
 
@@ -58,13 +58,13 @@ def run(args) -> dict:
 
 
 def _study(args) -> dict:
-    from ..analysis.study import run_study, summary_text
+    from ..analysis.validation_study import run_validation_study, validation_summary_text
     variants = tuple(v.strip() for v in args.variants.split(",") if v.strip())
     if not variants:
         raise SuspInputError("--variants: give at least one friction variant")
-    res = run_study(args.study, args.out, variants=variants, plots=not args.no_plots,
-                    progress=not args.no_progress, topic_map=args.topic_map)
-    res["summary"] = summary_text(res)
+    res = run_validation_study(args.study, args.out, variants=variants, plots=not args.no_plots,
+                               progress=not args.no_progress, topic_map=args.topic_map)
+    res["summary"] = validation_summary_text(res)
     return res
 
 

@@ -9,7 +9,7 @@ batch simulation and :func:`~..discrepancy.fit.fit_structure`: maximum a posteri
 ``least_squares`` over whitened residuals, each drive counted at its effective sample size). The oil
 levels are bounded to [0, 1] with a weak prior that only keeps the information matrix invertible.
 
-What the drives can tell, per axle (:func:`identifiability`): from the posterior covariance of a
+What the drives can tell, per axle (:func:`oil_identifiability`): from the posterior covariance of a
 per-wheel fit's linearisation at half oil. Left and right are told apart when their *difference* is
 pinned to ``per_wheel_max_sd``; a bump across the full width excites both alike (the roll rate stays
 flat), so only their mean is, and the axle is fitted as one value. An axle whose mean is not pinned to
@@ -224,7 +224,7 @@ def _road_excites(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
     return False
 
 
-def identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
+def oil_identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
     """Per axle: ``wheel`` (left and right told apart), ``axle`` (only their mean) or ``no``, with the
     posterior sds it was decided on (linearised at half oil, nuisances at their prior centre)."""
     est = cfg["estimator"]
@@ -281,7 +281,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     notes: list = []
     model, ev, noise = prepare(paths, config, variant, cfg, topic_map, notes)
     cal = nuisance_params(model, est["nuisance"], est.get("nuisance_range_scale"))
-    ident = identifiability(ev, cal, cfg)
+    ident = oil_identifiability(ev, cal, cfg)
     groups: list = []
     for axle, (l, r) in AXLE_WHEELS.items():
         kind = ident[axle]["identifiable"]
@@ -297,7 +297,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
         fit = fit_structure(ev, st, max_nfev=1)
     cov = fit.covariance()
     if groups and est.get("consider"):
-        cov = cov + consider_covariance(ev, fit, cal, nuisance_params(model, est["consider"]))
+        cov = cov + oil_consider_covariance(ev, fit, cal, nuisance_params(model, est["consider"]))
     se = np.sqrt(np.clip(np.diag(cov), 0, None))
     sd_m = float(est["model_form_sd"])
     x = fit.x
@@ -344,7 +344,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     return res
 
 
-def consider_covariance(ev: Evaluator, fit: FitResult, cal, consider) -> np.ndarray:
+def oil_consider_covariance(ev: Evaluator, fit: FitResult, cal, consider) -> np.ndarray:
     """Covariance added to the fitted parameters by the uncertainty of the ``consider`` parameters
     (held at their prior centre, prior sd as in the vehicle file): ``S Sigma_c S^T`` with the
     sensitivity ``S = -H^-1 (w J_a^T J_c)`` of the weighted least-squares estimate to them (Schmidt's

@@ -17,7 +17,7 @@ measured by a 200 Hz IMU with white noise, and it stands on the virtual EUSAMA b
 - ``eusama``: 100 - the lowest EUSAMA % of the four wheels;
 - ``phase_shift``: minus the lowest minimum phase angle of the four wheels [deg];
 - ``decay_ratio``: pitch-rate decay ratio after the rear axle has left the bump
-  (:func:`~susp_sim_ros.analysis.sweep.engine.decay_ratio`, on the measured, noisy rate);
+  (:func:`~susp_sim_ros.analysis.sweep.tasks.decay_ratio`, on the measured, noisy rate);
 - ``model_based``: 1 - the lowest oil level of :func:`~.estimate.one_step_estimate` on the bump
   crossing (the estimator is told nothing of the car but its class); ``model_based_<variant>`` for the
   other ``estimator_variants`` (``dahl_only``: the estimator built on the Dahl-only friction model,
@@ -231,7 +231,7 @@ def car_statistics(data: Mapping, i: int) -> dict:
     from ...model.params import load_variant, load_vehicle
     from ...model.rigs import eusama_bench, eusama_plate_motion
     from ..discrepancy.data import prepare_case
-    from ..sweep.engine import decay_ratio
+    from ..sweep.tasks import decay_ratio
     from .estimate import evaluator_for, load_config, one_step_estimate
     roc = data["roc"]
     key = ("setup", data["vehicle"], roc["truth_variant"])

@@ -1,7 +1,7 @@
 """What one run of a study is: its vehicle, model, parameter vector and maneuver (cached per process).
 
 Pure functions of the normalised study description (``spec.data``) and the run's parameters; the study
-spec (:mod:`.spec`, grouping runs into chunks), the batch engine (:mod:`.engine`) and the ride study
+spec (:mod:`.spec`, grouping runs into chunks), the batch tasks (:mod:`.tasks`) and the ride study
 (:mod:`.ride`) all build runs through here.
 """
 from __future__ import annotations

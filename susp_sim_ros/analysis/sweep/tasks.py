@@ -431,7 +431,7 @@ def drive_task(path: str, variants: Sequence[str], diagnose: bool = False) -> di
     against the first variant. A drive that fails gives a row with ``error`` instead of raising."""
     from ...errors import SuspInputError
     from ...io.drive import read_drive
-    from ..study import simulate_and_validate
+    from ..validation_study import simulate_and_validate
     row = {"file": path}
     try:
         drive = read_drive(path)

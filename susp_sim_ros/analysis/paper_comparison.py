@@ -1,4 +1,4 @@
-"""The paper's simulation study on the model alone: its two maneuvers x three vehicle states x four
+"""The paper comparison (``susp paper``) on the model alone: its two maneuvers x three vehicle states x four
 friction variants (paper Table 5), with each variant's RMSE against the ``full`` model (deg/s; the
 paper reports deg/s), overlay plots and a Markdown report.
 
@@ -21,7 +21,7 @@ RING_OUT_THRESHOLD_DEG_S = 0.3  # model-spec 5 measures the bump ring-out agains
 
 
 @dataclass
-class PaperStudy:
+class PaperComparison:
     """Results: ``traces[maneuver][state][variant]`` = (t [s], signal [deg/s])."""
 
     traces: dict
@@ -30,7 +30,8 @@ class PaperStudy:
     elapsed_s: float
 
 
-def run_paper_study(vehicle: str = "passat_b8_like", dt: float = 0.001, progress=None) -> PaperStudy:
+def run_paper_comparison(vehicle: str = "passat_b8_like", dt: float = 0.001,
+                         progress=None) -> PaperComparison:
     t_start = time.perf_counter()
     models = {v: Model(vehicle, v) for v in VARIANTS}
     wb = models["full"].vehicle.wheelbase
@@ -57,10 +58,10 @@ def run_paper_study(vehicle: str = "passat_b8_like", dt: float = 0.001, progress
             ref = traces[mname][state]["full"][1]
             for var in VARIANTS:
                 rmse[mname][state][var] = float(np.sqrt(np.mean((traces[mname][state][var][1] - ref) ** 2)))
-    return PaperStudy(traces, rmse, ring, time.perf_counter() - t_start)
+    return PaperComparison(traces, rmse, ring, time.perf_counter() - t_start)
 
 
-def write_report(study: PaperStudy, out: Path) -> dict:
+def write_paper_comparison_report(study: PaperComparison, out: Path) -> dict:
     """Write ``paper_study.md``, ``paper_study.json`` and one overlay PNG per maneuver into ``out``."""
     import matplotlib
     matplotlib.use("Agg")

@@ -245,7 +245,7 @@ def findings(tab: dict, variants: Sequence[str] = VARIANTS) -> dict:
     return out
 
 
-def write_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: dict, elapsed_s: float,
+def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: dict, elapsed_s: float,
                  variants: Sequence[str] = VARIANTS) -> None:
     lines = ["# Validation study: friction variants against recorded test drives", "",
              f"{len(drives)} drives, {len(variants)} friction variants each, simulated in lockstep "
@@ -348,8 +348,8 @@ def write_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: di
 
 
 # ---- the study -----------------------------------------------------------------------------------------
-def run_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: bool = True,
-              progress: bool = True, topic_map=None) -> dict:
+def run_validation_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: bool = True,
+                         progress: bool = True, topic_map=None) -> dict:
     """Run the study over ``folder``; write plots, ``report.md`` and ``study.json`` into ``out_dir``.
     ``topic_map`` (see :mod:`susp_sim_ros.io.topic_map`) is applied to every drive.
 
@@ -385,7 +385,7 @@ def run_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: boo
     found = findings(tab, variants)
     elapsed = time.perf_counter() - t_start
     report = out / "report.md"
-    write_report(report, results, tab, found, elapsed, variants)
+    write_validation_report(report, results, tab, found, elapsed, variants)
     result = {"tables": tab, "elapsed_s": elapsed, "unit": "deg/s",
               "signals": {m: va.MANEUVER_SIGNAL[m] for m in MANEUVERS},
               "windows": {m: va.MANEUVER_WINDOW[m] for m in MANEUVERS},
@@ -403,7 +403,7 @@ def _jsonable(x):
     return str(x)
 
 
-def summary_text(result: dict) -> str:
+def validation_summary_text(result: dict) -> str:
     """Human summary: the tables and the headline findings."""
     lines = []
     for m, by_s in result["tables"].items():
