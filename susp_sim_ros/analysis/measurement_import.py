@@ -53,6 +53,7 @@ import numpy as np
 
 from ..errors import MeasurementImportError, TopicMapError
 from ..io.topic_map import FRAMES, UNITS, parse_frame, unit_factor
+from ..model.paper import IMU_SIGNALS
 from .csv_import import DRIVE_QUANTITIES
 
 #: Unit strings as measurement systems write them -> this package's unit names (topic_map.UNITS).
@@ -156,7 +157,7 @@ def _default_channel_map(names: set[str], path) -> dict:
     cm: dict[str, Any] = {"speed": find("speed", "speed", "speed"),
                           "steering_wheel_angle": find("steering", "angle", "steering_wheel_angle"),
                           "imu": {"frame": (FRAMES["flu"], "flu")}}
-    for ax, q in zip(_IMU_AXES, ("roll_rate", "pitch_rate", "yaw_rate", "accel_x", "accel_y", "accel_z")):
+    for ax, q in zip(_IMU_AXES, IMU_SIGNALS):
         e = find(q, "rate" if ax.startswith("gyro") else "accel", ax, required=ax.startswith("gyro"))
         if e is not None:
             cm["imu"][ax] = e

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Model, simulate
-from ..model.maneuvers import bump_crossing, sine_steer, vehicle_state
-from ..model.paper import PRIMARY_OUTPUT, STATES, VARIANTS
+from ..model.maneuvers import paper_maneuver, vehicle_state
+from ..model.paper import MANEUVERS, PRIMARY_OUTPUT, STATES, VARIANTS
 
 RING_OUT_THRESHOLD_DEG_S = 0.3  # model-spec 5 measures the bump ring-out against 0.3 deg/s
 
@@ -35,7 +35,7 @@ def run_paper_comparison(vehicle: str = "passat_b8_like", dt: float = 0.001,
     t_start = time.perf_counter()
     models = {v: Model(vehicle, v) for v in VARIANTS}
     wb = models["full"].vehicle.wheelbase
-    maneuvers = {"bump_crossing": bump_crossing(wheelbase=wb), "sine_steer": sine_steer()}
+    maneuvers = {m: paper_maneuver(m, wb) for m in MANEUVERS}
     traces, rmse, ring = {}, {}, {}
     for mname, man in maneuvers.items():
         U = man.to_inputs(dt)

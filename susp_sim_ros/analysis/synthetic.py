@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ..model.paper import IMU_OUTPUTS
 from ..model.terms import PhysicsTerm, TermParam, dahl_exact, register_term
 
 GENERATOR = "susp_sim_ros.analysis.synthetic"
@@ -262,7 +263,7 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
     oil = vehicle_state(state)
     dt = hidden.step_s
     res = simulate(model, man.to_inputs(dt), dt=dt, road=man.road, oil=oil,
-                   outputs=["ROLL_RATE", "PITCH_RATE", "YAW_RATE", "AX_SF", "AY_SF", "AZ_SF"])
+                   outputs=list(IMU_OUTPUTS))
     if not res.ok:
         raise RuntimeError(f"synthetic {maneuver}/{state}: the reference simulation diverged")
     # truth at t = 0 (rest) and after every step; the IMU sees it through its bandwidth

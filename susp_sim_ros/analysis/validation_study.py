@@ -33,11 +33,9 @@ import numpy as np
 
 from ..errors import RecordingError, SuspInputError
 from ..model.maneuvers import vehicle_state
-from ..model.paper import MANEUVERS, STATES, VARIANTS
+from ..model.paper import MANEUVERS, STATES, VARIANT_LABEL, VARIANTS
 from . import validation as va
 
-VARIANT_LABEL = {"full": "Model 1 full", "no_horizontal": "Model 2 no horizontal",
-                 "no_velocity": "Model 3 no velocity", "dahl_only": "Model 4 Dahl only"}
 PAPER_RATIO = 65.0  # paper: rear dampers oil-empty, bump crossing, RMSE dahl_only / full
 # measured with the generator (bags/README.md, "How much each ingredient costs"); valid for its version
 ABLATION_NOTE = ("For this generator version, the same chain without any hidden physics gives a ratio of about "

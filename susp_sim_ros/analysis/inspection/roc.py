@@ -37,6 +37,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ...errors import ConfigError
+from ...model.paper import IMU_OUTPUTS
 
 STATES = ("intact", "one_empty", "one_half", "several")
 METHODS = ("eusama", "phase_shift", "decay_ratio", "model_based")
@@ -167,7 +168,7 @@ def bump_drive(model, draw: Mapping, roc: Mapping, dt: float = 0.001):
     vp = model.vehicle
     man = bump_crossing(speed=draw["speed_kmh"] / 3.6, height=draw["bump_height"], wheelbase=vp.wheelbase)
     res = simulate(model, man.to_inputs(dt), dt=dt, road=man.road, oil=draw["oil"],
-                   outputs=["ROLL_RATE", "PITCH_RATE", "YAW_RATE", "AX_SF", "AY_SF", "AZ_SF"])
+                   outputs=list(IMU_OUTPUTS))
     if not res.ok:
         raise RuntimeError(f"car {draw['car']}: the truth simulation diverged")
     rng = np.random.default_rng(draw["noise_seed"])

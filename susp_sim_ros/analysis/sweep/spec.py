@@ -26,7 +26,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ...errors import ConfigError, SuspInputError
-from ...model.paper import MANEUVERS, PRIMARY_OUTPUT
+from ...model.paper import MANEUVERS, PRIMARY_OUTPUT, VARIANTS
 from .runs import MANEUVER_KEYS, maneuver_of, vehicle_key, vehicle_params
 
 ENGINE_VERSION = 2          # bump when a change alters results, so old stores are not resumed into
@@ -334,7 +334,7 @@ def _drives(data: dict, source: str, name: str) -> StudySpec:
     folder = data.get("folder")
     if not isinstance(folder, str) or not folder:
         raise ConfigError(f"{source}: folder: a drives study needs the folder of recorded drives (*.mcap)")
-    variants = data.get("variants", ["full", "no_horizontal", "no_velocity", "dahl_only"])
+    variants = data.get("variants", list(VARIANTS))
     if not isinstance(variants, list) or not variants:
         raise ConfigError(f"{source}: variants: expected a non-empty list of friction variants")
     for i, v in enumerate(variants):
