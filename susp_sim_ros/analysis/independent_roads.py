@@ -201,6 +201,7 @@ class TruthManeuver:
             z = 0.5 * self.bump_height_m * (1.0 - np.cos(2 * np.pi * x / self.bump_length_m))
             return s0 + x, z, z.copy()
         if self.kind == "rough":
+            assert self.road_class is not None, "a rough-road maneuver has a road class (TruthManeuver.rough)"
             length = self.speed_mps * self.duration_s + 20.0
             s, zl, zr = iso8608_road(length, self.road_class, self.road_seed, ds=self.road_ds_m,
                                      n_c=self.road_coherence_nc)

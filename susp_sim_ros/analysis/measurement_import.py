@@ -377,14 +377,14 @@ def import_measurement(drive_path: str | os.PathLike, out: str | os.PathLike, ro
         drive.metadata["import_source"] = f"{Path(drive_path).name} (CSV)"
     elif suffix in (".mf4", ".mdf"):
         drive = mdf_to_drive(drive_path, channel_map, vehicle=vehicle, **metadata)
-        if rsuffix == ".csv":
+        if rsuffix == ".csv" and road is not None:
             from .csv_import import read_road_csv
             drive.road = read_road_csv(road)
             drive.metadata["road_source"] = f"{Path(road).name} (CSV road layout)"
     else:
         raise MeasurementImportError(f"{drive_path}: unknown measurement format {suffix or '(no suffix)'!r} "
                                      f"(expected .mf4 / .mdf (ASAM MDF4) or .csv)")
-    if rsuffix == ".crg":
+    if rsuffix == ".crg" and road is not None:
         from ..model import load_vehicle
         drive.road, desc = crg_to_road(road, load_vehicle(vehicle).track[0], road_start_u)
         drive.metadata["road_source"] = desc

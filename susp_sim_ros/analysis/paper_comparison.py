@@ -24,9 +24,9 @@ RING_OUT_THRESHOLD_DEG_S = 0.3  # model-spec 5 measures the bump ring-out agains
 class PaperComparison:
     """Results: ``traces[maneuver][state][variant]`` = (t [s], signal [deg/s])."""
 
-    traces: dict
-    rmse_vs_full: dict
-    ring_out_s: dict
+    traces: dict[str, dict[str, dict[str, tuple[np.ndarray, np.ndarray]]]]
+    rmse_vs_full: dict[str, dict[str, dict[str, float]]]   # [maneuver][state][variant], deg/s
+    ring_out_s: dict[str, dict[str, dict[str, float]]]     # bump crossing only, s
     elapsed_s: float
 
 
@@ -36,7 +36,9 @@ def run_paper_comparison(vehicle: str = "passat_b8_like", dt: float = 0.001,
     models = {v: Model(vehicle, v) for v in VARIANTS}
     wb = models["full"].vehicle.wheelbase
     maneuvers = {m: paper_maneuver(m, wb) for m in MANEUVERS}
-    traces, rmse, ring = {}, {}, {}
+    traces: dict[str, dict[str, dict[str, tuple[np.ndarray, np.ndarray]]]] = {}
+    rmse: dict[str, dict[str, dict[str, float]]] = {}
+    ring: dict[str, dict[str, dict[str, float]]] = {}
     for mname, man in maneuvers.items():
         U = man.to_inputs(dt)
         traces[mname], rmse[mname], ring[mname] = {}, {}, {}
@@ -88,11 +90,11 @@ def write_paper_comparison_report(study: PaperComparison, out: Path) -> dict:
     lines = ["# The paper's maneuvers on the model: friction variants compared", "",
              "RMSE of each variant against the `full` model, in deg/s (degrees for people; the model "
              "works in rad/s). Bump crossing: pitch rate; sine steer: roll rate.", ""]
-    for mname, by_state in study.rmse_vs_full.items():
+    for mname, rmse_by_state in study.rmse_vs_full.items():
         lines += [f"## {mname}", "", "| state | " + " | ".join(VARIANTS) + " |",
                   "|---|" + "---|" * len(VARIANTS)]
         for state in STATES:
-            lines.append(f"| {state} | " + " | ".join(f"{by_state[state][v]:.3f}" for v in VARIANTS) + " |")
+            lines.append(f"| {state} | " + " | ".join(f"{rmse_by_state[state][v]:.3f}" for v in VARIANTS) + " |")
         lines.append("")
     lines += ["## Bump ring-out", "",
               f"Time the pitch rate stays above {RING_OUT_THRESHOLD_DEG_S} deg/s after the rear axle has "

@@ -272,7 +272,7 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
     y_sensor = _lowpass(y_true, dt, imu.bandwidth_hz)
     # IMU sample times: 200 Hz with jitter, strictly inside the simulated span
     n_imu = int(math.floor(man.duration * imu.rate_hz))
-    t_imu = np.arange(1, n_imu + 1) / imu.rate_hz + rng.normal(0.0, imu.jitter_s, n_imu)
+    t_imu: np.ndarray = np.arange(1, n_imu + 1) / imu.rate_hz + rng.normal(0.0, imu.jitter_s, n_imu)
     t_imu = np.clip(t_imu, 0.0, t_true[-1])
     t_imu_ns = t0_ns + np.round(t_imu * 1e9).astype(np.int64)
     t_imu_ns = np.maximum.accumulate(t_imu_ns + np.arange(n_imu))  # strictly increasing to the ns

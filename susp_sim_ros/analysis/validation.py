@@ -124,7 +124,8 @@ def resample(t_ns: np.ndarray, y: np.ndarray, t_new_ns: np.ndarray) -> np.ndarra
 
 def median_rate(t_ns: np.ndarray) -> float:
     """Median sample rate [Hz] of a time series."""
-    return float(NS / np.median(np.diff(np.asarray(t_ns, dtype=np.int64))))
+    steps_ns: np.ndarray = np.diff(np.asarray(t_ns, dtype=np.int64))
+    return float(NS / np.median(steps_ns))
 
 
 # ---- metrics ----------------------------------------------------------------------------------------------

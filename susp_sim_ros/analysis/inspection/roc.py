@@ -133,7 +133,7 @@ def car_draw(roc: Mapping, vp, i: int) -> dict:
         lo, hi = roc["several_oil"]
         for w in rng.choice(4, size=int(rng.integers(2, 5)), replace=False):
             oil[int(w)] = float(rng.uniform(lo, hi))
-    values = {}
+    values: dict[str, float | tuple[float, ...]] = {}   # per parameter: a scalar or per axle
     for f in roc["variation"]:
         pr = vp.priors[f]
         if pr.shape == "axle":

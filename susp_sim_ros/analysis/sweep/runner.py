@@ -155,6 +155,8 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     store = ResultStore(spec, out, fresh=fresh)
     resumed = sorted(store.done)
     todo = [c for c in spec.chunks if c.id not in store.done]
+    todo_tasks: list[tuple[tuple[int, ...], tuple]]     # (chunk ids, arguments of ``fn``) per task
+    fn: Callable[..., list[dict]]
     if spec.kind == "sweep":
         todo_tasks = [(tuple(c.id for c in t), (spec.data, spec.hash, [c.runs for c in t]))
                       for t in plan_tasks(todo, getattr(executor, "threads_total", 1))]
@@ -306,7 +308,8 @@ DIAG_COLUMNS = ("diag_verdict", "diag_terms", "diag_rmse_before_deg_s", "diag_rm
 
 def _diagnosis_summary(rows) -> dict:
     """Verdict counts and how often each term was found, over the diagnosed drives."""
-    verdicts, terms = {}, {}
+    verdicts: dict[str, int] = {}
+    terms: dict[str, int] = {}
     for r in rows:
         if r.get("error"):
             continue

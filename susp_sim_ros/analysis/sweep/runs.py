@@ -21,7 +21,7 @@ _cache: dict = {}
 _lock = threading.RLock()
 
 
-def vehicle_key(data: dict, run: Mapping) -> str:
+def vehicle_key(data: Mapping, run: Mapping) -> str:
     """What identifies the vehicle parameter set of a run (a name/path or a class definition)."""
     if "vehicle_class" in run:
         c = run["vehicle_class"]
