@@ -43,9 +43,11 @@ The ``test_drive`` metadata records what was converted: ``import_source``, ``uni
 """
 from __future__ import annotations
 
+import importlib
 import os
 import math
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 from collections.abc import Mapping
 
@@ -169,15 +171,22 @@ def _default_channel_map(names: set[str], path) -> dict:
     return cm
 
 
-# ---- MDF4 ------------------------------------------------------------------------------------------------
-def _open_mdf(path):
+def _reader_for(path, module: str, what: str) -> ModuleType:
+    """The optional library ``module`` that reads ``what`` (the ``import`` extra), for the existing file
+    ``path``; a named error when either is missing."""
     try:
-        from asammdf import MDF
+        lib = importlib.import_module(module)
     except ImportError:
-        raise MeasurementImportError(f"{path}: reading MDF4 needs asammdf (pip install "
+        raise MeasurementImportError(f"{path}: reading {what} needs {module} (pip install "
                                      f"'susp_sim_ros[import]')") from None
     if not Path(path).is_file():
         raise MeasurementImportError(f"{path}: no such file")
+    return lib
+
+
+# ---- MDF4 ------------------------------------------------------------------------------------------------
+def _open_mdf(path):
+    MDF = _reader_for(path, "asammdf", "MDF4").MDF
     with open(path, "rb") as f:
         head = f.read(8)
     if not head.startswith(b"MDF "):
@@ -318,13 +327,7 @@ def crg_to_road(path: str | os.PathLike, track_m: float, start_u: float | None =
     ``v = +-track_m/2``, ``s = u - start_u`` (``start_u``: the road's ``u`` under the front axle when the
     drive starts; default the file's first ``u``) (module docstring)."""
     from ..model.road import RoadProfile
-    try:
-        import pyopencrg
-    except ImportError:
-        raise MeasurementImportError(f"{path}: reading OpenCRG needs pyopencrg (pip install "
-                                     f"'susp_sim_ros[import]')") from None
-    if not Path(path).is_file():
-        raise MeasurementImportError(f"{path}: no such file")
+    pyopencrg = _reader_for(path, "pyopencrg", "OpenCRG")
     try:
         road = pyopencrg.read(str(path), check=True)
         u = np.asarray(road.u, dtype=float)
