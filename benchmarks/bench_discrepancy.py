@@ -86,6 +86,7 @@ from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder  # noqa: E402
 from susp_sim_ros.analysis.independent_sim import (TruthCar, TruthFriction, TruthHidden,  # noqa: E402
                                                    TruthManeuver, TruthSensor, make_drive, write_drive)
 from susp_sim_ros.io.drive import ImuSeries  # noqa: E402
+from susp_sim_ros.model.paper import IMU_SIGNALS  # noqa: E402
 
 MEASUREMENT_TERMS = ("sensor_bias", "time_offset", "steering_offset")
 
@@ -236,7 +237,7 @@ def run_case(name: str, spec: dict, noise: float, tmp: Path) -> dict:
     nf = rep.get("noise_floor_deg_s")
     after = rep.get("heldout_rmse_after_deg_s")
     floors = rep.get("noise_floors", {}) or {}
-    gyro_floors = {s: floors[s] for s in ("roll_rate", "pitch_rate", "yaw_rate") if s in floors}
+    gyro_floors = {s: floors[s] for s in IMU_SIGNALS[:3] if s in floors}
     res = {
         "case": name, "noise_deg_s": noise, "base_variant": spec["base"], "seed": spec["seed"],
         "car": "perturbed " + json.dumps({k: (np.round(v, 3).tolist() if isinstance(v, list) else round(v, 3))

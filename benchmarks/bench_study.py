@@ -50,7 +50,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from susp_sim_ros.analysis.sweep import InProcessExecutor, load_study, make_executor, run_study  # noqa: E402
-from susp_sim_ros.analysis.sweep import engine, runner  # noqa: E402
+from susp_sim_ros.analysis.sweep import runner, tasks  # noqa: E402
 from susp_sim_ros.analysis.sweep import store as store_mod  # noqa: E402
 from susp_sim_ros.analysis.sweep.runner import plan_tasks  # noqa: E402
 import susp_sim_ros.model as model_mod  # noqa: E402
@@ -61,9 +61,9 @@ def bare_batches(spec, threads_total: int = 1):
     """The kernel calls the study's tasks make (``simulate_batch`` inputs per task, the reference runs in
     the task's batch as the engine puts them), prepared in advance. ``threads_total``: worker threads the
     tasks are planned for (1: in-process and one Dask worker)."""
-    tasks = plan_tasks(spec.chunks, threads_total)
-    runs = [[spec.runs[r] for c in t for r in c.runs] for t in tasks]
-    return [b for rs in runs for b in engine.batch_inputs(spec.data, engine.task_batch(spec.data, rs)[0])]
+    planned = plan_tasks(spec.chunks, threads_total)
+    runs = [[spec.runs[r] for c in t for r in c.runs] for t in planned]
+    return [b for rs in runs for b in tasks.batch_inputs(spec.data, tasks.task_batch(spec.data, rs)[0])]
 
 
 def time_bare(spec, batches, cpu: bool = False) -> float:
@@ -86,9 +86,9 @@ def breakdown(spec, tmp: Path, n: int = 7) -> dict:
     """Where an in-process study's time goes (one kernel thread; ms, median of ``n``)."""
     parts = {"kernel (simulate_batch)": (model_mod, "simulate_batch"),
              "store: open": (store_mod.ResultStore, "__init__"),
-             "batch preparation": (engine, "_prepare"),
-             "metrics": (engine, "batch_metrics"),
-             "tasks (incl. kernel, metrics)": (engine, "sweep_task"),
+             "batch preparation": (tasks, "_prepare"),
+             "metrics": (tasks, "batch_metrics"),
+             "tasks (incl. kernel, metrics)": (tasks, "sweep_task"),
              "chunk files": (store_mod.ResultStore, "write_chunk"),
              "final table and summary": (runner, "_finish_sweep")}
     acc: dict = collections.defaultdict(float)

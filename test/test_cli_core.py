@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from susp_sim_ros.analysis.paper_study import run_paper_study
+from susp_sim_ros.analysis.paper_comparison import run_paper_comparison
 
 
 def susp(*args):
@@ -39,7 +39,7 @@ def test_bad_input_exit_2_with_named_error(args, needle):
 def test_paper_study_qualitative_findings():
     """Paper: variants hardly differ on the intact car; with oil-empty rear dampers the body rings out
     far longer and the variants separate (no velocity scaling underestimates friction)."""
-    st = run_paper_study()
+    st = run_paper_comparison()
     bump = st.rmse_vs_full["bump_crossing"]
     ring = st.ring_out_s["bump_crossing"]
     peak_intact = np.max(np.abs(st.traces["bump_crossing"]["intact"]["full"][1]))

@@ -6,7 +6,7 @@ import pytest
 
 
 @pytest.mark.parametrize("module", ["susp_sim_ros.model", "susp_sim_ros.model.rigs",
-                                    "susp_sim_ros.model.maneuvers", "susp_sim_ros.analysis.paper_study",
+                                    "susp_sim_ros.model.maneuvers", "susp_sim_ros.analysis.paper_comparison",
                                     "susp_sim_ros.cli.main", "susp_sim_ros.io.topic_map", "susp_sim_ros.io.reader",
                                     "susp_sim_ros.analysis.measurement_import"])
 def test_core_does_not_import_rclpy(module):

@@ -20,7 +20,7 @@ import yaml
 from _cli_helpers import Interrupt, stop_after
 from susp_sim_ros.analysis.sweep import (InProcessExecutor, drives_study, load_study,
                                          run_study, study_from_dict)
-from susp_sim_ros.analysis.sweep import engine
+from susp_sim_ros.analysis.sweep import tasks
 from susp_sim_ros.cli.main import main
 from susp_sim_ros.errors import ConfigError
 
@@ -124,20 +124,20 @@ def test_vehicle_classes_change_the_vehicle():
                             "vehicle_classes": {"stock": {}, "heavy": {"sprung_mass": 1900.0,
                                                                        "wheel_rate": [33000.0, 30000.0]}}},
                            "classes.yaml")
-    stock, heavy = (engine.vehicle_params(spec.data, r) for r in spec.runs)
+    stock, heavy = (tasks.vehicle_params(spec.data, r) for r in spec.runs)
     assert heavy.sprung_mass == 1900.0 and heavy.wheel_rate == (33000.0, 30000.0)
     assert stock.sprung_mass != 1900.0
-    res = engine.chunk_task(spec.data, spec.runs, [None, None])
+    res = tasks.chunk_task(spec.data, spec.runs, [None, None])
     assert all(res["ok"]) and res["metrics"][0] != res["metrics"][1]
 
 
-# ---- metrics and the engine -------------------------------------------------------------------------
+# ---- metrics and the tasks --------------------------------------------------------------------------
 def test_cached_parameter_vector_equals_model_params(model_full):
     data = load_study(EXAMPLE).data
     for oil in ((1.0, 1.0, 1.0, 1.0), (0.0, 0.0, 1.0, 1.0), (0.3, 0.3, 0.7, 0.7)):
         run = {"variant": "full", "oil_front": oil[0], "oil_rear": oil[2]}
-        np.testing.assert_array_equal(engine.params_of(data, run), model_full.params(oil))  # exact: same numbers
-    assert engine.oil_of({"oil_rear": 0.2, "oil_RL": 0.9}) == (1.0, 1.0, 0.9, 0.2)
+        np.testing.assert_array_equal(tasks.params_of(data, run), model_full.params(oil))  # exact: same numbers
+    assert tasks.oil_of({"oil_rear": 0.2, "oil_RL": 0.9}) == (1.0, 1.0, 0.9, 0.2)
 
 
 @pytest.mark.parametrize("zeta", [0.05, 0.2, 0.5])
@@ -145,11 +145,11 @@ def test_decay_ratio_of_a_damped_oscillator(zeta):
     t = np.arange(0, 6, 0.001)
     wd = 2 * np.pi * 1.5 * math.sqrt(1 - zeta ** 2)
     q = np.exp(-zeta * 2 * np.pi * 1.5 * t) * np.sin(wd * t)
-    r = engine.decay_ratio(q, 0)
+    r = tasks.decay_ratio(q, 0)
     # successive half-wave peaks of a damped sine: ratio exp(-pi zeta / sqrt(1 - zeta^2)) (1 ms sampling)
     assert r == pytest.approx(math.exp(-math.pi * zeta / math.sqrt(1 - zeta ** 2)), rel=2e-3)
-    assert engine.damping_ratio(r) == pytest.approx(zeta, rel=5e-3)
-    assert engine.decay_ratio(np.exp(-t), 0) == 0.0 and engine.damping_ratio(0.0) == 1.0
+    assert tasks.damping_ratio(r) == pytest.approx(zeta, rel=5e-3)
+    assert tasks.decay_ratio(np.exp(-t), 0) == 0.0 and tasks.damping_ratio(0.0) == 1.0
 
 
 def test_vectorised_decay_ratio_equals_the_scalar_definition():
@@ -160,8 +160,8 @@ def test_vectorised_decay_ratio_equals_the_scalar_definition():
     Q[3] = 0.0                      # no motion: NaN
     Q[4] = np.exp(-t)               # no overshoot: 0
     k0 = rng.integers(0, 599, 60)
-    expected = np.array([engine.decay_ratio(Q[i], int(k0[i])) for i in range(60)])
-    np.testing.assert_array_equal(engine.decay_ratios(Q, k0), expected)   # same values, not just close
+    expected = np.array([tasks.decay_ratio(Q[i], int(k0[i])) for i in range(60)])
+    np.testing.assert_array_equal(tasks.decay_ratios(Q, k0), expected)   # same values, not just close
 
 
 def test_compiled_rms_metrics_equal_the_numpy_forms():
@@ -176,7 +176,7 @@ def test_compiled_rms_metrics_equal_the_numpy_forms():
     R = np.degrees(Y[:3, :250, 0])                   # shorter references: the common length counts
     ref_row = rng.integers(0, 3, B)
     ref_row[:3] = [0, 1, 2]                         # the first three are their own references
-    got = engine.batch_metrics(data, Y, t_after, dt_out, R, ref_row)
+    got = tasks.batch_metrics(data, Y, t_after, dt_out, R, ref_row)
     k0 = np.clip(np.ceil(t_after / dt_out - 1e-9).astype(np.int64) - 1, 0, n)
     w = 100
     for b in range(B):
@@ -188,7 +188,7 @@ def test_compiled_rms_metrics_equal_the_numpy_forms():
         np.testing.assert_allclose(got[b, 2], np.sqrt(np.mean(Y[b, :, 1] ** 2)), rtol=1e-14)
     assert got[:3, 1].tolist() == [0.0, 0.0, 0.0]
     assert np.isnan(got[k0 >= n, 0]).all() and (k0 >= n).any()
-    assert np.isnan(engine.batch_metrics(data, Y, t_after, dt_out)[:, 1]).all()     # no reference
+    assert np.isnan(tasks.batch_metrics(data, Y, t_after, dt_out)[:, 1]).all()     # no reference
 
 
 def test_example_metrics_equal_the_paper_study_path(model_full):
@@ -201,7 +201,7 @@ def test_example_metrics_equal_the_paper_study_path(model_full):
     t_leave = (float(man.road.s[-1]) + model_full.vehicle.wheelbase) / man.speed
     runs = [{"variant": "full", "oil_front": f, "oil_rear": r, "bump_height": 0.06} for f, r in ((1, 1), (0, 1), (1,
                                                                                                                   0))]
-    res = engine.chunk_task(spec.data, runs, [np.zeros(1000)] * 3)
+    res = tasks.chunk_task(spec.data, runs, [np.zeros(1000)] * 3)
     cols = spec.metric_columns()
     for run, m in zip(runs, res["metrics"]):
         oil = (run["oil_front"],) * 2 + (run["oil_rear"],) * 2
@@ -270,19 +270,19 @@ def test_reference_runs_ride_in_the_task_batch_and_give_the_given_trace_results(
     one of its runs) and its metrics equal those computed against separately simulated references."""
     spec = study_from_dict(json.loads(json.dumps(TINY)), "tiny.yaml")
     runs = spec.runs[:4]                      # oil_front 1.0, oil_rear 0/1, both bumps: holds the 2 references
-    batch, ref_at = engine.task_batch(spec.data, runs)
+    batch, ref_at = tasks.task_batch(spec.data, runs)
     assert batch == runs and [batch[i] for i in ref_at] == [
         {**r, "oil_front": 1.0, "oil_rear": 1.0} for r in runs]
     runs = spec.runs[4:8]                     # oil_front 0.5: both references added, once each
-    batch, ref_at = engine.task_batch(spec.data, runs)
+    batch, ref_at = tasks.task_batch(spec.data, runs)
     assert batch[:4] == runs and len(batch) == 6 and ref_at[4:] == [4, 5]
     assert all(batch[ref_at[i]] == {**runs[i], "oil_front": 1.0, "oil_rear": 1.0} for i in range(4))
     chunks = [spec.runs[4:7], spec.runs[7:10]]
-    got = engine.sweep_task(spec.data, spec.hash, [range(4, 7), range(7, 10)])
-    refs = {json.dumps(r, sort_keys=True): np.degrees(engine.simulate_groups(spec.data, [r])[0][1][0, :, 0])
+    got = tasks.sweep_task(spec.data, spec.hash, [range(4, 7), range(7, 10)])
+    refs = {json.dumps(r, sort_keys=True): np.degrees(tasks.simulate_groups(spec.data, [r])[0][1][0, :, 0])
             for r in (spec.runs[2], spec.runs[3])}                       # the two references, alone
     for c, res in zip(chunks, got):
-        given = engine.chunk_task(spec.data, c, [refs[json.dumps({**r, "oil_front": 1.0, "oil_rear": 1.0},
+        given = tasks.chunk_task(spec.data, c, [refs[json.dumps({**r, "oil_front": 1.0, "oil_rear": 1.0},
                                                                   sort_keys=True)] for r in c])
         np.testing.assert_array_equal(res["metrics"], np.array(given["metrics"]))    # bit for bit
         assert res["ok"].tolist() == given["ok"]
@@ -352,7 +352,7 @@ def test_killed_study_process_resumes(tmp_path, tiny_reference):
     assert [int(x["run_id"]) for x in rows] == list(range(N_KILL)) and all(x["ok"] == "1" for x in rows)
     # the killed-and-resumed table equals the plain run of the same runs
     spec = study_from_dict(json.loads(json.dumps(data)), str(path))
-    plain = engine.chunk_task(spec.data, spec.runs[:3], [None] * 3)
+    plain = tasks.chunk_task(spec.data, spec.runs[:3], [None] * 3)
     ref = run_study(spec, tmp_path / "plain", InProcessExecutor(), progress=False, plot=False)
     assert (out / "results.csv").read_text() == (tmp_path / "plain" / "results.csv").read_text()
     assert ref["runs_failed"] == 0 and all(plain["ok"])
@@ -399,7 +399,7 @@ def test_batch_validation_over_a_folder(tmp_path, dask_executor):
     assert float(rear["rmse_dahl_only_deg_s"]) > float(rear["rmse_full_deg_s"]) > 0      # the paper's finding
     assert res["tables"]["bump_crossing"]["rear_empty"]["full"] == pytest.approx(float(rear["rmse_full_deg_s"]))
     # the same numbers as `susp validate --study` computes per drive
-    from susp_sim_ros.analysis.study import simulate_and_validate
+    from susp_sim_ros.analysis.validation_study import simulate_and_validate
     from susp_sim_ros.io.drive import read_drive
     one = simulate_and_validate(folder / "bump_crossing_rear_empty.mcap",
                                 read_drive(folder / "bump_crossing_rear_empty.mcap"), ["full"], {})

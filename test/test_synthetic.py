@@ -6,7 +6,7 @@ import pytest
 
 from susp_sim_ros.analysis import synthetic as syn
 from susp_sim_ros.analysis import validation as va
-from susp_sim_ros.model import Model, get_term
+from susp_sim_ros.model import Model, get_term, load_vehicle
 from susp_sim_ros.model.rigs import half_hysteresis_at_zero, triangle
 
 BAGS = Path(__file__).resolve().parents[1] / "bags"
@@ -99,7 +99,7 @@ def test_amplitude_friction_is_clearly_present_in_the_rear_empty_bump_drive():
 
     def rmse_full(drive):
         r = run_lockstep(drive, variant="full")
-        w = va.analysis_windows(drive)["bump"]
+        w = va.analysis_windows(drive, load_vehicle(drive.metadata["vehicle"]).wheelbase)["bump"]
         return va.validate(drive.imu.t_ns, drive.imu.gyro, r.imu.t_ns, r.imu.gyro,
                            windows={"bump": w}).rmse_deg_s("bump", "pitch_rate")
 

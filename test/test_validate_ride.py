@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from susp_sim_ros.analysis import ride_recording as rr
-from susp_sim_ros.analysis import study
+from susp_sim_ros.analysis import validation_study
 from susp_sim_ros.analysis import validation as va
 from susp_sim_ros.analysis.ride import (
     comfort_wk_rms,
@@ -178,7 +178,7 @@ def test_suspension_parser_accepts_only_the_layout(sizes, offset, data):
 
 def test_study_reports_ride_per_drive_as_validate_does(sims, capsys, model):
     drive = read_drive(BUMP)
-    d = study.simulate_and_validate(BUMP, drive, ["full"], {("passat_b8_like", "full"): model})
+    d = validation_study.simulate_and_validate(BUMP, drive, ["full"], {("passat_b8_like", "full"): model})
     ride = d.as_dict()["ride"]
     pair = _validate(capsys, BUMP, sims["intact"])["ride"]
     assert ride["simulated"]["full"]["comfort_wk_rms_m_s2"] == pytest.approx(

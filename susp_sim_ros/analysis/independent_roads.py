@@ -13,6 +13,11 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+#: wheelbase [m] the maneuvers' durations assume when none is given: model-spec section 3 (a + b = 1.10 +
+#: 1.69 m, wheelbase 2.79 m published). Declared here, not read from the model's vehicle config, so the
+#: truth generator stays independent of the model it checks.
+SPEC_WHEELBASE_M = 2.79
+
 #: ISO 8608 classes: Gd(n0) [m^3] at n0 = 0.1 cycles/m, geometric mean of each class (A = 16e-6, x4 per class).
 ISO8608_N0 = 0.1
 ISO8608_CLASSES = "ABCDEFGH"
@@ -111,7 +116,8 @@ class TruthManeuver:
     # ---- constructors ----
     @classmethod
     def bump(cls, speed_kmh: float = 8.0, height_m: float = 0.06, length_m: float = 0.5,
-             lead_in_s: float = 1.5, ring_out_s: float = 3.0, wheelbase_m: float = 2.79) -> "TruthManeuver":
+             lead_in_s: float = 1.5, ring_out_s: float = 3.0,
+             wheelbase_m: float = SPEC_WHEELBASE_M) -> "TruthManeuver":
         v = speed_kmh / 3.6
         dur = lead_in_s + (length_m + wheelbase_m) / v + ring_out_s
         return cls("bump", v, dur, lead_in_s, bump_height_m=height_m, bump_length_m=length_m)
@@ -187,7 +193,7 @@ class TruthManeuver:
         return np.zeros_like(t)
 
     # ---- road ----
-    def road(self, wheelbase_m: float = 2.79) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    def road(self, wheelbase_m: float = SPEC_WHEELBASE_M) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """(s, zl, zr) of the road, or None for a flat road."""
         if self.kind == "bump":
             s0 = self.speed_mps * self.lead_in_s
@@ -195,6 +201,7 @@ class TruthManeuver:
             z = 0.5 * self.bump_height_m * (1.0 - np.cos(2 * np.pi * x / self.bump_length_m))
             return s0 + x, z, z.copy()
         if self.kind == "rough":
+            assert self.road_class is not None, "a rough-road maneuver has a road class (TruthManeuver.rough)"
             length = self.speed_mps * self.duration_s + 20.0
             s, zl, zr = iso8608_road(length, self.road_class, self.road_seed, ds=self.road_ds_m,
                                      n_c=self.road_coherence_nc)

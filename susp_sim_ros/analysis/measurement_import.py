@@ -43,9 +43,11 @@ The ``test_drive`` metadata records what was converted: ``import_source``, ``uni
 """
 from __future__ import annotations
 
+import importlib
 import os
 import math
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 from collections.abc import Mapping
 
@@ -53,6 +55,7 @@ import numpy as np
 
 from ..errors import MeasurementImportError, TopicMapError
 from ..io.topic_map import FRAMES, UNITS, parse_frame, unit_factor
+from ..model.paper import IMU_SIGNALS
 from .csv_import import DRIVE_QUANTITIES
 
 #: Unit strings as measurement systems write them -> this package's unit names (topic_map.UNITS).
@@ -156,7 +159,7 @@ def _default_channel_map(names: set[str], path) -> dict:
     cm: dict[str, Any] = {"speed": find("speed", "speed", "speed"),
                           "steering_wheel_angle": find("steering", "angle", "steering_wheel_angle"),
                           "imu": {"frame": (FRAMES["flu"], "flu")}}
-    for ax, q in zip(_IMU_AXES, ("roll_rate", "pitch_rate", "yaw_rate", "accel_x", "accel_y", "accel_z")):
+    for ax, q in zip(_IMU_AXES, IMU_SIGNALS):
         e = find(q, "rate" if ax.startswith("gyro") else "accel", ax, required=ax.startswith("gyro"))
         if e is not None:
             cm["imu"][ax] = e
@@ -168,15 +171,22 @@ def _default_channel_map(names: set[str], path) -> dict:
     return cm
 
 
-# ---- MDF4 ------------------------------------------------------------------------------------------------
-def _open_mdf(path):
+def _reader_for(path, module: str, what: str) -> ModuleType:
+    """The optional library ``module`` that reads ``what`` (the ``import`` extra), for the existing file
+    ``path``; a named error when either is missing."""
     try:
-        from asammdf import MDF
+        lib = importlib.import_module(module)
     except ImportError:
-        raise MeasurementImportError(f"{path}: reading MDF4 needs asammdf (pip install "
+        raise MeasurementImportError(f"{path}: reading {what} needs {module} (pip install "
                                      f"'susp_sim_ros[import]')") from None
     if not Path(path).is_file():
         raise MeasurementImportError(f"{path}: no such file")
+    return lib
+
+
+# ---- MDF4 ------------------------------------------------------------------------------------------------
+def _open_mdf(path):
+    MDF = _reader_for(path, "asammdf", "MDF4").MDF
     with open(path, "rb") as f:
         head = f.read(8)
     if not head.startswith(b"MDF "):
@@ -317,13 +327,7 @@ def crg_to_road(path: str | os.PathLike, track_m: float, start_u: float | None =
     ``v = +-track_m/2``, ``s = u - start_u`` (``start_u``: the road's ``u`` under the front axle when the
     drive starts; default the file's first ``u``) (module docstring)."""
     from ..model.road import RoadProfile
-    try:
-        import pyopencrg
-    except ImportError:
-        raise MeasurementImportError(f"{path}: reading OpenCRG needs pyopencrg (pip install "
-                                     f"'susp_sim_ros[import]')") from None
-    if not Path(path).is_file():
-        raise MeasurementImportError(f"{path}: no such file")
+    pyopencrg = _reader_for(path, "pyopencrg", "OpenCRG")
     try:
         road = pyopencrg.read(str(path), check=True)
         u = np.asarray(road.u, dtype=float)
@@ -376,14 +380,14 @@ def import_measurement(drive_path: str | os.PathLike, out: str | os.PathLike, ro
         drive.metadata["import_source"] = f"{Path(drive_path).name} (CSV)"
     elif suffix in (".mf4", ".mdf"):
         drive = mdf_to_drive(drive_path, channel_map, vehicle=vehicle, **metadata)
-        if rsuffix == ".csv":
+        if rsuffix == ".csv" and road is not None:
             from .csv_import import read_road_csv
             drive.road = read_road_csv(road)
             drive.metadata["road_source"] = f"{Path(road).name} (CSV road layout)"
     else:
         raise MeasurementImportError(f"{drive_path}: unknown measurement format {suffix or '(no suffix)'!r} "
                                      f"(expected .mf4 / .mdf (ASAM MDF4) or .csv)")
-    if rsuffix == ".crg":
+    if rsuffix == ".crg" and road is not None:
         from ..model import load_vehicle
         drive.road, desc = crg_to_road(road, load_vehicle(vehicle).track[0], road_start_u)
         drive.metadata["road_source"] = desc

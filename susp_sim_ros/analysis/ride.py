@@ -103,18 +103,21 @@ def ride_metrics(y: dict[str, np.ndarray], fs: float, *, gravity: float, static_
     """The interface's ride metrics from output series ``y`` (OUTPUT_LABELS keys: AZ_SF, ROLL_RATE,
     PITCH_RATE, F_Z_*, DEFL_*) sampled at ``fs`` [Hz]. ``static_loads`` [N], ``bump_travel`` and
     ``rebound_travel`` [m] per wheel FL, FR, RL, RR."""
+    tyre_load: dict[str, float] = {}
+    travel: dict[str, float] = {}
+    stops: dict[str, int] = {}
     out = {
         "comfort_wk_rms_m_s2": comfort_wk_rms(y["AZ_SF"], fs, gravity),
         "vertical_acceleration_rms_m_s2": rms(np.asarray(y["AZ_SF"]) - np.mean(y["AZ_SF"])),
         "pitch_acceleration_rms_rad_s2": rms(np.gradient(np.asarray(y["PITCH_RATE"]), 1.0 / fs)),
         "roll_acceleration_rms_rad_s2": rms(np.gradient(np.asarray(y["ROLL_RATE"]), 1.0 / fs)),
-        "dynamic_tyre_load_rms_rel": {}, "suspension_travel_rms_m": {}, "stop_contacts": {},
+        "dynamic_tyre_load_rms_rel": tyre_load, "suspension_travel_rms_m": travel, "stop_contacts": stops,
     }
     for i, w in enumerate(WHEELS):
         fz0 = float(static_loads[i])
-        out["dynamic_tyre_load_rms_rel"][w] = rms((np.asarray(y[f"F_Z_{w}"]) - fz0) / fz0)
-        out["suspension_travel_rms_m"][w] = rms(y[f"DEFL_{w}"])
-        out["stop_contacts"][w] = stop_contacts(y[f"DEFL_{w}"], bump_travel[i], rebound_travel[i])
+        tyre_load[w] = rms((np.asarray(y[f"F_Z_{w}"]) - fz0) / fz0)
+        travel[w] = rms(y[f"DEFL_{w}"])
+        stops[w] = stop_contacts(y[f"DEFL_{w}"], bump_travel[i], rebound_travel[i])
     return out
 
 

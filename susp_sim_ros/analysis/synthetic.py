@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.amplitude_friction import FRICTION_AMPLITUDE  # noqa: F401  (registers the hidden term)
+from ..model.paper import IMU_OUTPUTS
 
 GENERATOR = "susp_sim_ros.analysis.synthetic"
 VERSION = "1.0"
@@ -188,7 +189,7 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
     oil = vehicle_state(state)
     dt = hidden.step_s
     res = simulate(model, man.to_inputs(dt), dt=dt, road=man.road, oil=oil,
-                   outputs=["ROLL_RATE", "PITCH_RATE", "YAW_RATE", "AX_SF", "AY_SF", "AZ_SF"])
+                   outputs=list(IMU_OUTPUTS))
     if not res.ok:
         raise RuntimeError(f"synthetic {maneuver}/{state}: the reference simulation diverged")
     # truth at t = 0 (rest) and after every step; the IMU sees it through its bandwidth
@@ -197,7 +198,7 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
     y_sensor = _lowpass(y_true, dt, imu.bandwidth_hz)
     # IMU sample times: 200 Hz with jitter, strictly inside the simulated span
     n_imu = int(math.floor(man.duration * imu.rate_hz))
-    t_imu = np.arange(1, n_imu + 1) / imu.rate_hz + rng.normal(0.0, imu.jitter_s, n_imu)
+    t_imu: np.ndarray = np.arange(1, n_imu + 1) / imu.rate_hz + rng.normal(0.0, imu.jitter_s, n_imu)
     t_imu = np.clip(t_imu, 0.0, t_true[-1])
     t_imu_ns = t0_ns + np.round(t_imu * 1e9).astype(np.int64)
     t_imu_ns = np.maximum.accumulate(t_imu_ns + np.arange(n_imu))  # strictly increasing to the ns

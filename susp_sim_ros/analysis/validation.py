@@ -26,11 +26,11 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..errors import RecordingError, SuspInputError
-from ..model.paper import PRIMARY_SIGNAL
+from ..model.paper import IMU_SIGNALS, PRIMARY_SIGNAL
 
 NS = 1_000_000_000
-RATE_SIGNALS = ("roll_rate", "pitch_rate", "yaw_rate")  # gyro axes x, y, z (REP-103)
-SIGNAL_AXIS = {"roll_rate": 0, "pitch_rate": 1, "yaw_rate": 2}
+RATE_SIGNALS = IMU_SIGNALS[:3]  # gyro axes x, y, z (REP-103)
+SIGNAL_AXIS = {s: i for i, s in enumerate(RATE_SIGNALS)}
 # signal the paper's tables use per maneuver (model-spec 4)
 MANEUVER_SIGNAL = PRIMARY_SIGNAL  # the signal each of the paper's maneuvers is compared on
 MANEUVER_WINDOW = {"bump_crossing": "bump", "sine_steer": "steering"}
@@ -124,7 +124,8 @@ def resample(t_ns: np.ndarray, y: np.ndarray, t_new_ns: np.ndarray) -> np.ndarra
 
 def median_rate(t_ns: np.ndarray) -> float:
     """Median sample rate [Hz] of a time series."""
-    return float(NS / np.median(np.diff(np.asarray(t_ns, dtype=np.int64))))
+    steps_ns: np.ndarray = np.diff(np.asarray(t_ns, dtype=np.int64))
+    return float(NS / np.median(steps_ns))
 
 
 # ---- metrics ----------------------------------------------------------------------------------------------
@@ -307,9 +308,10 @@ def steering_window(t_ns, steering, *, end_ns: int, threshold: float = STEER_THR
                   f"until {ringout_s} s after it last does")
 
 
-def analysis_windows(drive, wheelbase: float = 2.79) -> dict[str, Window]:
+def analysis_windows(drive, wheelbase: float) -> dict[str, Window]:
     """Windows of a test drive (:class:`~susp_sim_ros.io.drive.TestDrive`): ``whole`` (its IMU span) plus
-    ``bump`` and/or ``steering`` where the drive has that excitation."""
+    ``bump`` and/or ``steering`` where the drive has that excitation. ``wheelbase`` [m] of the drive's
+    vehicle: the bump window ends after the rear axle has left the bump."""
     imu = drive.imu
     t0, t1 = int(imu.t_ns[0]), int(imu.t_ns[-1])
     out = {"whole": Window("whole", t0, t1, "the whole measured IMU record")}

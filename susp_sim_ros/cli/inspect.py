@@ -24,12 +24,12 @@ def add_arguments(p) -> None:
 
 def run(args) -> dict:
     from ..analysis.inspection import inspect_drives, load_config
-    from ..analysis.inspection.report import write_report
+    from ..analysis.inspection.report import write_inspection_report
     cfg = load_config()
     res = inspect_drives(args.drives, config=args.config, variant=args.variant, cfg=cfg, topic_map=args.topic_map)
     out = res.to_json()
     if args.out:
-        out["written"] = write_report(res, args.out, cfg, args.drives)
+        out["written"] = write_inspection_report(res, args.out, cfg, args.drives)
     lines = [f"damper inspection of {len(args.drives)} drive(s), {res.elapsed_s_:.1f} s:"]
     for w, e in res.wheels_.items():
         if e["oil_level"] is None:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..analysis.paper_study import STATES, VARIANTS, run_paper_study, write_report
+from ..analysis.paper_comparison import STATES, VARIANTS, run_paper_comparison, write_paper_comparison_report
 
 
 def add_arguments(p) -> None:
@@ -36,8 +36,8 @@ def _rig_plots(vehicle: str, out: Path) -> list[str]:
 def run(args) -> dict:
     from ..progress import progress
     with progress(total=2 * len(STATES) * len(VARIANTS), desc="paper study", unit="run") as bar:
-        study = run_paper_study(args.config, args.step, progress=lambda _: bar.update())
-    result = write_report(study, Path(args.out))
+        study = run_paper_comparison(args.config, args.step, progress=lambda _: bar.update())
+    result = write_paper_comparison_report(study, Path(args.out))
     result["rig_plots"] = _rig_plots(args.config, Path(args.out))
     rows = []
     for m, by_state in study.rmse_vs_full.items():

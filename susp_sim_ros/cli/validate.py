@@ -12,7 +12,7 @@ cover, the simulated recording's ride and road-holding metrics from its IMU and 
 (static tyre loads of its vehicle) and the measured drive's Wk comfort from its IMU (a measured drive has
 no suspension travel or tyre loads).
 
-The second form (see :mod:`susp_sim_ros.analysis.study`) simulates every drive in the folder with all four
+The second form (see :mod:`susp_sim_ros.analysis.validation_study`) simulates every drive in the folder with all four
 friction variants in lockstep and writes tables, overlay plots and a Markdown report. Its JSON holds
 ``{"tables": {MANEUVER: {STATE: {VARIANT: rmse_deg_s}}}, "elapsed_s": ..., ...}`` (interface.md).
 
@@ -25,6 +25,7 @@ import time
 
 from ..analysis import validation as va
 from ..errors import RecordingError, SuspInputError
+from ..model.paper import VARIANTS
 
 
 def add_arguments(p) -> None:
@@ -37,7 +38,7 @@ def add_arguments(p) -> None:
                    help="common resampling rate [Hz] (default: the lower rate of the two recordings)")
     p.add_argument("--study", metavar="DIR", help="run the paper-style study over every *.mcap in DIR")
     p.add_argument("--out", metavar="DIR", help="output directory of the study (report, plots, JSON)")
-    p.add_argument("--variants", default=",".join(("full", "no_horizontal", "no_velocity", "dahl_only")),
+    p.add_argument("--variants", default=",".join(VARIANTS),
                    help="comma-separated friction variants of the study")
     p.add_argument("--no-plots", action="store_true", help="study without PNG plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
@@ -58,13 +59,13 @@ def run(args) -> dict:
 
 
 def _study(args) -> dict:
-    from ..analysis.study import run_study, summary_text
+    from ..analysis.validation_study import run_validation_study, validation_summary_text
     variants = tuple(v.strip() for v in args.variants.split(",") if v.strip())
     if not variants:
         raise SuspInputError("--variants: give at least one friction variant")
-    res = run_study(args.study, args.out, variants=variants, plots=not args.no_plots,
-                    progress=not args.no_progress, topic_map=args.topic_map)
-    res["summary"] = summary_text(res)
+    res = run_validation_study(args.study, args.out, variants=variants, plots=not args.no_plots,
+                               progress=not args.no_progress, topic_map=args.topic_map)
+    res["summary"] = validation_summary_text(res)
     return res
 
 
@@ -93,7 +94,7 @@ def _pair(args) -> dict:
     topic, sim, sim_rec = _simulated_imu(args.simulated, args.simulated_topic, with_recording=True)
     if len(sim) < 2:
         raise RecordingError(f"{args.simulated}: fewer than 2 IMU samples on {topic}")
-    windows = va.analysis_windows(drive)
+    windows = va.analysis_windows(drive, _wheelbase_of(drive))
     try:
         res = va.validate(drive.imu.t_ns, drive.imu.gyro, sim.t_ns, sim.gyro, windows=windows,
                           rate_hz=args.rate, names=(f"{args.measured} {imu_topic}", f"{args.simulated} {topic}"))
@@ -124,6 +125,18 @@ def _pair(args) -> dict:
     lines.append("  " + summary_line(out["ride"]))
     out["summary"] = "\n".join(lines)
     return out
+
+
+def _wheelbase_of(drive) -> float:
+    """Wheelbase [m] of the drive's vehicle (its ``vehicle`` metadata, as the validation study reads it);
+    the reference vehicle's where the drive names none or one without a parameter set here."""
+    from ..errors import ConfigError
+    from ..model.params import load_vehicle
+    name = drive.metadata.get("vehicle") or ""
+    try:
+        return load_vehicle(name).wheelbase if name else load_vehicle().wheelbase
+    except ConfigError:
+        return load_vehicle().wheelbase
 
 
 def _ride(args, drive, sim, sim_rec) -> dict:

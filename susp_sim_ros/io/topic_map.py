@@ -41,7 +41,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 
 import numpy as np
 
@@ -272,18 +272,24 @@ def _msgtype(x: Any, where: str) -> str | None:
     return x
 
 
-def _entry(name: str, raw: Any, where: str) -> MappedInput:
-    kind, _, _, default_field = INPUTS[name]
+def _entry_mapping(raw: Any, where: str, known: Collection[str], shape: str) -> Mapping:
+    """An input's entry as a mapping: a bare topic name stands for ``{topic: NAME}``; only ``known``
+    keys, ``topic`` among them (``shape`` describes the mapping in the error)."""
     if isinstance(raw, str):
         raw = {"topic": raw}
     if not isinstance(raw, Mapping):
-        raise TopicMapError(f"{where}: expected a mapping {{topic: ..., field: ..., unit: ...}} or a topic "
-                            f"name, got {raw!r}")
-    unknown = sorted(str(k) for k in raw if k not in _ENTRY_KEYS)
+        raise TopicMapError(f"{where}: expected a mapping {shape} or a topic name, got {raw!r}")
+    unknown = sorted(str(k) for k in raw if k not in known)
     if unknown:
-        raise TopicMapError(f"{where}: unknown key(s) {', '.join(unknown)} (known: {', '.join(sorted(_ENTRY_KEYS))})")
+        raise TopicMapError(f"{where}: unknown key(s) {', '.join(unknown)} (known: {', '.join(sorted(known))})")
     if "topic" not in raw:
         raise TopicMapError(f"{where}: missing topic")
+    return raw
+
+
+def _entry(name: str, raw: Any, where: str) -> MappedInput:
+    kind, _, _, default_field = INPUTS[name]
+    raw = _entry_mapping(raw, where, _ENTRY_KEYS, "{topic: ..., field: ..., unit: ...}")
     topic = _topic(raw["topic"], where)
     path = parse_field_path(raw.get("field", default_field), where)
     factor, desc = unit_factor(kind, raw.get("unit"), raw.get("scale"), where)
@@ -296,15 +302,7 @@ def _entry(name: str, raw: Any, where: str) -> MappedInput:
 
 
 def _imu(raw: Any, where: str) -> MappedImu:
-    if isinstance(raw, str):
-        raw = {"topic": raw}
-    if not isinstance(raw, Mapping):
-        raise TopicMapError(f"{where}: expected a mapping {{topic: ..., frame: ...}} or a topic name, got {raw!r}")
-    unknown = sorted(str(k) for k in raw if k not in _IMU_KEYS)
-    if unknown:
-        raise TopicMapError(f"{where}: unknown key(s) {', '.join(unknown)} (known: {', '.join(sorted(_IMU_KEYS))})")
-    if "topic" not in raw:
-        raise TopicMapError(f"{where}: missing topic")
+    raw = _entry_mapping(raw, where, _IMU_KEYS, "{topic: ..., frame: ...}")
     rot, frame = parse_frame(raw.get("frame"), where)
     gf, _ = unit_factor("rate", raw.get("gyro_unit"), raw.get("gyro_scale"), where, unit_key="gyro_unit",
                         scale_key="gyro_scale")

@@ -12,7 +12,7 @@ import numpy as np
 import yaml
 
 from ..errors import ConfigError
-from .params import config_dir
+from .params import config_dir, load_vehicle
 from .road import RoadProfile, cosine_bump
 from .vehicle import make_inputs
 from .paper import MANEUVERS, STATES  # noqa: F401  (re-exported: the paper's maneuvers and states)
@@ -80,10 +80,19 @@ class Maneuver:
         return replace(self, steer_amplitude=-self.steer_amplitude, road=self.road.mirrored())
 
 
+def reference_wheelbase() -> float:
+    """Wheelbase [m] of the reference vehicle (``config/vehicles/passat_b8_like.yaml``, its
+    ``cg_to_front_axle + cg_to_rear_axle``): the maneuvers' length when no vehicle is given."""
+    return load_vehicle().wheelbase
+
+
 def bump_crossing(*, speed=None, height=None, length=None, start=None, settle_time=None,
-                  wheelbase: float = 2.79) -> Maneuver:
+                  wheelbase: float | None = None) -> Maneuver:
     """Slow crossing of a single cosine bump on both tracks; lasts until ``settle_time`` after the rear
-    axle has left the bump."""
+    axle has left the bump. ``wheelbase`` [m]: the simulated vehicle's (``model.vehicle.wheelbase``);
+    default :func:`reference_wheelbase`."""
+    if wheelbase is None:
+        wheelbase = reference_wheelbase()
     cfg = _maneuver_config()
     g = lambda k, v: float(v if v is not None else _value(cfg, "bump_crossing", k))
     speed, height, length = g("speed", speed), g("bump_height", height), g("bump_length", length)
@@ -105,7 +114,9 @@ def sine_steer(*, speed=None, amplitude=None, frequency=None, periods=None, lead
     return Maneuver("sine_steer", total, speed, RoadProfile.flat(), amp, freq, lead, periods)
 
 
-def paper_maneuver(name: str, wheelbase: float = 2.79) -> Maneuver:
+def paper_maneuver(name: str, wheelbase: float | None = None) -> Maneuver:
+    """``bump_crossing`` (``bump``) or ``sine_steer`` (``sine``) with the values of
+    ``config/maneuvers.yaml``; ``wheelbase`` [m] as for :func:`bump_crossing`."""
     if name in ("bump", "bump_crossing"):
         return bump_crossing(wheelbase=wheelbase)
     if name in ("sine", "sine_steer"):

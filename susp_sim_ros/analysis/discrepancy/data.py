@@ -21,7 +21,7 @@ from ...errors import RecordingError, SuspInputError
 from ...io.drive import TestDrive
 from ...model.layout import N_U, U_INDEX
 from .. import validation as va
-from ..study import classify_maneuver, classify_state
+from ..validation_study import classify_maneuver, classify_state
 
 NS = va.NS
 SIM_RATE_HZ = 1000.0  # the model's 1 ms step

@@ -9,7 +9,7 @@ batch simulation and :func:`~..discrepancy.fit.fit_structure`: maximum a posteri
 ``least_squares`` over whitened residuals, each drive counted at its effective sample size). The oil
 levels are bounded to [0, 1] with a weak prior that only keeps the information matrix invertible.
 
-What the drives can tell, per axle (:func:`identifiability`): from the posterior covariance of a
+What the drives can tell, per axle (:func:`oil_identifiability`): from the posterior covariance of a
 per-wheel fit's linearisation at half oil. Left and right are told apart when their *difference* is
 pinned to ``per_wheel_max_sd``; a bump across the full width excites both alike (the roll rate stays
 flat), so only their mean is, and the axle is fitted as one value. An axle whose mean is not pinned to
@@ -34,6 +34,7 @@ from ...errors import ConfigError, SuspInputError
 from ...model import Model
 from ...model.layout import P_INDEX
 from ...model.params import CORNER_NAMES, config_dir, load_vehicle
+from ...model.road import RoadProfile
 from ..discrepancy.calibration import calibration_candidate, calibration_params
 from ..discrepancy.candidates import CALIBRATION, CandParam, Candidate
 from ..discrepancy.data import SIGNALS, DriveCase, load_cases, mark_quiet, select_signals
@@ -173,7 +174,9 @@ def evaluator_for(model: Model, cases: Sequence[DriveCase], cfg: dict) -> tuple[
         select_signals(c, want)
         if not c.signals:
             raise SuspInputError(f"{c.path}: none of the signals {want} recorded on /imu/data")
-        noise[c.name] = {s: noise_sigma(c.y_raw[:, SIGNALS.index(s)]) for s in c.signals}
+        y_raw = c.y_raw
+        assert y_raw is not None, "load_cases keeps every measured signal of a drive"
+        noise[c.name] = {s: noise_sigma(y_raw[:, SIGNALS.index(s)]) for s in c.signals}
         bad = [s for s, v in noise[c.name].items() if not (math.isfinite(v) and v > 0)]
         if bad:
             raise SuspInputError(f"{c.path}: /imu/data {bad}: no measurable noise (constant or too few samples)")
@@ -204,8 +207,9 @@ def _tracks_differ(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
     """Whether any drive's road differs between the left and right tracks by more than ``tol_m``."""
     from ...model.layout import U_INDEX
     for c in cases:
-        if c.road is not None and len(c.road) >= 2 and np.max(
-                np.abs(np.asarray(c.road.zl) - np.asarray(c.road.zr))) > tol_m:
+        road = c.road
+        if isinstance(road, RoadProfile) and len(road) >= 2 and np.max(
+                np.abs(np.asarray(road.zl) - np.asarray(road.zr))) > tol_m:
             return True
         zr = c.U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4]
         if np.max(np.abs(zr[:, 0] - zr[:, 1])) > tol_m or np.max(np.abs(zr[:, 2] - zr[:, 3])) > tol_m:
@@ -217,14 +221,16 @@ def _road_excites(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
     """Whether any drive's road (profile or wheel heights) leaves the flat by more than ``tol_m``."""
     from ...model.layout import U_INDEX
     for c in cases:
-        if c.road is not None and len(c.road) >= 2 and np.max(np.abs(np.concatenate([c.road.zl, c.road.zr]))) > tol_m:
+        road = c.road
+        if isinstance(road, RoadProfile) and len(road) >= 2 and np.max(
+                np.abs(np.concatenate([road.zl, road.zr]))) > tol_m:
             return True
         if np.max(np.abs(c.U[:, U_INDEX["ZR_IN"]:U_INDEX["ZR_IN"] + 4])) > tol_m:
             return True
     return False
 
 
-def identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
+def oil_identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
     """Per axle: ``wheel`` (left and right told apart), ``axle`` (only their mean) or ``no``, with the
     posterior sds it was decided on (linearised at half oil, nuisances at their prior centre)."""
     est = cfg["estimator"]
@@ -281,7 +287,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     notes: list = []
     model, ev, noise = prepare(paths, config, variant, cfg, topic_map, notes)
     cal = nuisance_params(model, est["nuisance"], est.get("nuisance_range_scale"))
-    ident = identifiability(ev, cal, cfg)
+    ident = oil_identifiability(ev, cal, cfg)
     groups: list = []
     for axle, (l, r) in AXLE_WHEELS.items():
         kind = ident[axle]["identifiable"]
@@ -297,11 +303,11 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
         fit = fit_structure(ev, st, max_nfev=1)
     cov = fit.covariance()
     if groups and est.get("consider"):
-        cov = cov + consider_covariance(ev, fit, cal, nuisance_params(model, est["consider"]))
+        cov = cov + oil_consider_covariance(ev, fit, cal, nuisance_params(model, est["consider"]))
     se = np.sqrt(np.clip(np.diag(cov), 0, None))
     sd_m = float(est["model_form_sd"])
     x = fit.x
-    oil_off = st.offsets[1] if groups else None
+    oil_off: int = st.offsets[1] if groups else 0     # unused without groups
     by_group = {}
     for g, (name, _wheels) in enumerate(groups):
         j = oil_off + g
@@ -344,7 +350,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     return res
 
 
-def consider_covariance(ev: Evaluator, fit: FitResult, cal, consider) -> np.ndarray:
+def oil_consider_covariance(ev: Evaluator, fit: FitResult, cal, consider) -> np.ndarray:
     """Covariance added to the fitted parameters by the uncertainty of the ``consider`` parameters
     (held at their prior centre, prior sd as in the vehicle file): ``S Sigma_c S^T`` with the
     sensitivity ``S = -H^-1 (w J_a^T J_c)`` of the weighted least-squares estimate to them (Schmidt's

@@ -68,7 +68,7 @@ def plot_intervals(res, path: Path, states_cfg: dict) -> str:
     return name
 
 
-def write_report(res, out: str | Path, cfg: dict, drives) -> dict:
+def write_inspection_report(res, out: str | Path, cfg: dict, drives) -> dict:
     """``inspection.md``, ``inspection.json`` and the PNGs into ``out``; returns the paths written."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -17,7 +17,7 @@ measured by a 200 Hz IMU with white noise, and it stands on the virtual EUSAMA b
 - ``eusama``: 100 - the lowest EUSAMA % of the four wheels;
 - ``phase_shift``: minus the lowest minimum phase angle of the four wheels [deg];
 - ``decay_ratio``: pitch-rate decay ratio after the rear axle has left the bump
-  (:func:`~susp_sim_ros.analysis.sweep.engine.decay_ratio`, on the measured, noisy rate);
+  (:func:`~susp_sim_ros.analysis.sweep.tasks.decay_ratio`, on the measured, noisy rate);
 - ``model_based``: 1 - the lowest oil level of :func:`~.estimate.one_step_estimate` on the bump
   crossing (the estimator is told nothing of the car but its class); ``model_based_<variant>`` for the
   other ``estimator_variants`` (``dahl_only``: the estimator built on the Dahl-only friction model,
@@ -37,6 +37,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ...errors import ConfigError
+from ...model.paper import IMU_OUTPUTS
 
 STATES = ("intact", "one_empty", "one_half", "several")
 METHODS = ("eusama", "phase_shift", "decay_ratio", "model_based")
@@ -132,7 +133,7 @@ def car_draw(roc: Mapping, vp, i: int) -> dict:
         lo, hi = roc["several_oil"]
         for w in rng.choice(4, size=int(rng.integers(2, 5)), replace=False):
             oil[int(w)] = float(rng.uniform(lo, hi))
-    values = {}
+    values: dict[str, float | tuple[float, ...]] = {}   # per parameter: a scalar or per axle
     for f in roc["variation"]:
         pr = vp.priors[f]
         if pr.shape == "axle":
@@ -167,7 +168,7 @@ def bump_drive(model, draw: Mapping, roc: Mapping, dt: float = 0.001):
     vp = model.vehicle
     man = bump_crossing(speed=draw["speed_kmh"] / 3.6, height=draw["bump_height"], wheelbase=vp.wheelbase)
     res = simulate(model, man.to_inputs(dt), dt=dt, road=man.road, oil=draw["oil"],
-                   outputs=["ROLL_RATE", "PITCH_RATE", "YAW_RATE", "AX_SF", "AY_SF", "AZ_SF"])
+                   outputs=list(IMU_OUTPUTS))
     if not res.ok:
         raise RuntimeError(f"car {draw['car']}: the truth simulation diverged")
     rng = np.random.default_rng(draw["noise_seed"])
@@ -231,7 +232,7 @@ def car_statistics(data: Mapping, i: int) -> dict:
     from ...model.params import load_variant, load_vehicle
     from ...model.rigs import eusama_bench, eusama_plate_motion
     from ..discrepancy.data import prepare_case
-    from ..sweep.engine import decay_ratio
+    from ..sweep.tasks import decay_ratio
     from .estimate import evaluator_for, load_config, one_step_estimate
     roc = data["roc"]
     key = ("setup", data["vehicle"], roc["truth_variant"])

@@ -4,7 +4,7 @@
 - :mod:`.spec`: sweep and drives studies: validation, expansion into runs/chunks;
 - :mod:`.runs`: a run's vehicle, model, parameter vector and maneuver (cached per process);
 - :mod:`.ride`: ride studies of semi-active damper controllers;
-- :mod:`.engine`: what one task does (a chunk as one batched simulation, then metrics; one drive);
+- :mod:`.tasks`: what one task does (a chunk as one batched simulation, then metrics; one drive);
 - :mod:`.store`: the resumable result store (one file per finished chunk);
 - :mod:`.runner`: executors (in-process, local Dask cluster, existing scheduler) and the study loop;
 - :mod:`.plot`: the figures.

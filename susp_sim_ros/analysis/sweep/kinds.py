@@ -11,6 +11,7 @@ from typing import Any
 import yaml
 
 from ...errors import ConfigError
+from ...model.paper import VARIANTS
 from ..inspection.roc import roc_spec
 from .ride import ride_study
 from .spec import TOP_KEYS, StudySpec, _drives, _sweep
@@ -28,7 +29,7 @@ def load_study(path: str | Path) -> StudySpec:
     return study_from_dict(data, str(path))
 
 
-def drives_study(folder: str | Path, variants=("full", "no_horizontal", "no_velocity", "dahl_only"),
+def drives_study(folder: str | Path, variants=VARIANTS,
                  name: str = "drives", source: str = "--drives", diagnose: bool = False) -> StudySpec:
     """A batch-validation (and, with ``diagnose``, diagnosis) study over every ``*.mcap`` in ``folder``."""
     return study_from_dict({"name": name, "kind": "drives", "folder": str(folder),

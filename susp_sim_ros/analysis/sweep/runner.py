@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterator, Sequence
 import numpy as np
 
 from ...errors import SuspInputError
-from . import engine
+from . import tasks
 from .spec import StudySpec
 from .store import ResultStore, _parse
 
@@ -47,7 +47,7 @@ class InProcessExecutor:
 
 def _threads_kw(fn, threads: int | None) -> dict:
     """The kernel's thread count for a task that runs the batch kernel (sweeps), nothing for others."""
-    return {"threads": threads} if fn is engine.sweep_task else {}
+    return {"threads": threads} if fn is tasks.sweep_task else {}
 
 
 def _timed(fn, *args, **kw):
@@ -155,23 +155,25 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     store = ResultStore(spec, out, fresh=fresh)
     resumed = sorted(store.done)
     todo = [c for c in spec.chunks if c.id not in store.done]
+    todo_tasks: list[tuple[tuple[int, ...], tuple]]     # (chunk ids, arguments of ``fn``) per task
+    fn: Callable[..., list[dict]]
     if spec.kind == "sweep":
-        tasks = [(tuple(c.id for c in t), (spec.data, spec.hash, [c.runs for c in t]))
-                 for t in plan_tasks(todo, getattr(executor, "threads_total", 1))]
-        fn = engine.sweep_task
+        todo_tasks = [(tuple(c.id for c in t), (spec.data, spec.hash, [c.runs for c in t]))
+                      for t in plan_tasks(todo, getattr(executor, "threads_total", 1))]
+        fn = tasks.sweep_task
     elif spec.kind == "ride":
-        tasks = [((c.id,), (spec.data, c.id, spec.runs[c.id])) for c in todo]
+        todo_tasks = [((c.id,), (spec.data, c.id, spec.runs[c.id])) for c in todo]
         fn = _ride_task
     elif spec.kind == "roc":  # damper-inspection detection study (issue 14): one task per chunk of cars
         from ..inspection.roc import roc_task
-        tasks = [((c.id,), (spec.data, list(c.runs))) for c in todo]
+        todo_tasks = [((c.id,), (spec.data, list(c.runs))) for c in todo]
         fn = roc_task
     else:
-        tasks = [((c.id,), (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
-                 for c in todo]
+        todo_tasks = [((c.id,), (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
+                      for c in todo]
         fn = _drive_task
     t_compute, cpu_compute = time.perf_counter(), time.process_time()
-    done_tasks = executor.map(fn, tasks)        # on a cluster: submitted, on their way while we go on
+    done_tasks = executor.map(fn, todo_tasks)        # on a cluster: submitted, on their way while we go on
     store.begin_session()
     from ...progress import progress as make_progress
     done_runs = sum(len(spec.chunks[c].runs) for c in resumed)
@@ -227,13 +229,13 @@ def plan_tasks(chunks: Sequence, threads: int, max_chunks: int = MAX_CHUNKS_PER_
     thread rather than one per chunk: each task costs a round trip through the scheduler and a batch
     with a partly empty last block of lanes), at most ``max_chunks``."""
     k = max(1, min(max_chunks, -(-len(chunks) // max(1, threads))))
-    tasks: list[list] = []
+    planned: list[list] = []
     for c in chunks:
-        if tasks and len(tasks[-1]) < k and tasks[-1][-1].group == c.group:
-            tasks[-1].append(c)
+        if planned and len(planned[-1]) < k and planned[-1][-1].group == c.group:
+            planned[-1].append(c)
         else:
-            tasks.append([c])
-    return tasks
+            planned.append([c])
+    return planned
 
 
 def _ride_task(data, run_id: int, run) -> list[dict]:
@@ -243,8 +245,8 @@ def _ride_task(data, run_id: int, run) -> list[dict]:
 
 
 def _drive_task(path: str, variants, diagnose: bool) -> list[dict]:
-    """:func:`engine.drive_task` as a task of one chunk."""
-    return [engine.drive_task(path, variants, diagnose)]
+    """:func:`tasks.drive_task` as a task of one chunk."""
+    return [tasks.drive_task(path, variants, diagnose)]
 
 
 def _finish_sweep(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
@@ -306,7 +308,8 @@ DIAG_COLUMNS = ("diag_verdict", "diag_terms", "diag_rmse_before_deg_s", "diag_rm
 
 def _diagnosis_summary(rows) -> dict:
     """Verdict counts and how often each term was found, over the diagnosed drives."""
-    verdicts, terms = {}, {}
+    verdicts: dict[str, int] = {}
+    terms: dict[str, int] = {}
     for r in rows:
         if r.get("error"):
             continue

@@ -1,7 +1,7 @@
 """What one run of a study is: its vehicle, model, parameter vector and maneuver (cached per process).
 
 Pure functions of the normalised study description (``spec.data``) and the run's parameters; the study
-spec (:mod:`.spec`, grouping runs into chunks), the batch engine (:mod:`.engine`) and the ride study
+spec (:mod:`.spec`, grouping runs into chunks), the batch tasks (:mod:`.tasks`) and the ride study
 (:mod:`.ride`) all build runs through here.
 """
 from __future__ import annotations
@@ -21,7 +21,7 @@ _cache: dict = {}
 _lock = threading.RLock()
 
 
-def vehicle_key(data: dict, run: Mapping) -> str:
+def vehicle_key(data: Mapping, run: Mapping) -> str:
     """What identifies the vehicle parameter set of a run (a name/path or a class definition)."""
     if "vehicle_class" in run:
         c = run["vehicle_class"]

@@ -26,7 +26,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ...errors import ConfigError, SuspInputError
-from ...model.paper import MANEUVERS, PRIMARY_OUTPUT
+from ...model.paper import MANEUVERS, PRIMARY_OUTPUT, VARIANTS
 from .runs import MANEUVER_KEYS, maneuver_of, vehicle_key, vehicle_params
 
 ENGINE_VERSION = 2          # bump when a change alters results, so old stores are not resumed into
@@ -188,13 +188,13 @@ def _load(source, where, loader, name):
         raise ConfigError(f"{source}: {where}: {exc}") from None
 
 
-def _outputs(source: str, spec: Any, has_reference: bool) -> list:
+def _outputs(source: str, spec: Any, has_reference: bool) -> list[str | dict[str, str]]:
     from ...model.layout import OUTPUT_LABELS
     spec = list(METRICS[:-1]) + (["rmse_ref"] if has_reference else []) if spec is None else spec
     if not isinstance(spec, list) or not spec:
         raise ConfigError(f"{source}: outputs: expected a non-empty list of metrics ({', '.join(METRICS)}, "
                           f"or {{peak: OUTPUT}} / {{rms: OUTPUT}})")
-    out = []
+    out: list[str | dict[str, str]] = []
     for i, m in enumerate(spec):
         where = f"outputs[{i}]"
         if isinstance(m, str):
@@ -334,7 +334,7 @@ def _drives(data: dict, source: str, name: str) -> StudySpec:
     folder = data.get("folder")
     if not isinstance(folder, str) or not folder:
         raise ConfigError(f"{source}: folder: a drives study needs the folder of recorded drives (*.mcap)")
-    variants = data.get("variants", ["full", "no_horizontal", "no_velocity", "dahl_only"])
+    variants = data.get("variants", list(VARIANTS))
     if not isinstance(variants, list) or not variants:
         raise ConfigError(f"{source}: variants: expected a non-empty list of friction variants")
     for i, v in enumerate(variants):
@@ -353,7 +353,7 @@ def _drives(data: dict, source: str, name: str) -> StudySpec:
     norm = {"name": name, "kind": "drives", "folder": str(p.resolve()), "variants": list(variants),
             "diagnose": diagnose, "files": ident, "results": "csv"}
     spec = StudySpec(source, norm)
-    spec.runs = [{"file": str(p.resolve() / f[0])} for f in ident]
+    spec.runs = [{"file": str(p.resolve() / f.name)} for f in files]
     spec.chunks = [Chunk(i, (i,)) for i in range(len(files))]
     return spec
 
@@ -373,14 +373,15 @@ def _expand(spec: StudySpec) -> None:
     wheelbase_cache: dict = {}
     for i, run in enumerate(spec.runs):
         groups.setdefault(group_key(spec.data, run, wheelbase_cache), []).append(i)
-    size, chunks = spec.data["chunk_size"], []
+    size = spec.data["chunk_size"]
+    chunks: list[Chunk] = []
     for key, ids in groups.items():
         for j in range(0, len(ids), size):
             chunks.append(Chunk(len(chunks), tuple(ids[j:j + size]), key))
     spec.chunks = chunks
 
 
-def group_key(data: dict, run: Mapping, cache: dict) -> tuple:
+def group_key(data: Mapping, run: Mapping, cache: dict) -> tuple:
     """Runs with equal keys run in one batched simulation: same kernel (variant) and step count."""
     vk = vehicle_key(data, run)
     if vk not in cache:
@@ -389,10 +390,9 @@ def group_key(data: dict, run: Mapping, cache: dict) -> tuple:
     return (run.get("variant", "full"), n)
 
 
-def reference_run(data: dict, run: Mapping) -> dict | None:
-    ref = data.get("reference")
-    if ref is None:
-        return None
+def reference_run(ref: Mapping, run: Mapping) -> dict:
+    """The reference of ``run`` under the study's ``reference`` keys ``ref``: the run with those keys set
+    (a reference vehicle replaces a vehicle class and the other way round)."""
     out = dict(run)
     out.update(ref)
     if "vehicle_class" in ref:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
@@ -48,7 +49,9 @@ def _prepare(data: Mapping, runs: Sequence[Mapping]):
     RR. The caches are consulted once per distinct setup, not once per run."""
     models: dict = {}
     setup_of: dict = {}
-    setups, which, oils = [], [], []
+    setups: list[tuple] = []              # (model, base parameter vector, maneuver, wheelbase [m])
+    which: list[int] = []
+    oils: list[tuple[float, float, float, float]] = []
     for run in runs:
         key = (run.get("vehicle_class"), run.get("vehicle"), run.get("variant", "full"), *map(run.get, MANEUVER_KEYS))
         k = setup_of.get(key)
@@ -78,7 +81,10 @@ def batch_inputs(data: Mapping, runs: Sequence[Mapping]) -> list[dict]:
     out = []
     for (_, _, n_req), ks in by_group.items():
         model = setups[ks[0]][0]
-        u_keys, U, r_keys, roads = {}, [], {}, []
+        u_keys: dict[tuple, int] = {}
+        U: list[np.ndarray] = []
+        r_keys: dict[tuple, int] = {}
+        roads: list = []                    # RoadProfile of each distinct road of the group
         local = np.full(len(setups), -1)        # setup id -> row of this group's per-setup tables
         u_of, road_of, t_of = [], [], []
         for j, k in enumerate(ks):
@@ -113,7 +119,9 @@ def simulate_groups(data: Mapping, runs: Sequence[Mapping], threads: int | None 
     from ...model import simulate_batch
     if threads is not None:
         import numba
-        numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
+        # numba sets its config attributes from the environment at import: mypy cannot see them
+        max_threads: int = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
+        numba.set_num_threads(max(1, min(int(threads), max_threads)))
     out = []
     for b in batch_inputs(data, runs):
         res = simulate_batch(*b["args"], **b["kw"])
@@ -321,7 +329,7 @@ def task_batch(data: Mapping, runs: Sequence[Mapping]) -> tuple[list, list]:
         nk = tuple([kv for kv in r.items() if kv[0] not in drop])
         p = ref_of.get(nk)
         if p is None:
-            rr = reference_run(data, r)
+            rr = reference_run(ref, r)
             key = tuple(rr.items())
             p = pos.get(key)
             if p is None:
@@ -386,7 +394,7 @@ def chunk_task(data: Mapping, runs: Sequence[Mapping], refs: Sequence[np.ndarray
     R, ref_row = None, None
     if refs is not None and any(r is not None for r in refs):
         given = [i for i, r in enumerate(refs) if r is not None]
-        R = np.stack([refs[i] for i in given])
+        R = np.stack([r for r in refs if r is not None])       # in the order of ``given``
         ref_row = np.full(len(runs), -1)
         ref_row[given] = np.arange(len(given))
     ok, metrics = _metrics(data, groups, len(runs), R, ref_row)
@@ -405,8 +413,10 @@ def _metrics(data: Mapping, groups: list, n: int, R: np.ndarray | None,
 
     def refs_of(idx):
         """``(R, rows)`` for the runs ``idx``, or ``(None, None)`` if one of them has no reference."""
-        rows = ref_row[idx] if want_ref else None
-        return (R, rows) if want_ref and (rows >= 0).all() else (None, None)
+        if not want_ref or ref_row is None:
+            return None, None
+        rows = ref_row[idx]
+        return (R, rows) if (rows >= 0).all() else (None, None)
 
     if len(groups) == 1 and ok.all():           # the usual task: one batch, every run finished
         idx, Y, _, ta, dt_out = groups[0]
@@ -432,8 +442,8 @@ def drive_task(path: str, variants: Sequence[str], diagnose: bool = False) -> di
     against the first variant. A drive that fails gives a row with ``error`` instead of raising."""
     from ...errors import SuspInputError
     from ...io.drive import read_drive
-    from ..study import simulate_and_validate
-    row = {"file": path}
+    from ..validation_study import simulate_and_validate
+    row: dict[str, Any] = {"file": path}
     try:
         drive = read_drive(path)
         models = _cache.setdefault(("drive_models",), {})

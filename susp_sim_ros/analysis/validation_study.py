@@ -28,16 +28,18 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import RecordingError, SuspInputError
 from ..model.maneuvers import vehicle_state
-from ..model.paper import MANEUVERS, STATES, VARIANTS
+from ..model.paper import MANEUVERS, STATES, VARIANT_LABEL, VARIANTS
 from . import validation as va
 
-VARIANT_LABEL = {"full": "Model 1 full", "no_horizontal": "Model 2 no horizontal",
-                 "no_velocity": "Model 3 no velocity", "dahl_only": "Model 4 Dahl only"}
+if TYPE_CHECKING:
+    from ..io.drive import TestDrive
+
 PAPER_RATIO = 65.0  # paper: rear dampers oil-empty, bump crossing, RMSE dahl_only / full
 # measured with the generator (bags/README.md, "How much each ingredient costs"); valid for its version
 ABLATION_NOTE = ("For this generator version, the same chain without any hidden physics gives a ratio of about "
@@ -81,9 +83,9 @@ class DriveResult:
     source: str
     signal: str
     window: str
+    drive: TestDrive = field(repr=False)
     results: dict[str, va.ValidationResult] = field(default_factory=dict)
     sims: dict = field(default_factory=dict, repr=False)
-    drive: object = field(default=None, repr=False)
     plot: str | None = None
     ride: dict = field(default_factory=dict)  # {"measured": {...}, "simulated": {variant: {...}}}
 
@@ -109,7 +111,7 @@ def _find_drives(folder: Path) -> list[Path]:
     return drives
 
 
-def simulate_and_validate(path: Path, drive, variants: Sequence[str], models: dict, progress=None) -> DriveResult:
+def simulate_and_validate(path: str | Path, drive, variants: Sequence[str], models: dict, progress=None) -> DriveResult:
     """Lockstep-simulate one drive with every variant and validate each against its measured IMU."""
     from ..lockstep import run_lockstep
 
@@ -118,10 +120,10 @@ def simulate_and_validate(path: Path, drive, variants: Sequence[str], models: di
     meta = drive.metadata
     maneuver = classify_maneuver(meta.get("maneuver", ""))
     vehicle = meta.get("vehicle") or "passat_b8_like"
-    signal = va.MANEUVER_SIGNAL.get(maneuver, "pitch_rate")
+    signal = va.MANEUVER_SIGNAL.get(maneuver or "", "pitch_rate")
     wheelbase = _model(models, vehicle, variants[0]).vehicle.wheelbase
     windows = va.analysis_windows(drive, wheelbase)
-    window = va.MANEUVER_WINDOW.get(maneuver, "whole")
+    window = va.MANEUVER_WINDOW.get(maneuver or "", "whole")
     if window not in windows:
         window = "whole"
     state = classify_state(drive.oil_levels()) if drive.oil_known else "unknown (simulated intact)"
@@ -198,6 +200,7 @@ def plot_drive(d: DriveResult, path: Path) -> None:
 
     ax_i = va.SIGNAL_AXIS[d.signal]
     imu = d.drive.imu
+    assert imu is not None, "simulate_and_validate keeps only drives with a measured IMU"
     t0 = int(imu.t_ns[0])
     fig, (ax, ax_e) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, height_ratios=[2, 1])
     ax.plot((imu.t_ns - t0) * 1e-9, np.degrees(imu.gyro[:, ax_i]), color="0.55", lw=0.8,
@@ -245,7 +248,7 @@ def findings(tab: dict, variants: Sequence[str] = VARIANTS) -> dict:
     return out
 
 
-def write_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: dict, elapsed_s: float,
+def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: dict, elapsed_s: float,
                  variants: Sequence[str] = VARIANTS) -> None:
     lines = ["# Validation study: friction variants against recorded test drives", "",
              f"{len(drives)} drives, {len(variants)} friction variants each, simulated in lockstep "
@@ -282,7 +285,7 @@ def write_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: di
             continue
         row = tab[m]["intact"]
         peaks = [float(np.max(np.abs(np.degrees(d.drive.imu.gyro[:, va.SIGNAL_AXIS[d.signal]]))))
-                 for d in drives if d.maneuver == m and d.state == "intact"]
+                 for d in drives if d.maneuver == m and d.state == "intact" and d.drive.imu is not None]
         spread = max(row.values()) - min(row.values())
         rel = spread / max(peaks) if peaks and max(peaks) > 0 else math.inf
         lines.append(f"- Intact car, {m}: the variants' RMSE differ by at most {spread:.3f} deg/s, "
@@ -348,8 +351,8 @@ def write_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: di
 
 
 # ---- the study -----------------------------------------------------------------------------------------
-def run_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: bool = True,
-              progress: bool = True, topic_map=None) -> dict:
+def run_validation_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: bool = True,
+                         progress: bool = True, topic_map=None) -> dict:
     """Run the study over ``folder``; write plots, ``report.md`` and ``study.json`` into ``out_dir``.
     ``topic_map`` (see :mod:`susp_sim_ros.io.topic_map`) is applied to every drive.
 
@@ -385,7 +388,7 @@ def run_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS, plots: boo
     found = findings(tab, variants)
     elapsed = time.perf_counter() - t_start
     report = out / "report.md"
-    write_report(report, results, tab, found, elapsed, variants)
+    write_validation_report(report, results, tab, found, elapsed, variants)
     result = {"tables": tab, "elapsed_s": elapsed, "unit": "deg/s",
               "signals": {m: va.MANEUVER_SIGNAL[m] for m in MANEUVERS},
               "windows": {m: va.MANEUVER_WINDOW[m] for m in MANEUVERS},
@@ -403,7 +406,7 @@ def _jsonable(x):
     return str(x)
 
 
-def summary_text(result: dict) -> str:
+def validation_summary_text(result: dict) -> str:
     """Human summary: the tables and the headline findings."""
     lines = []
     for m, by_s in result["tables"].items():

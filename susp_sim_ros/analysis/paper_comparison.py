@@ -1,4 +1,4 @@
-"""The paper's simulation study on the model alone: its two maneuvers x three vehicle states x four
+"""The paper comparison (``susp paper``) on the model alone: its two maneuvers x three vehicle states x four
 friction variants (paper Table 5), with each variant's RMSE against the ``full`` model (deg/s; the
 paper reports deg/s), overlay plots and a Markdown report.
 
@@ -14,28 +14,31 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Model, simulate
-from ..model.maneuvers import bump_crossing, sine_steer, vehicle_state
-from ..model.paper import PRIMARY_OUTPUT, STATES, VARIANTS
+from ..model.maneuvers import paper_maneuver, vehicle_state
+from ..model.paper import MANEUVERS, PRIMARY_OUTPUT, STATES, VARIANTS
 
 RING_OUT_THRESHOLD_DEG_S = 0.3  # model-spec 5 measures the bump ring-out against 0.3 deg/s
 
 
 @dataclass
-class PaperStudy:
+class PaperComparison:
     """Results: ``traces[maneuver][state][variant]`` = (t [s], signal [deg/s])."""
 
-    traces: dict
-    rmse_vs_full: dict
-    ring_out_s: dict
+    traces: dict[str, dict[str, dict[str, tuple[np.ndarray, np.ndarray]]]]
+    rmse_vs_full: dict[str, dict[str, dict[str, float]]]   # [maneuver][state][variant], deg/s
+    ring_out_s: dict[str, dict[str, dict[str, float]]]     # bump crossing only, s
     elapsed_s: float
 
 
-def run_paper_study(vehicle: str = "passat_b8_like", dt: float = 0.001, progress=None) -> PaperStudy:
+def run_paper_comparison(vehicle: str = "passat_b8_like", dt: float = 0.001,
+                         progress=None) -> PaperComparison:
     t_start = time.perf_counter()
     models = {v: Model(vehicle, v) for v in VARIANTS}
     wb = models["full"].vehicle.wheelbase
-    maneuvers = {"bump_crossing": bump_crossing(wheelbase=wb), "sine_steer": sine_steer()}
-    traces, rmse, ring = {}, {}, {}
+    maneuvers = {m: paper_maneuver(m, wb) for m in MANEUVERS}
+    traces: dict[str, dict[str, dict[str, tuple[np.ndarray, np.ndarray]]]] = {}
+    rmse: dict[str, dict[str, dict[str, float]]] = {}
+    ring: dict[str, dict[str, dict[str, float]]] = {}
     for mname, man in maneuvers.items():
         U = man.to_inputs(dt)
         traces[mname], rmse[mname], ring[mname] = {}, {}, {}
@@ -57,10 +60,10 @@ def run_paper_study(vehicle: str = "passat_b8_like", dt: float = 0.001, progress
             ref = traces[mname][state]["full"][1]
             for var in VARIANTS:
                 rmse[mname][state][var] = float(np.sqrt(np.mean((traces[mname][state][var][1] - ref) ** 2)))
-    return PaperStudy(traces, rmse, ring, time.perf_counter() - t_start)
+    return PaperComparison(traces, rmse, ring, time.perf_counter() - t_start)
 
 
-def write_report(study: PaperStudy, out: Path) -> dict:
+def write_paper_comparison_report(study: PaperComparison, out: Path) -> dict:
     """Write ``paper_study.md``, ``paper_study.json`` and one overlay PNG per maneuver into ``out``."""
     import matplotlib
     matplotlib.use("Agg")
@@ -87,11 +90,11 @@ def write_report(study: PaperStudy, out: Path) -> dict:
     lines = ["# The paper's maneuvers on the model: friction variants compared", "",
              "RMSE of each variant against the `full` model, in deg/s (degrees for people; the model "
              "works in rad/s). Bump crossing: pitch rate; sine steer: roll rate.", ""]
-    for mname, by_state in study.rmse_vs_full.items():
+    for mname, rmse_by_state in study.rmse_vs_full.items():
         lines += [f"## {mname}", "", "| state | " + " | ".join(VARIANTS) + " |",
                   "|---|" + "---|" * len(VARIANTS)]
         for state in STATES:
-            lines.append(f"| {state} | " + " | ".join(f"{by_state[state][v]:.3f}" for v in VARIANTS) + " |")
+            lines.append(f"| {state} | " + " | ".join(f"{rmse_by_state[state][v]:.3f}" for v in VARIANTS) + " |")
         lines.append("")
     lines += ["## Bump ring-out", "",
               f"Time the pitch rate stays above {RING_OUT_THRESHOLD_DEG_S} deg/s after the rear axle has "

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from susp_sim_ros.analysis import study, validation as va
+from susp_sim_ros.analysis import validation as va, validation_study
 from susp_sim_ros.cli.main import main
 
 BAGS = Path(__file__).resolve().parents[1] / "bags"
@@ -16,7 +16,7 @@ VARIANTS = ["full", "no_horizontal", "no_velocity", "dahl_only"]
 @pytest.fixture(scope="module")
 def study_result(tmp_path_factory):
     out = tmp_path_factory.mktemp("study")
-    return study.run_study(BAGS, out, progress=False), out
+    return validation_study.run_validation_study(BAGS, out, progress=False), out
 
 
 def test_study_tables_have_the_interface_shape(study_result):
@@ -54,7 +54,7 @@ def test_study_writes_report_plots_and_json_fast(study_result):
 
 def test_study_is_exactly_reproducible(study_result, tmp_path):
     res, _ = study_result
-    again = study.run_study(BAGS, tmp_path, progress=False, plots=False)
+    again = validation_study.run_validation_study(BAGS, tmp_path, progress=False, plots=False)
     assert again["tables"] == res["tables"]  # bit for bit
 
 
