@@ -10,8 +10,8 @@ Parameters per corner (``p[po + 4*j + i]``): 0 ``extra_level`` [N], 1 ``onset`` 
 3 ``band`` [m], 4 ``sigma`` [N/m], 5 ``horizontal`` [1], 6 ``memory`` [s]. States per corner
 (``s[so + 4*k + i]``): 0 Dahl force [N], 1 deflection [m] (sum of the increments from static
 equilibrium), 2 deflection at the last reversal [m], 3 extreme deflection of the current stroke [m],
-4 stroke direction (+1, -1, 0 before the first move), 5 amplitude of the last completed stroke [m] (with ``memory`` > 0: the decaying peak
-deflection).
+4 stroke direction (+1, -1, 0 before the first move), 5 amplitude of the last completed stroke [m]
+(with ``memory`` > 0: the decaying peak deflection).
 """
 from __future__ import annotations
 
