@@ -436,13 +436,13 @@ class DiscrepancyFinder:
         :data:`WEIGHT_TOLERANCE` of the best held-out residual wins. Weight 1 trusts the data as their
         noise says; a smaller weight means the calibration followed structure the model lacks (a missing
         friction term absorbed by mass, stiffness or damper factors), which then stays in the residual
-        for the discovery stage. Intervals widen with it (the data count less)."""
+        for the discovery stage. Intervals widen with it (the data count less). Calibration values only
+        the held-out drive informs keep their joint value in its fold (:func:`_informed_only_by`)."""
         J, r, x = fit.jac, fit.residual, fit.x
         st = fit.structure
         pidx, pmu, psd = st.prior()
         lo, hi = st.bounds()
         edges = np.cumsum([0] + [self.evaluator_.n_res[q] for q in fit.idx])
-        free = list(range(len(x)))
         scores = {}
         for w in DATA_WEIGHTS:
             sq = 0.0
@@ -452,11 +452,14 @@ class DiscrepancyFinder:
                 tr = ~held
                 ne_t = max(fit.n_eff * tr.sum() / len(r), 1.0)
                 pw = math.sqrt(tr.sum() / ne_t / w)
-                A, b = J[tr], -r[tr]
+                fixed = set(_informed_only_by(fit, held, pw))
+                free = [j for j in range(len(x)) if j not in fixed]
+                A, b = J[tr][:, free], -r[tr]
                 pr = prior_rows(free, x, pidx, pmu, psd, pw)
                 if pr is not None:
                     A, b = np.vstack([A, pr[0]]), np.concatenate([b, pr[1]])
-                d, *_ = np.linalg.lstsq(A, b, rcond=None)
+                d = np.zeros(len(x))
+                d[free], *_ = np.linalg.lstsq(A, b, rcond=None)
                 d = np.clip(x + d, lo, hi) - x
                 e = r[held] + J[held] @ d
                 sq += float(e @ e)
@@ -669,17 +672,18 @@ def _warm(st: Structure, cur: FitResult, o) -> np.ndarray:
     return np.clip(x, lo, hi)
 
 
-def _informed_only_by(fit: FitResult, held: np.ndarray) -> list[int]:
+def _informed_only_by(fit: FitResult, held: np.ndarray, pw: float | None = None) -> list[int]:
     """Calibration parameters (with a prior) that the rows outside ``held`` inform less than their prior
     does (the oil-empty damper of the only drive with an empty damper). A leave-one-drive-out refit keeps
     them at the joint fit's value: no other drive can predict them, and reverting them to the prior would
-    judge the prior, not the model."""
+    judge the prior, not the model. ``pw``: the prior rows' weight (default: the structure's)."""
     if fit.jac is None or not len(fit.x):
         return []
     tr = ~held
     pidx, _, psd = fit.structure.prior()
-    ne_t = max(fit.n_eff * tr.sum() / len(held), 1.0)
-    pw = math.sqrt(tr.sum() / ne_t) * fit.structure.prior_gain
+    if pw is None:
+        ne_t = max(fit.n_eff * tr.sum() / len(held), 1.0)
+        pw = math.sqrt(tr.sum() / ne_t) * fit.structure.prior_gain
     info = np.einsum("ij,ij->j", fit.jac[tr], fit.jac[tr])
     return [int(j) for j, sd in zip(pidx, psd) if info[j] < (pw / sd) ** 2]
 
