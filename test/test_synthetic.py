@@ -7,6 +7,8 @@ import pytest
 from susp_sim_ros.analysis import synthetic as syn
 from susp_sim_ros.analysis import validation as va
 from susp_sim_ros.model import Model, get_term, load_vehicle
+from susp_sim_ros.model import amplitude_friction as af
+from susp_sim_ros.model.layout import C_INDEX, N_CTX
 from susp_sim_ros.model.rigs import half_hysteresis_at_zero, triangle
 
 BAGS = Path(__file__).resolve().parents[1] / "bags"
@@ -31,8 +33,13 @@ def synthetic_model():
 
 def test_term_is_registered_through_the_term_interface():
     t = get_term("friction_amplitude")
-    assert t is syn.FRICTION_AMPLITUDE and t.component == "axle"
-    assert [p.name for p in t.params] == ["extra_level", "onset", "scale", "band", "sigma"]
+    assert t is syn.FRICTION_AMPLITUDE is af.FRICTION_AMPLITUDE and t.component == "axle"
+    assert [p.name for p in t.params] == ["extra_level", "onset", "scale", "band", "sigma", "horizontal", "memory"]
+    # the bundled generator uses the stroke-amplitude form without horizontal scaling (bags unchanged)
+    setting = next(s for s in syn.synthetic_variant().terms if s.term.name == "friction_amplitude")
+    assert not {"memory", "horizontal"} & set(setting.values)
+    assert {p.name: p.default for p in t.params if p.name in ("memory", "horizontal")} == {"memory": 0.0,
+                                                                                          "horizontal": 0.0}
 
 
 @pytest.mark.parametrize("corner, amplitude, expected, tol", [
@@ -50,7 +57,7 @@ def test_default_model_has_no_amplitude_dependence():
 
 
 def test_level_function():
-    f = syn.friction_amplitude_level
+    f = af.friction_amplitude_level
     assert f(24.0, 0.005, 0.008, 0.004) == 0.0
     np.testing.assert_allclose(f(24.0, 0.005, 0.008, 1.0), 24.0)
     np.testing.assert_allclose(f(24.0, 0.005, 0.008, 0.013), 24.0 * (1 - np.exp(-1)))
@@ -109,3 +116,41 @@ def test_amplitude_friction_is_clearly_present_in_the_rear_empty_bump_drive():
     # what the hidden term alone adds (errors add in quadrature) is far above the gyro noise
     assert np.sqrt(with_term ** 2 - without ** 2) > 4 * syn.ImuSpec.reference().gyro_noise_deg_s
     assert without < 0.6 * with_term
+
+
+def _amplitude_term_run(d, *, memory=0.0, horizontal=0.0, sh=1.0, dt=1e-3, extra=20.0):
+    """Drive corner 0 of the amplitude-friction term through deflections ``d`` [m]; its Dahl force [N] and
+    remembered amplitude [m] per step."""
+    p = np.zeros(4 * 7)
+    p[0:4], p[4:8], p[8:12], p[12:16], p[16:20] = extra, 0.0, 0.005, 0.001, 1e5
+    p[20:24], p[24:28] = horizontal, memory
+    s = np.zeros(4 * 7)
+    c = np.zeros((4, N_CTX))
+    c[:, C_INDEX["DT"]] = dt
+    c[:, C_INDEX["SH"]] = sh
+    force, amp = [], []
+    prev = 0.0
+    for x in d:
+        af.friction_amplitude_update(p, 0, s, 0, 0, c, x - prev)
+        prev = x
+        force.append(s[0])
+        amp.append(s[24] if memory > 0.0 else s[20])
+    return np.array(force), np.array(amp)
+
+
+def test_amplitude_memory_forgets_the_peak_deflection_with_its_time_constant():
+    tau, dt = 0.5, 1e-3
+    d = np.concatenate([np.linspace(0.0, 0.02, 200), np.full(1000, 0.0)])
+    _, amp = _amplitude_term_run(d, memory=tau, dt=dt)
+    assert amp[199] == pytest.approx(0.02, rel=1e-9)
+    # back at the static position the remembered peak decays as exp(-t / tau)
+    np.testing.assert_allclose(amp[200 + 499], 0.02 * np.exp(-500 * dt / tau), rtol=1e-6)
+
+
+def test_amplitude_level_follows_the_axle_horizontal_scaling_when_asked():
+    d = np.linspace(0.0, 0.05, 2000)  # one long stroke: the Dahl element saturates at its level
+    plain, _ = _amplitude_term_run(d, memory=1.0, horizontal=0.0, sh=1.8)
+    scaled, _ = _amplitude_term_run(d, memory=1.0, horizontal=1.0, sh=1.8)
+    level = 20.0 * (1.0 - np.exp(-0.05 / 0.005))
+    assert plain[-1] == pytest.approx(level, rel=1e-3)
+    assert scaled[-1] == pytest.approx(1.8 * level, rel=1e-3)

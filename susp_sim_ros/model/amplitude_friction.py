@@ -10,8 +10,8 @@ Parameters per corner (``p[po + 4*j + i]``): 0 ``extra_level`` [N], 1 ``onset`` 
 3 ``band`` [m], 4 ``sigma`` [N/m], 5 ``horizontal`` [1], 6 ``memory`` [s]. States per corner
 (``s[so + 4*k + i]``): 0 Dahl force [N], 1 deflection [m] (sum of the increments from static
 equilibrium), 2 deflection at the last reversal [m], 3 extreme deflection of the current stroke [m],
-4 stroke direction (+1, -1, 0 before the first move), 5 amplitude of the last completed stroke [m]
-(with ``memory`` > 0: the decaying peak deflection).
+4 stroke direction (+1, -1, 0 before the first move), 5 amplitude of the last completed stroke [m],
+6 remembered peak deflection from the static position [m] (used with ``memory`` > 0).
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from numba import njit
 from .layout import C_INDEX
 from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 
-_F, _DEF, _REV, _EXT, _DIR, _ALAST = 0, 4, 8, 12, 16, 20
+_F, _DEF, _REV, _EXT, _DIR, _ALAST, _PEAK = 0, 4, 8, 12, 16, 20, 24
 _C_SH, _C_DT = C_INDEX["SH"], C_INDEX["DT"]
 
 
@@ -69,10 +69,10 @@ def friction_amplitude_update(p, po, s, so, i, c, dx):
         s[so + _DIR + i] = -direction
     memory = p[po + 24 + i]
     if memory > 0.0:  # peak deflection from the static position, forgotten with time constant ``memory``
-        amp = s[so + _ALAST + i] * math.exp(-c[i, _C_DT] / memory)
+        amp = s[so + _PEAK + i] * math.exp(-c[i, _C_DT] / memory)
         if abs(d) > amp:
             amp = abs(d)
-        s[so + _ALAST + i] = amp
+        s[so + _PEAK + i] = amp
     else:
         amp = 0.5 * abs(s[so + _EXT + i] - s[so + _REV + i])
         if s[so + _ALAST + i] > amp:
@@ -102,5 +102,5 @@ FRICTION_AMPLITUDE = register_term(PhysicsTerm(
                       "scaling s_h, 0: not", 0.0, 0.0, 1.0),
             TermParam("memory", "s", "0: the amplitude is that of the current or last stroke; > 0: the peak "
                       "deflection from the static position, forgotten with this time constant", 0.0, 0.0)),
-    n_states=6, force=friction_amplitude_force, update=friction_amplitude_update,
+    n_states=7, force=friction_amplitude_force, update=friction_amplitude_update,
     stored_energy=_amplitude_energy))
