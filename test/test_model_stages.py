@@ -118,3 +118,16 @@ def test_units_follow_the_named_indices():
     assert [L.output_unit(x) for x in ("PITCH_RATE", "AZ_SF", "DEFL_RL", "F_DAMPER_FR")] == [
         "rad/s", "m/s^2", "m", "N"]
     assert set(L.OUTPUT_UNITS) == {s.name for s in L.Y_SLOTS}
+
+
+def test_term_parameters_append_slots_with_their_units():
+    """With a variant's terms, P is the fixed slots followed by one slot per term parameter."""
+    from susp_sim_ros.model.extra_terms import EXTRA_VISCOUS_DAMPING
+    from susp_sim_ros.model.terms import BUILTIN_TERMS
+    terms = BUILTIN_TERMS + (EXTRA_VISCOUS_DAMPING,)
+    slots = L.P_SLOTS + L.term_param_slots(terms)
+    assert all(a.index + a.size == b.index for a, b in zip(slots, slots[1:]))
+    assert slots[-1].index + slots[-1].size == L.KernelLayout.for_terms(terms).n_p
+    assert [(s.name, s.unit) for s in slots[-5:]] == [
+        ("axle_friction.level", "N"), ("axle_friction.sigma", "N/m"), ("damper_friction.level", "N"),
+        ("damper_friction.sigma", "N/m"), ("extra_viscous_damping.c", "N s/m")]

@@ -180,3 +180,12 @@ class KernelLayout:
             p += len(term.params) * N_CORNER
             s += term.n_states * N_CORNER
         return cls(tuple(po), tuple(so), p, s)
+
+
+def term_param_slots(terms) -> tuple[Slot, ...]:
+    """The slots of the term blocks that :class:`KernelLayout` appends to ``P`` after the fixed ones
+    (:data:`P_SLOTS`): one per term parameter, named ``term.param``, four entries (FL, FR, RL, RR) in the
+    unit the term declares (:class:`~.terms.TermParam`). The terms' states declare no units yet."""
+    layout = KernelLayout.for_terms(terms)
+    return tuple(Slot(f"{t.name}.{p.name}", off + N_CORNER * j, N_CORNER, p.unit)
+                 for t, off in zip(terms, layout.param_offsets) for j, p in enumerate(t.params))
