@@ -394,11 +394,11 @@ def body_accelerations(P, DV, S, W, nl):
                          + (P[_X_I + 2, l] * fs2 + P[_X_I + 3, l] * fs3))
         phidd = (roll_moment + ms * (P[_H_CG, l] - P[_H_RC, l]) * (ay + g * phi)) * DV[_D_INV_IXX, l]
         thdd = (pitch_moment + ms * (P[_H_CG, l] - P[_H_PC, l]) * (g * th - ax)) * DV[_D_INV_IYY, l]
-        # planar: lateral and yaw
         W[_W_ZDD, l] = zdd
         W[_W_AY, l] = ay
         W[_W_PHIDD, l] = phidd
         W[_W_THDD, l] = thdd
+        # planar: lateral and yaw
         W[_W_VYD, l] = ay - v * r
         W[_W_RD, l] = (P[_A, l] * (fy0 + fy1) - P[_B, l] * (fy2 + fy3)) * DV[_D_INV_IZZ, l]
     # wheels: tyre force (from static) against the suspension force
