@@ -14,6 +14,11 @@ vehicles held as columns (structure of arrays), so every loop over the vehicles 
 SIMD instructions: :func:`run_one` runs one vehicle as a block of one (the node calls it every publish
 period with the few steps due; offline runs call it once for a whole drive) and :func:`run_batch` runs
 blocks in parallel with ``prange``. A vehicle's numbers do not depend on its block or lane.
+
+:func:`step` is a sequence of named stages, each inlined into it: :func:`road_under_wheels`,
+:func:`corner_kinematics`, :func:`suspension_forces`, :func:`body_accelerations` (the pure right-hand
+side, which :mod:`.linear` linearises), :func:`integrate`, :func:`update_term_states`,
+:func:`state_is_finite`, :func:`corner_outputs` and :func:`imu_outputs`.
 """
 import math
 
@@ -81,7 +86,9 @@ SEMI_ACTIVE_CODE = True
 _W_ZR, _W_ZRD, _W_SLOPE, _W_D, _W_DD, _W_FZ, _W_WF, _W_FX, _W_FS = 0, 4, 8, 12, 16, 20, 24, 28, 32
 _W_V, _W_AX, _W_DELTA, _W_ZDD, _W_AY, _W_OK = 36, 37, 38, 39, 40, 41
 _W_CMD = 42  # 4: the valve command of the step per corner, limited to [0, 1]
-N_SCRATCH = 46
+# accelerations of the step (:func:`body_accelerations`): roll, pitch, lateral velocity, yaw, then per wheel
+_W_PHIDD, _W_THDD, _W_VYD, _W_RD, _W_ZWDD = 46, 47, 48, 49, 50
+N_SCRATCH = 54
 
 # reciprocals of constant parameters, computed once per run (:func:`derive`): the step then
 # multiplies instead of dividing, and a parameter changed between runs is always seen
@@ -251,21 +258,18 @@ def fill_context(p, dv, i, c, d, dd, fx, fy, fz, v):
     c[i, _C_SH] = sh if p[_USE_H] > 0.5 else 1.0
 
 
+# ---- the stages of one step ----------------------------------------------------------------------------
+# Each stage works on the ``nl`` lanes of a block (column ``l`` of every array is one vehicle) and is
+# inlined into :func:`step`, so the compiled step is one function whose loops over lanes vectorise. Every
+# arithmetic expression is written in the order the kernel has always evaluated it (the results are the
+# same bit for bit as the single-function step they replaced).
 @njit(cache=True, inline="always")
-def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, out):
-    """Advance the ``nl`` vehicles of a block by one step ``dt`` [s] with the inputs of row ``k`` of
-    ``U[urow[l]]`` (layout.U_INDEX); writes outputs ``Y`` when ``out`` (skipped on steps whose outputs
-    nobody reads).
-
-    Vehicles are lanes: column ``l`` of ``P`` (parameters), ``DV`` (their reciprocals, :func:`derive`),
-    ``S`` (state, updated in place), ``C`` (corner context, 4 x N_CTX per lane, constant part set by
-    :func:`fill_context_const`), ``W`` (scratch) and ``Y`` (outputs). Every loop over lanes does the same
-    arithmetic for each vehicle, so the compiler runs it on several vehicles per SIMD instruction; a
-    single vehicle is a block of one. Road: tracks ``RS``/``RZL``/``RZR`` row ``rrow[l]`` with ``RN``
-    valid samples (``mode`` 0), or per-wheel road heights from the inputs (``mode`` 1). ``W[_W_OK, l]``
-    becomes 0 when lane ``l``'s state stopped being finite.
-    """
-    # -- inputs and the road under each wheel (binary search: per vehicle) --------------------------
+def road_under_wheels(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, W, nl):
+    """Inputs of step row ``k`` (speed, longitudinal acceleration, road-wheel steer angle, the valve
+    command limited to [0, 1]) and the road under each wheel: height [m], its rate [m/s] and slope [-]
+    from the tracks (``mode`` 0, binary search: per vehicle) or the per-wheel heights of the inputs
+    (``mode`` 1). Writes scratch rows ``_W_V``, ``_W_AX``, ``_W_DELTA``, ``_W_ZR``, ``_W_ZRD``,
+    ``_W_SLOPE``, ``_W_CMD``."""
     for l in range(nl):
         u = urow[l]
         v = U[u, k, _U_V]
@@ -291,7 +295,13 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
             if SEMI_ACTIVE_CODE:
                 W[_W_CMD + i, l] = min(max(U[u, k, _U_CMD + i], 0.0), 1.0)
 
-    # -- corner kinematics, tyre loads and horizontal wheel forces ----------------------------------
+
+@njit(cache=True, inline="always")
+def corner_kinematics(P, DV, S, W, nl):
+    """Suspension deflection [m] and its rate [m/s] per corner (positive in bump), the tyre's vertical
+    load [N] (spring and damper on the road, lateral load transfer through the axle's roll centre,
+    lift-off), the net vertical tyre force on the wheel from static [N] and the horizontal wheel force
+    [N] (drive/brake share, bump reaction). Writes ``_W_D``, ``_W_DD``, ``_W_FZ``, ``_W_WF``, ``_W_FX``."""
     for i in range(4):
         for l in range(nl):
             z = S[_Z, l]
@@ -316,7 +326,14 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
             fx_drive = P[_M_TOT, l] * ax * (share_f if i < 2 else 1.0 - share_f) * 0.5
             W[_W_FX + i, l] = fx_drive - fz * W[_W_SLOPE + i, l]  # bump reaction while climbing/leaving
 
-    # -- suspension forces ---------------------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def suspension_forces(P, DV, S, C, W, Y, nl, out):
+    """Force of each suspension on the body [N], positive up: wheel-rate spring and stops, hydraulic
+    damper (passive curve by oil level, or the semi-active family at the lagged valve setting, which
+    this stage advances: ``S[_VALVE]``), the physics terms (the paper's friction elements with their
+    scalings, added terms; context filled by :func:`fill_context`) and the anti-roll bar. Writes
+    ``_W_FS``, the corner context ``C`` and, when ``out``, the force outputs of ``Y``."""
     for i in range(4):
         j = i + 1 if i % 2 == 0 else i - 1
         for l in range(nl):
@@ -343,7 +360,15 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
                 Y[_Y_F_FRICTION + i, l] = f_terms
                 Y[_Y_F_ARB + i, l] = f_arb
 
-    # -- equations of motion and semi-implicit Euler ---------------------------------------------------
+
+@njit(cache=True, inline="always")
+def body_accelerations(P, DV, S, W, nl):
+    """The right-hand side of the equations of motion (model-spec 2): from the state ``S``, the inputs
+    (``_W_V``, ``_W_AX``), the suspension forces ``_W_FS`` and the net vertical tyre forces ``_W_WF``,
+    the accelerations of heave [m/s^2] (``_W_ZDD``), roll and pitch [rad/s^2] (``_W_PHIDD``,
+    ``_W_THDD``), lateral acceleration [m/s^2] (``_W_AY``) and lateral velocity rate [m/s^2]
+    (``_W_VYD``), yaw [rad/s^2] (``_W_RD``) and of the four wheels [m/s^2] (``_W_ZWDD``). Pure: it
+    changes nothing but those scratch rows."""
     for l in range(nl):
         v = W[_W_V, l]
         ax = W[_W_AX, l]
@@ -369,25 +394,40 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
                          + (P[_X_I + 2, l] * fs2 + P[_X_I + 3, l] * fs3))
         phidd = (roll_moment + ms * (P[_H_CG, l] - P[_H_RC, l]) * (ay + g * phi)) * DV[_D_INV_IXX, l]
         thdd = (pitch_moment + ms * (P[_H_CG, l] - P[_H_PC, l]) * (g * th - ax)) * DV[_D_INV_IYY, l]
+        W[_W_ZDD, l] = zdd
+        W[_W_AY, l] = ay
+        W[_W_PHIDD, l] = phidd
+        W[_W_THDD, l] = thdd
         # planar: lateral and yaw
-        vyd = ay - v * r
-        rd = (P[_A, l] * (fy0 + fy1) - P[_B, l] * (fy2 + fy3)) * DV[_D_INV_IZZ, l]
-        zd = S[_ZD, l] + zdd * dt
-        phid = S[_PHID, l] + phidd * dt
-        thd = S[_THETAD, l] + thdd * dt
-        r += rd * dt
+        W[_W_VYD, l] = ay - v * r
+        W[_W_RD, l] = (P[_A, l] * (fy0 + fy1) - P[_B, l] * (fy2 + fy3)) * DV[_D_INV_IZZ, l]
+    # wheels: tyre force (from static) against the suspension force
+    for i in range(4):
+        for l in range(nl):
+            W[_W_ZWDD + i, l] = (W[_W_WF + i, l] - W[_W_FS + i, l]) * DV[_D_INV_MU + i, l]
+
+
+@njit(cache=True, inline="always")
+def integrate(P, DV, S, W, dt, nl):
+    """Advance the state by ``dt`` [s] with the accelerations of :func:`body_accelerations`: semi-implicit
+    (symplectic) Euler for body, planar motion and wheels (velocities first, positions with the new
+    velocities), the tyre lateral forces by the exact solution of their first-order relaxation toward the
+    steady tanh characteristic, and the road height under each wheel remembered for the next step."""
+    for l in range(nl):
+        zd = S[_ZD, l] + W[_W_ZDD, l] * dt
+        phid = S[_PHID, l] + W[_W_PHIDD, l] * dt
+        thd = S[_THETAD, l] + W[_W_THDD, l] * dt
+        r = S[_R, l] + W[_W_RD, l] * dt
         S[_ZD, l] = zd
         S[_PHID, l] = phid
         S[_THETAD, l] = thd
         S[_Z, l] += zd * dt
-        S[_PHI, l] = phi + phid * dt
-        S[_THETA, l] = th + thd * dt
-        S[_VY, l] += vyd * dt
+        S[_PHI, l] += phid * dt
+        S[_THETA, l] += thd * dt
+        S[_VY, l] += W[_W_VYD, l] * dt
         S[_R, l] = r
         S[_PSI, l] += r * dt
-        S[_SPATH, l] += v * dt
-        W[_W_ZDD, l] = zdd
-        W[_W_AY, l] = ay
+        S[_SPATH, l] += W[_W_V, l] * dt
     for l in range(nl):  # planar position (libm sin/cos: per vehicle)
         psi = S[_PSI, l]
         v = W[_W_V, l]
@@ -397,7 +437,7 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
         S[_X, l] += (v * cpsi - vy * spsi) * dt
         S[_Y, l] += (v * spsi + vy * cpsi) * dt
 
-    # -- tyre lateral forces: steady tanh characteristic, first-order relaxation (exact) -------------
+    # tyre lateral forces: steady tanh characteristic, first-order relaxation (exact)
     for l in range(nl):
         vfade = P[_V_FADE, l]
         av = abs(W[_W_V, l])
@@ -417,33 +457,58 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
             fss = fss if fz > 0.0 else 0.0
             S[_FYT + i, l] += relax * (fss - S[_FYT + i, l])
 
-    # -- wheels, then the terms' state over the deflection increment of the step --------------------
     for i in range(4):
         for l in range(nl):
-            zwd_i = S[_ZWD + i, l] + (W[_W_WF + i, l] - W[_W_FS + i, l]) * DV[_D_INV_MU + i, l] * dt
-            zw_i = S[_ZW + i, l] + zwd_i * dt
+            zwd_i = S[_ZWD + i, l] + W[_W_ZWDD + i, l] * dt
             S[_ZWD + i, l] = zwd_i
-            S[_ZW + i, l] = zw_i
-            d_new = zw_i - (S[_Z, l] - P[_X_I + i, l] * S[_THETA, l] + P[_Y_I + i, l] * S[_PHI, l])
-            terms_update(P[:, l], S[:, l], i, C[:, :, l], d_new - W[_W_D + i, l], MASK_ALL)
+            S[_ZW + i, l] += zwd_i * dt
             S[_ZR_PREV + i, l] = W[_W_ZR + i, l]
-            if out:
-                Y[_Y_DEFL + i, l] = d_new
-                Y[_Y_DEFL_VEL + i, l] = zwd_i - (S[_ZD, l] - P[_X_I + i, l] * S[_THETAD, l]
-                                                 + P[_Y_I + i, l] * S[_PHID, l])
-                Y[_Y_F_Z + i, l] = W[_W_FZ + i, l]
-                Y[_Y_F_X + i, l] = W[_W_FX + i, l]
-                Y[_Y_F_Y + i, l] = C[i, _C_FY, l]
-                Y[_Y_Z_ROAD + i, l] = W[_W_ZR + i, l]
 
+
+@njit(cache=True, inline="always")
+def _deflection(P, S, i, l):
+    """Suspension deflection [m] of corner ``i`` of lane ``l`` in state ``S``."""
+    return S[_ZW + i, l] - (S[_Z, l] - P[_X_I + i, l] * S[_THETA, l] + P[_Y_I + i, l] * S[_PHI, l])
+
+
+@njit(cache=True, inline="always")
+def update_term_states(P, S, C, W, nl):
+    """The physics terms' own states (e.g. Dahl elements) over the deflection increment of the step:
+    from the deflection at its start (``_W_D``) to the one of the integrated state."""
+    for i in range(4):
+        for l in range(nl):
+            terms_update(P[:, l], S[:, l], i, C[:, :, l], _deflection(P, S, i, l) - W[_W_D + i, l], MASK_ALL)
+
+
+@njit(cache=True, inline="always")
+def state_is_finite(S, W, nl):
+    """Health check: ``W[_W_OK, l]`` becomes 0 when lane ``l``'s state stopped being finite."""
     for l in range(nl):
         ok = math.isfinite(S[_ZW, l] + S[_ZW + 1, l] + S[_ZW + 2, l] + S[_ZW + 3, l]
                            + S[_Z, l] + S[_PHI, l] + S[_THETA, l] + S[_VY, l] + S[_R, l]
                            + S[_ZD, l] + S[_PHID, l] + S[_THETAD, l])
         W[_W_OK, l] = 1.0 if ok else 0.0
-    if not out:
-        return
-    # -- outputs: IMU at the centre of gravity (specific force incl. gravity, REP-145), pose --------
+
+
+@njit(cache=True, inline="always")
+def corner_outputs(P, S, C, W, Y, nl):
+    """Per-corner outputs after the step: deflection [m] and its rate [m/s], tyre forces [N] and the road
+    height [m] (the suspension force components are written by :func:`suspension_forces`)."""
+    for i in range(4):
+        for l in range(nl):
+            Y[_Y_DEFL + i, l] = _deflection(P, S, i, l)
+            Y[_Y_DEFL_VEL + i, l] = S[_ZWD + i, l] - (S[_ZD, l] - P[_X_I + i, l] * S[_THETAD, l]
+                                                      + P[_Y_I + i, l] * S[_PHID, l])
+            Y[_Y_F_Z + i, l] = W[_W_FZ + i, l]
+            Y[_Y_F_X + i, l] = W[_W_FX + i, l]
+            Y[_Y_F_Y + i, l] = C[i, _C_FY, l]
+            Y[_Y_Z_ROAD + i, l] = W[_W_ZR + i, l]
+
+
+@njit(cache=True, inline="always")
+def imu_outputs(P, S, W, Y, nl):
+    """IMU at the centre of gravity (angular rates [rad/s], specific force incl. gravity [m/s^2],
+    REP-145) and the pose, velocity, heave and path coordinate after the step."""
     for l in range(nl):
         g = P[_G, l]
         vy = S[_VY, l]
@@ -463,6 +528,32 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
         Y[_Y_VY, l] = vy
         Y[_Y_HEAVE, l] = S[_Z, l]
         Y[_Y_PATH, l] = S[_SPATH, l]
+
+
+@njit(cache=True, inline="always")
+def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, out):
+    """Advance the ``nl`` vehicles of a block by one step ``dt`` [s] with the inputs of row ``k`` of
+    ``U[urow[l]]`` (layout.U_INDEX); writes outputs ``Y`` when ``out`` (skipped on steps whose outputs
+    nobody reads).
+
+    Vehicles are lanes: column ``l`` of ``P`` (parameters), ``DV`` (their reciprocals, :func:`derive`),
+    ``S`` (state, updated in place), ``C`` (corner context, 4 x N_CTX per lane, constant part set by
+    :func:`fill_context_const`), ``W`` (scratch) and ``Y`` (outputs). Every loop over lanes does the same
+    arithmetic for each vehicle, so the compiler runs it on several vehicles per SIMD instruction; a
+    single vehicle is a block of one. Road: tracks ``RS``/``RZL``/``RZR`` row ``rrow[l]`` with ``RN``
+    valid samples (``mode`` 0), or per-wheel road heights from the inputs (``mode`` 1). ``W[_W_OK, l]``
+    becomes 0 when lane ``l``'s state stopped being finite.
+    """
+    road_under_wheels(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, W, nl)
+    corner_kinematics(P, DV, S, W, nl)
+    suspension_forces(P, DV, S, C, W, Y, nl, out)
+    body_accelerations(P, DV, S, W, nl)
+    integrate(P, DV, S, W, dt, nl)
+    update_term_states(P, S, C, W, nl)
+    state_is_finite(S, W, nl)
+    if out:
+        corner_outputs(P, S, C, W, Y, nl)
+        imu_outputs(P, S, W, Y, nl)
 
 
 @njit(cache=True, inline="always")

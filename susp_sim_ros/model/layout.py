@@ -8,7 +8,9 @@ to ``P`` and ``S`` at offsets computed by :class:`KernelLayout`.
 
 All quantities SI, axes REP-103 (x forward, y left, z up; roll positive = left side up, pitch positive =
 nose down). Suspension deflection is positive in bump (compression); suspension forces act on the body,
-positive upwards.
+positive upwards. Every slot carries its SI unit (:class:`Slot`; ``"1"`` for a dimensionless number, a
+fraction, a switch or an index): ``P_SLOTS``, ``S_SLOTS``, ``U_SLOTS``, ``Y_SLOTS``, ``C_SLOTS`` and the
+name -> unit maps ``P_UNITS``, ``S_UNITS``, ``U_UNITS``, ``OUTPUT_UNITS``, ``C_UNITS``.
 """
 from __future__ import annotations
 
@@ -20,25 +22,53 @@ WHEELS = ("FL", "FR", "RL", "RR")
 N_CORNER = 4
 
 
-def _enumerate(spec: list[tuple[str, int]]) -> tuple[dict[str, int], int]:
-    index, k = {}, 0
-    for name, size in spec:
-        index[name] = k
+@dataclass(frozen=True)
+class Slot:
+    """A named block of consecutive entries of one of the kernel's vectors: ``size`` entries from
+    ``index`` (1 for a scalar, 4 per corner in the order FL, FR, RL, RR, or a curve table), each in SI
+    ``unit`` (``"1"``: dimensionless)."""
+
+    name: str
+    index: int
+    size: int
+    unit: str
+
+
+def _slots(spec: list[tuple[str, int, str]], start: int = 0) -> tuple[tuple[Slot, ...], int]:
+    slots, k = [], start
+    for name, size, unit in spec:
+        slots.append(Slot(name, k, size, unit))
         k += size
-    return index, k
+    return tuple(slots), k
+
+
+def _enumerate(spec: list[tuple[str, int, str]]) -> tuple[dict[str, int], int]:
+    slots, n = _slots(spec)
+    return {s.name: s.index for s in slots}, n
+
+
+def slot_at(slots: tuple[Slot, ...], index: int) -> Slot:
+    """The slot of ``slots`` holding entry ``index`` of its vector (KeyError if none does)."""
+    for s in slots:
+        if s.index <= index < s.index + s.size:
+            return s
+    raise KeyError(f"no slot holds entry {index}")
 
 
 # ---- parameters (scalars, then per-corner blocks of 4) ---------------------------------------------
 _P_SPEC = [
-    ("G", 1), ("M_S", 1), ("M_TOT", 1), ("IXX", 1), ("IYY", 1), ("IZZ", 1), ("A", 1), ("B", 1),
-    ("H_CG", 1), ("H_RC", 1), ("H_PC", 1), ("STEER_RATIO", 1), ("MU", 1), ("RELAX_LEN", 1),
-    ("V_FADE", 1), ("KT", 1), ("CT", 1), ("K_STOP", 1), ("STOP_EP", 1),
-    ("DRIVE_FRONT", 1), ("BRAKE_FRONT", 1),
-    ("USE_V", 1), ("USE_OIL", 1), ("USE_H", 1), ("SV_REF", 1), ("SV_INF", 1), ("SV_VS", 1),
+    ("G", 1, "m/s^2"), ("M_S", 1, "kg"), ("M_TOT", 1, "kg"), ("IXX", 1, "kg*m^2"), ("IYY", 1, "kg*m^2"),
+    ("IZZ", 1, "kg*m^2"), ("A", 1, "m"), ("B", 1, "m"), ("H_CG", 1, "m"), ("H_RC", 1, "m"), ("H_PC", 1, "m"),
+    ("STEER_RATIO", 1, "1"), ("MU", 1, "1"), ("RELAX_LEN", 1, "m"), ("V_FADE", 1, "m/s"),
+    ("KT", 1, "N/m"), ("CT", 1, "N*s/m"), ("K_STOP", 1, "N/m"), ("STOP_EP", 1, "m"),
+    ("DRIVE_FRONT", 1, "1"), ("BRAKE_FRONT", 1, "1"),
+    ("USE_V", 1, "1"), ("USE_OIL", 1, "1"), ("USE_H", 1, "1"), ("SV_REF", 1, "m/s"), ("SV_INF", 1, "1"),
+    ("SV_VS", 1, "m/s"),
     # per corner
-    ("X_I", 4), ("Y_I", 4), ("M_U", 4), ("K_S", 4), ("STOP_BUMP", 4), ("STOP_REB", 4), ("K_ARB", 4),
-    ("TRACK", 4), ("H_RC_AXLE", 4), ("C_ALPHA", 4), ("FZ0", 4), ("OIL", 4), ("SOIL_EMPTY", 4),
-    ("SH_X", 4), ("SH_Y", 4),
+    ("X_I", 4, "m"), ("Y_I", 4, "m"), ("M_U", 4, "kg"), ("K_S", 4, "N/m"), ("STOP_BUMP", 4, "m"),
+    ("STOP_REB", 4, "m"), ("K_ARB", 4, "N/m"), ("TRACK", 4, "m"), ("H_RC_AXLE", 4, "m"),
+    ("C_ALPHA", 4, "N/rad"), ("FZ0", 4, "N"), ("OIL", 4, "1"), ("SOIL_EMPTY", 4, "1"),
+    ("SH_X", 4, "1/N"), ("SH_Y", 4, "1/N"),
 ]
 P_INDEX, N_P_BASE = _enumerate(_P_SPEC)
 
@@ -59,48 +89,65 @@ P_H_HARD = P_H_SOFT + 4 * N_GRID        # 4 x N_GRID hydraulic forces at command
 P_SEMI_ACTIVE = P_H_HARD + 4 * N_GRID   # 0: passive damper (command ignored), 1: command in use
 P_VALVE_TAU = P_SEMI_ACTIVE + 1         # valve (actuator) time constant [s]
 N_P_FIXED = P_VALVE_TAU + 1
+#: every slot of the fixed parameter vector (base parameters, damper tables, semi-active switch and lag)
+P_SLOTS = _slots(_P_SPEC)[0] + _slots([
+    ("GRID", N_GRID, "m/s"), ("H_INTACT", 4 * N_GRID, "N"), ("H_EMPTY", 4 * N_GRID, "N"),
+    ("H_SOFT", 4 * N_GRID, "N"), ("H_HARD", 4 * N_GRID, "N"), ("SEMI_ACTIVE", 1, "1"), ("VALVE_TAU", 1, "s"),
+], N_P_BASE)[0]
+P_UNITS = {s.name: s.unit for s in P_SLOTS}
 
 # ---- state -----------------------------------------------------------------------------------------
 _S_SPEC = [
-    ("Z", 1), ("PHI", 1), ("THETA", 1), ("ZD", 1), ("PHID", 1), ("THETAD", 1),
-    ("VY", 1), ("R", 1), ("X", 1), ("Y", 1), ("PSI", 1), ("SPATH", 1),
-    ("ZW", 4), ("ZWD", 4), ("FYT", 4), ("ZR_PREV", 4),
-    ("VALVE", 4),  # semi-active valve setting after the actuator lag [0..1] (unused by a passive damper)
+    ("Z", 1, "m"), ("PHI", 1, "rad"), ("THETA", 1, "rad"), ("ZD", 1, "m/s"), ("PHID", 1, "rad/s"),
+    ("THETAD", 1, "rad/s"), ("VY", 1, "m/s"), ("R", 1, "rad/s"), ("X", 1, "m"), ("Y", 1, "m"),
+    ("PSI", 1, "rad"), ("SPATH", 1, "m"),
+    ("ZW", 4, "m"), ("ZWD", 4, "m/s"), ("FYT", 4, "N"), ("ZR_PREV", 4, "m"),
+    ("VALVE", 4, "1"),  # semi-active valve setting after the actuator lag [0..1] (unused by a passive damper)
 ]
 S_INDEX, N_S_FIXED = _enumerate(_S_SPEC)
+S_SLOTS = _slots(_S_SPEC)[0]
+S_UNITS = {s.name: s.unit for s in S_SLOTS}
 STATE_LABELS = tuple(
-    name if size == 1 else f"{name}_{WHEELS[i]}" for name, size in _S_SPEC for i in range(size))
+    name if size == 1 else f"{name}_{WHEELS[i]}" for name, size, _ in _S_SPEC for i in range(size))
 
 # ---- inputs of one step ----------------------------------------------------------------------------
-_U_SPEC = [("V", 1), ("AX", 1), ("SWA", 1), ("ZR_IN", 4),
-           ("CMD", 4)]  # semi-active valve command [0..1] per corner (read only when P_SEMI_ACTIVE is 1)
+_U_SPEC = [("V", 1, "m/s"), ("AX", 1, "m/s^2"), ("SWA", 1, "rad"), ("ZR_IN", 4, "m"),
+           ("CMD", 4, "1")]  # semi-active valve command [0..1] per corner (read only when P_SEMI_ACTIVE is 1)
 U_INDEX, N_U = _enumerate(_U_SPEC)
+U_SLOTS = _slots(_U_SPEC)[0]
+U_UNITS = {s.name: s.unit for s in U_SLOTS}
 
 # ---- outputs of one step ---------------------------------------------------------------------------
 _Y_SPEC = [
-    ("ROLL_RATE", 1), ("PITCH_RATE", 1), ("YAW_RATE", 1), ("AX_SF", 1), ("AY_SF", 1), ("AZ_SF", 1),
-    ("ROLL", 1), ("PITCH", 1), ("YAW", 1), ("POS_X", 1), ("POS_Y", 1), ("VEL_X", 1), ("VEL_Y", 1),
-    ("HEAVE", 1), ("PATH_S", 1),
-    ("DEFL", 4), ("DEFL_VEL", 4), ("F_SPRING", 4), ("F_DAMPER", 4), ("F_FRICTION", 4), ("F_ARB", 4),
-    ("F_Z", 4), ("F_X", 4), ("F_Y", 4), ("Z_ROAD", 4),
+    ("ROLL_RATE", 1, "rad/s"), ("PITCH_RATE", 1, "rad/s"), ("YAW_RATE", 1, "rad/s"), ("AX_SF", 1, "m/s^2"),
+    ("AY_SF", 1, "m/s^2"), ("AZ_SF", 1, "m/s^2"), ("ROLL", 1, "rad"), ("PITCH", 1, "rad"), ("YAW", 1, "rad"),
+    ("POS_X", 1, "m"), ("POS_Y", 1, "m"), ("VEL_X", 1, "m/s"), ("VEL_Y", 1, "m/s"), ("HEAVE", 1, "m"),
+    ("PATH_S", 1, "m"),
+    ("DEFL", 4, "m"), ("DEFL_VEL", 4, "m/s"), ("F_SPRING", 4, "N"), ("F_DAMPER", 4, "N"),
+    ("F_FRICTION", 4, "N"), ("F_ARB", 4, "N"), ("F_Z", 4, "N"), ("F_X", 4, "N"), ("F_Y", 4, "N"),
+    ("Z_ROAD", 4, "m"),
 ]
 Y_INDEX, N_Y = _enumerate(_Y_SPEC)
+Y_SLOTS = _slots(_Y_SPEC)[0]
 OUTPUT_LABELS = tuple(
-    name if size == 1 else f"{name}_{WHEELS[i]}" for name, size in _Y_SPEC for i in range(size))
-OUTPUT_UNITS = {
-    "ROLL_RATE": "rad/s", "PITCH_RATE": "rad/s", "YAW_RATE": "rad/s", "AX_SF": "m/s^2",
-    "AY_SF": "m/s^2", "AZ_SF": "m/s^2", "ROLL": "rad", "PITCH": "rad", "YAW": "rad", "POS_X": "m",
-    "POS_Y": "m", "VEL_X": "m/s", "VEL_Y": "m/s", "HEAVE": "m", "PATH_S": "m", "DEFL": "m",
-    "DEFL_VEL": "m/s", "F_SPRING": "N", "F_DAMPER": "N", "F_FRICTION": "N", "F_ARB": "N", "F_Z": "N",
-    "F_X": "N", "F_Y": "N", "Z_ROAD": "m",
-}
+    name if size == 1 else f"{name}_{WHEELS[i]}" for name, size, _ in _Y_SPEC for i in range(size))
+#: unit of each output slot (per-corner outputs: of each of its four labels ``NAME_FL`` ...)
+OUTPUT_UNITS = {s.name: s.unit for s in Y_SLOTS}
 
 # ---- per-corner context handed to physics terms ----------------------------------------------------
 _C_SPEC = [
-    ("D", 1), ("DD", 1), ("FX", 1), ("FY", 1), ("FZ", 1), ("OIL", 1), ("AXLE", 1), ("SIDE", 1),
-    ("SV", 1), ("SOIL", 1), ("SH", 1), ("V", 1), ("DT", 1),
+    ("D", 1, "m"), ("DD", 1, "m/s"), ("FX", 1, "N"), ("FY", 1, "N"), ("FZ", 1, "N"), ("OIL", 1, "1"),
+    ("AXLE", 1, "1"), ("SIDE", 1, "1"), ("SV", 1, "1"), ("SOIL", 1, "1"), ("SH", 1, "1"), ("V", 1, "m/s"),
+    ("DT", 1, "s"),
 ]
 C_INDEX, N_CTX = _enumerate(_C_SPEC)
+C_SLOTS = _slots(_C_SPEC)[0]
+C_UNITS = {s.name: s.unit for s in C_SLOTS}
+
+
+def output_unit(label: str) -> str:
+    """SI unit of an output label such as ``'PITCH_RATE'`` or ``'DEFL_RL'``."""
+    return slot_at(Y_SLOTS, output_index(label)).unit
 
 
 def output_index(label: str) -> int:
@@ -133,3 +180,12 @@ class KernelLayout:
             p += len(term.params) * N_CORNER
             s += term.n_states * N_CORNER
         return cls(tuple(po), tuple(so), p, s)
+
+
+def term_param_slots(terms) -> tuple[Slot, ...]:
+    """The slots of the term blocks that :class:`KernelLayout` appends to ``P`` after the fixed ones
+    (:data:`P_SLOTS`): one per term parameter, named ``term.param``, four entries (FL, FR, RL, RR) in the
+    unit the term declares (:class:`~.terms.TermParam`). The terms' states declare no units yet."""
+    layout = KernelLayout.for_terms(terms)
+    return tuple(Slot(f"{t.name}.{p.name}", off + N_CORNER * j, N_CORNER, p.unit)
+                 for t, off in zip(terms, layout.param_offsets) for j, p in enumerate(t.params))

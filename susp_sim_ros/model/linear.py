@@ -1,9 +1,14 @@
 """Linearised vertical dynamics: the exact reference the nonlinear kernel is checked against.
 
-Seven degrees of freedom ``q = [z, phi, theta, zw_FL, zw_FR, zw_RL, zw_RR]`` around static equilibrium,
-with friction, dampers and tyre damping off: ``M q'' + K q = 0``. ``K`` holds the wheel-rate springs,
-anti-roll bars, tyres and the destabilising gravity terms of the roll and pitch equations
-(model-spec 2). Heave and pitch are coupled when a*k_f != b*k_r.
+Seven degrees of freedom ``q = [z, phi, theta, zw_FL, zw_FR, zw_RL, zw_RR]`` around static equilibrium
+(model-spec 2): ``M q'' + C q' + K q = 0``. The matrices are not derived by hand: they are the model's
+own right-hand side (the kernel's stages :func:`corner_kinematics`, :func:`suspension_forces` and
+:func:`body_accelerations` of ``_kernel_template.py``, without physics terms, so without friction)
+linearised by central differences about the static equilibrium on a flat road at standstill:
+``K = -M d(q'')/dq`` holds the wheel-rate springs, anti-roll bars, tyres and the destabilising gravity
+terms of the roll and pitch equations; ``C = -M d(q'')/dq'`` the hydraulic dampers' slopes at zero
+velocity (mean of bump and rebound) and the tyre damping. ``M`` is the diagonal of the masses and
+inertias. Heave and pitch are coupled when a*k_f != b*k_r.
 """
 from __future__ import annotations
 
@@ -11,8 +16,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .layout import S_INDEX
-from .params import VehicleParams
+from . import _kernel_template as rhs
+from .layout import N_CTX, N_P_FIXED, N_S_FIXED, N_Y, P_INDEX, S_INDEX
+from .params import FrictionVariant, VehicleParams
+
+#: state slots of q and of q' (layout.S_INDEX)
+_Q = np.array([S_INDEX["Z"], S_INDEX["PHI"], S_INDEX["THETA"], *range(S_INDEX["ZW"], S_INDEX["ZW"] + 4)])
+_QD = np.array([S_INDEX["ZD"], S_INDEX["PHID"], S_INDEX["THETAD"],
+                *range(S_INDEX["ZWD"], S_INDEX["ZWD"] + 4)])
+#: scratch rows of :func:`body_accelerations` holding q''
+_QDD = np.array([rhs._W_ZDD, rhs._W_PHIDD, rhs._W_THDD, *range(rhs._W_ZWDD, rhs._W_ZWDD + 4)])
+#: central-difference step [m, rad, m/s, rad/s]: the model is linear far beyond it (stops, lift-off and
+#: the damper grid's first cell are millimetres away), and far above rounding
+_H = 1e-6
 
 
 @dataclass(frozen=True)
@@ -29,28 +45,62 @@ class Modes:
         return float(self.freq_hz[k]), self.shapes[:, k]
 
 
+@dataclass(frozen=True)
+class LinearModel:
+    """``M q'' + C q' + K q = 0`` in q coordinates: mass [kg, kg*m^2], damping [N*s/m, N*m*s/rad] and
+    stiffness [N/m, N*m/rad] matrices (7 x 7)."""
+
+    M: np.ndarray
+    C: np.ndarray
+    K: np.ndarray
+
+
+def _parameters(vp: VehicleParams) -> np.ndarray:
+    """The fixed parameter vector of ``vp`` (intact oil, passive damper), as a block of one vehicle."""
+    from .vehicle import Model  # the model's own parameter vector; vehicle imports the kernel loader
+    P = Model(vp, FrictionVariant("linearised", False, False, False)).params()
+    return np.ascontiguousarray(P[:N_P_FIXED].reshape(-1, 1))
+
+
+def _accelerations(P: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """q'' of the model's right-hand side at (q, q'), road flat, standstill, no physics terms."""
+    S = np.zeros((N_S_FIXED, 1))
+    S[_Q, 0] = q
+    S[_QD, 0] = qd
+    DV = np.zeros((rhs.N_DERIVED, 1))
+    C = np.zeros((4, N_CTX, 1))
+    W = np.zeros((rhs.N_SCRATCH, 1))
+    Y = np.zeros((N_Y, 1))
+    rhs.derive(P[:, 0], DV[:, 0])
+    for i in range(4):
+        rhs.fill_context_const(P[:, 0], i, C[:, :, 0], 0.0)
+    rhs.corner_kinematics(P, DV, S, W, 1)
+    rhs.suspension_forces(P, DV, S, C, W, Y, 1, False)
+    rhs.body_accelerations(P, DV, S, W, 1)
+    return W[_QDD, 0].copy()
+
+
+def linearise(vp: VehicleParams, P: np.ndarray | None = None) -> LinearModel:
+    """The model's vertical dynamics linearised about static equilibrium (module docstring). ``P``: a
+    parameter vector of ``vp`` to linearise instead of its default one (intact oil, passive damper),
+    e.g. with other damper curves; only its fixed part (``layout.N_P_FIXED``) is read."""
+    P = _parameters(vp) if P is None else np.ascontiguousarray(np.asarray(P, float)[:N_P_FIXED].reshape(-1, 1))
+    M = np.diag(P[[P_INDEX["M_S"], P_INDEX["IXX"], P_INDEX["IYY"], *range(P_INDEX["M_U"], P_INDEX["M_U"] + 4)], 0])
+    zero = np.zeros(7)
+    dq = np.empty((7, 7))
+    dqd = np.empty((7, 7))
+    for j in range(7):
+        e = np.zeros(7)
+        e[j] = _H
+        dq[:, j] = (_accelerations(P, e, zero) - _accelerations(P, -e, zero)) / (2 * _H)
+        dqd[:, j] = (_accelerations(P, zero, e) - _accelerations(P, zero, -e)) / (2 * _H)
+    return LinearModel(M, -M @ dqd, -M @ dq)
+
+
 def mass_stiffness(vp: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
-    x = np.array([vp.a, vp.a, -vp.b, -vp.b])
-    tf, tr = vp.track
-    y = np.array([tf / 2, -tf / 2, tr / 2, -tr / 2])
-    k = np.array([vp.wheel_rate[0]] * 2 + [vp.wheel_rate[1]] * 2)
-    mu = np.array([vp.unsprung_mass[0]] * 2 + [vp.unsprung_mass[1]] * 2)
-    M = np.diag([vp.sprung_mass, vp.roll_inertia, vp.pitch_inertia, *mu])
-    # deflection d = D q with d_i = zw_i - z + x_i theta - y_i phi
-    D = np.zeros((4, 7))
-    D[:, 0] = -1.0
-    D[:, 1] = -y
-    D[:, 2] = x
-    D[:, 3:] = np.eye(4)
-    K = D.T @ np.diag(k) @ D
-    for axle, (l, r) in enumerate(((0, 1), (2, 3))):  # anti-roll bar on d_l - d_r
-        e = D[l] - D[r]
-        K += vp.arb_rate[axle] * np.outer(e, e)
-    K[3:, 3:] += vp.tyre_stiffness * np.eye(4)
-    g, ms = vp.gravity, vp.sprung_mass
-    K[1, 1] -= ms * g * (vp.cg_height - 0.5 * sum(vp.roll_centre_height))
-    K[2, 2] -= ms * g * (vp.cg_height - vp.pitch_centre_height)
-    return M, K
+    """Mass and stiffness matrices ``(M, K)`` of :func:`linearise`."""
+    lin = linearise(vp)
+    return lin.M, lin.K
 
 
 def modes(vp: VehicleParams) -> Modes:
