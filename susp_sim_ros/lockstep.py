@@ -20,13 +20,15 @@ from .io.recorder import McapRecorder
 from .model.layout import OUTPUT_LABELS, output_index
 from .model.response import Response
 from .model.maneuvers import Maneuver
+from .model.paper import IMU_OUTPUTS
 from .model.vehicle import Model
 from .sim_core import SimCore, sample_messages
+from .model.params import DEFAULT_VEHICLE
 
 log = logging.getLogger(__name__)
 
-_GYRO = [output_index(k) for k in ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")]
-_ACC = [output_index(k) for k in ("AX_SF", "AY_SF", "AZ_SF")]
+_GYRO = [output_index(k) for k in IMU_OUTPUTS[:3]]
+_ACC = [output_index(k) for k in IMU_OUTPUTS[3:]]
 
 _ROAD, _SPEED, _STEER, _WH, _CMD = 0, 1, 2, 3, 4
 
@@ -56,7 +58,7 @@ def _events(drive: TestDrive) -> list[tuple[int, int, int]]:
     return ev
 
 
-def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: str = "full",
+def run_lockstep(drive: TestDrive, *, vehicle: str = DEFAULT_VEHICLE, variant: str = "full",
                  oil: Sequence[float] | None = None, step_s: float = 0.001, publish_rate_hz: float = 100.0,
                  out_path: str | os.PathLike | None = None, overwrite: bool = False,
                  input_timeout_s: float = 0.5, model: Model | None = None,
@@ -150,7 +152,7 @@ def run_lockstep(drive: TestDrive, *, vehicle: str = "passat_b8_like", variant: 
 
 def maneuver_drive(maneuver: Maneuver, oil: Sequence[float] = (1.0, 1.0, 1.0, 1.0), *,
                    rate_hz: float = 100.0, t0_ns: int = 1_000_000_000,
-                   vehicle: str = "passat_b8_like") -> TestDrive:
+                   vehicle: str = DEFAULT_VEHICLE) -> TestDrive:
     """A paper maneuver as a test drive: speed and steering messages at ``rate_hz`` from ``t0_ns``
     (ROS time 0 means "no clock yet" to a sim-time node, so the default starts at 1 s), its road."""
     n = int(round(maneuver.duration * rate_hz)) + 1

@@ -60,6 +60,7 @@ import numpy as np
 
 from ..errors import CsvImportError
 from ..io.drive import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT
+from ..model.params import DEFAULT_VEHICLE
 
 _NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
@@ -250,7 +251,7 @@ def _check_range(path, tab: CsvTable, q: str, quantities, lo: float, hi: float, 
 
 
 def csv_to_drive(drive_csv: str | os.PathLike, road_csv: str | os.PathLike | None = None, *,
-                 vehicle: str = "passat_b8_like", maneuver: str = "", damper_oil_level: str = "1,1,1,1",
+                 vehicle: str = DEFAULT_VEHICLE, maneuver: str = "", damper_oil_level: str = "1,1,1,1",
                  source: str = "measured", notes: str = "", drive_text: str | None = None,
                  road_text: str | None = None):
     """A :class:`~susp_sim_ros.io.drive.TestDrive` from the CSV files (nothing written)."""

@@ -57,6 +57,7 @@ from ..errors import MeasurementImportError, TopicMapError
 from ..io.topic_map import FRAMES, UNITS, parse_frame, unit_factor
 from ..model.paper import IMU_SIGNALS
 from .csv_import import DRIVE_QUANTITIES
+from ..model.params import DEFAULT_VEHICLE
 
 #: Unit strings as measurement systems write them -> this package's unit names (topic_map.UNITS).
 UNIT_ALIASES = {"°": "deg", "grad": "deg", "degree": "deg", "deg": "deg", "rad": "rad",
@@ -256,7 +257,7 @@ def _ns(t: np.ndarray) -> np.ndarray:
 
 
 def mdf_to_drive(path: str | os.PathLike, channel_map: str | os.PathLike | dict | None = None, *,
-                 vehicle: str = "passat_b8_like", maneuver: str = "", damper_oil_level: str = "1,1,1,1",
+                 vehicle: str = DEFAULT_VEHICLE, maneuver: str = "", damper_oil_level: str = "1,1,1,1",
                  source: str = "measured", notes: str = ""):
     """A :class:`~susp_sim_ros.io.drive.TestDrive` from an ASAM MDF4 file (nothing written)."""
     from ..io.drive import ImuSeries, Series, TestDrive, parse_oil
@@ -361,7 +362,7 @@ def crg_to_road(path: str | os.PathLike, track_m: float, start_u: float | None =
 # ---- the import --------------------------------------------------------------------------------------------
 def import_measurement(drive_path: str | os.PathLike, out: str | os.PathLike, road: str | os.PathLike | None = None,
                        *, channel_map: str | os.PathLike | None = None, overwrite: bool = False,
-                       vehicle: str = "passat_b8_like", road_start_u: float | None = None, **metadata) -> dict:
+                       vehicle: str = DEFAULT_VEHICLE, road_start_u: float | None = None, **metadata) -> dict:
     """``susp import``: an MDF4 (``.mf4``/``.mdf``) or CSV drive plus an optional road (``.crg`` or
     ``.csv``) into a test-drive MCAP at ``out``; returns a summary dict."""
     from ..io.drive import write_drive

@@ -16,6 +16,7 @@ import numpy as np
 from ..model import Model, simulate
 from ..model.maneuvers import paper_maneuver, vehicle_state
 from ..model.paper import MANEUVERS, PRIMARY_OUTPUT, STATES, VARIANTS
+from ..model.params import DEFAULT_VEHICLE
 
 RING_OUT_THRESHOLD_DEG_S = 0.3  # model-spec 5 measures the bump ring-out against 0.3 deg/s
 
@@ -30,7 +31,7 @@ class PaperComparison:
     elapsed_s: float
 
 
-def run_paper_comparison(vehicle: str = "passat_b8_like", dt: float = 0.001,
+def run_paper_comparison(vehicle: str = DEFAULT_VEHICLE, dt: float = 0.001,
                          progress=None) -> PaperComparison:
     t_start = time.perf_counter()
     models = {v: Model(vehicle, v) for v in VARIANTS}

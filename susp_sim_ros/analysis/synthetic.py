@@ -26,6 +26,7 @@ import numpy as np
 
 from ..model.amplitude_friction import FRICTION_AMPLITUDE  # noqa: F401  (registers the hidden term)
 from ..model.paper import IMU_OUTPUTS
+from ..model.params import DEFAULT_VEHICLE
 
 GENERATOR = "susp_sim_ros.analysis.synthetic"
 VERSION = "1.0"
@@ -124,7 +125,7 @@ MANEUVER_LABEL = {"bump_crossing": "bump_crossing_8kmh", "sine_steer": "sine_ste
 DEFAULT_SEED = 20240501
 
 
-def synthetic_vehicle(hidden: HiddenPhysics | None = None, base: str = "passat_b8_like"):
+def synthetic_vehicle(hidden: HiddenPhysics | None = None, base: str = DEFAULT_VEHICLE):
     """The synthetic car's parameter set: the reference set with ``hidden``'s parameter differences."""
     from ..model.params import load_vehicle
     hidden = hidden or HiddenPhysics.reference()
@@ -143,7 +144,7 @@ def synthetic_variant(hidden: HiddenPhysics | None = None):
     from ..model.params import TermSetting, load_variant, load_vehicle
     hidden = hidden or HiddenPhysics.reference()
     full = load_variant("full")
-    sigma = load_vehicle("passat_b8_like").dahl_stiffness
+    sigma = load_vehicle(DEFAULT_VEHICLE).dahl_stiffness
     fe, re_ = hidden.amplitude_extra
     setting = TermSetting(FRICTION_AMPLITUDE, {
         "extra_level": (fe, fe, re_, re_), "onset": (hidden.amplitude_onset,) * 4,
@@ -218,7 +219,7 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
     speed = man.speed_at(t_in)
     fe, re_ = hidden.amplitude_extra
     meta = {
-        "vehicle": "passat_b8_like",
+        "vehicle": DEFAULT_VEHICLE,
         "maneuver": MANEUVER_LABEL[maneuver],
         "damper_oil_level": ",".join(f"{x:g}" for x in oil),
         "source": SOURCE,

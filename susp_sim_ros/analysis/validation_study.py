@@ -36,6 +36,7 @@ from ..errors import RecordingError, SuspInputError
 from ..model.maneuvers import vehicle_state
 from ..model.paper import MANEUVERS, STATES, VARIANT_LABEL, VARIANTS
 from . import validation as va
+from ..model.params import DEFAULT_VEHICLE
 
 if TYPE_CHECKING:
     from ..io.drive import TestDrive
@@ -119,7 +120,7 @@ def simulate_and_validate(path: str | Path, drive, variants: Sequence[str], mode
         raise RecordingError(f"{path}: no measured IMU samples on /imu/data: nothing to validate against")
     meta = drive.metadata
     maneuver = classify_maneuver(meta.get("maneuver", ""))
-    vehicle = meta.get("vehicle") or "passat_b8_like"
+    vehicle = meta.get("vehicle") or DEFAULT_VEHICLE
     signal = va.MANEUVER_SIGNAL.get(maneuver or "", "pitch_rate")
     wheelbase = _model(models, vehicle, variants[0]).vehicle.wheelbase
     windows = va.analysis_windows(drive, wheelbase)

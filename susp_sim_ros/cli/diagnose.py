@@ -18,13 +18,14 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import RecordingError, SuspInputError
+from ..model.params import DEFAULT_VEHICLE
 
 
 def add_arguments(p) -> None:
     p.add_argument("drives", nargs="+", metavar="DRIVE.mcap", help="recorded test drives (MCAP files, rosbag2 "
                    "directories or .db3 files)")
     p.add_argument("--variant", default="full", help="base friction variant (name or YAML path)")
-    p.add_argument("--config", default="passat_b8_like", help="vehicle parameter set (name or YAML path)")
+    p.add_argument("--config", default=DEFAULT_VEHICLE, help="vehicle parameter set (name or YAML path)")
     p.add_argument("--out", default="results/diagnose", help="output directory (default results/diagnose)")
     p.add_argument("--name", default=None, help="name of the written variant (default diagnosed_<variant>)")
     p.add_argument("--candidates", default=None, help="comma-separated candidate terms (default: all)")

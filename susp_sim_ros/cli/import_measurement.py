@@ -6,6 +6,7 @@ Bad input (unknown channel, unit, malformed map, unreadable file) is an error na
 from __future__ import annotations
 
 from ..analysis.measurement_import import import_measurement
+from ..model.params import DEFAULT_VEHICLE
 
 
 def add_arguments(p) -> None:
@@ -23,7 +24,7 @@ def add_arguments(p) -> None:
 def add_output_arguments(p) -> None:
     """The output file and the ``test_drive`` metadata of an import (``susp import``, ``susp import-csv``)."""
     p.add_argument("--out", required=True, help="output MCAP (refuses to overwrite without --overwrite)")
-    p.add_argument("--vehicle", default="passat_b8_like", help="vehicle parameter set name (metadata; with an "
+    p.add_argument("--vehicle", default=DEFAULT_VEHICLE, help="vehicle parameter set name (metadata; with an "
                                                                "OpenCRG road its front track places the wheel "
                                                                "tracks)")
     p.add_argument("--maneuver", default="", help="maneuver text, e.g. bump_crossing_8kmh or sine_steer_50kmh")

@@ -4,11 +4,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..analysis.paper_comparison import STATES, VARIANTS, run_paper_comparison, write_paper_comparison_report
+from ..model.params import DEFAULT_VEHICLE
 
 
 def add_arguments(p) -> None:
     p.add_argument("--out", default="results/paper", help="output directory (report, plots, JSON)")
-    p.add_argument("--config", default="passat_b8_like", help="vehicle parameter set name or YAML path")
+    p.add_argument("--config", default=DEFAULT_VEHICLE, help="vehicle parameter set name or YAML path")
     p.add_argument("--step", type=float, default=0.001, help="integration step [s]")
 
 

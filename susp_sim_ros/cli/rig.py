@@ -5,6 +5,7 @@ from __future__ import annotations
 from ..errors import SuspInputError
 from ..model import Model
 from ..model.rigs import WHEELS, axle_rig, damper_rig, plot_loops
+from ..model.params import DEFAULT_VEHICLE
 
 
 def add_arguments(p) -> None:
@@ -19,7 +20,7 @@ def add_arguments(p) -> None:
     p.add_argument("--plate-amplitude", type=float, default=None,
                    help="eusama: plate amplitude [m] instead of config/rigs.yaml eusama.plate_amplitude")
     p.add_argument("--variant", default="full", help="friction variant name or YAML path")
-    p.add_argument("--config", default="passat_b8_like", help="vehicle parameter set name or YAML path")
+    p.add_argument("--config", default=DEFAULT_VEHICLE, help="vehicle parameter set name or YAML path")
     p.add_argument("--plot", default=None, help="write the hysteresis loop (eusama: force and phase "
                                                 "over frequency) as a PNG here")
 

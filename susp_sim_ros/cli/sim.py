@@ -21,6 +21,7 @@ from ..lockstep import maneuver_drive, run_lockstep
 from ..model import Model
 from ..model.maneuvers import STATES, paper_maneuver, vehicle_state
 from ..sim_core import DivergenceError
+from ..model.params import DEFAULT_VEHICLE
 
 
 def add_arguments(p) -> None:
@@ -33,7 +34,7 @@ def add_arguments(p) -> None:
                         "damper_oil_level metadata for --drive")
     p.add_argument("--oil", metavar="FL,FR,RL,RR", help="damper oil levels, overrides --state")
     p.add_argument("--variant", default="full", help="friction variant name or YAML path")
-    p.add_argument("--config", default="passat_b8_like", help="vehicle parameter set name or YAML path")
+    p.add_argument("--config", default=DEFAULT_VEHICLE, help="vehicle parameter set name or YAML path")
     p.add_argument("--step", type=float, default=0.001, help="integration step [s]")
     p.add_argument("--rate", type=float, default=100.0, help="publish rate of the /sim topics [Hz]")
     p.add_argument("--out", metavar="SIM.MCAP", help="write the simulated MCAP here")

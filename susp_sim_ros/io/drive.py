@@ -19,6 +19,7 @@ from . import messages as M
 from .reader import Recording, read_recording
 from .recorder import McapRecorder
 from .topic_map import MappedImu, TopicMap, get_field, load_topic_map
+from ..model.params import DEFAULT_VEHICLE
 
 log = logging.getLogger(__name__)
 
@@ -443,7 +444,7 @@ def recording_from_drive(drive: TestDrive, path: str | os.PathLike, *, imu_topic
 def write_drive(path: str | os.PathLike, drive: TestDrive, *, overwrite: bool = False,
                 imu_topic: str = IMU) -> int:
     """Write ``drive`` in the interface format; returns the number of messages written."""
-    meta = {"vehicle": "passat_b8_like", "maneuver": "", "damper_oil_level": "1,1,1,1", "source": "measured"}
+    meta = {"vehicle": DEFAULT_VEHICLE, "maneuver": "", "damper_oil_level": "1,1,1,1", "source": "measured"}
     meta.update({str(k): str(v) for k, v in drive.metadata.items()})
     msgs = drive_messages(drive, imu_topic=imu_topic)
     with McapRecorder(path, metadata=meta, overwrite=overwrite) as rec:

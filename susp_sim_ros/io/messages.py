@@ -41,6 +41,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from ..model.layout import OUTPUT_LABELS, WHEELS, output_index
+from ..model.paper import IMU_OUTPUTS
 
 SEPARATOR = "=" * 80
 
@@ -251,8 +252,7 @@ def quaternion_from_rpy(roll: float, pitch: float, yaw: float) -> tuple[float, f
             cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
 
 
-_I = {k: output_index(k) for k in ("ROLL_RATE", "PITCH_RATE", "YAW_RATE", "AX_SF", "AY_SF", "AZ_SF",
-                                   "ROLL", "PITCH", "YAW", "POS_X", "POS_Y", "VEL_X", "VEL_Y")}
+_I = {k: output_index(k) for k in IMU_OUTPUTS + ("ROLL", "PITCH", "YAW", "POS_X", "POS_Y", "VEL_X", "VEL_Y")}
 _ZERO9 = [0.0] * 9
 _ZERO36 = [0.0] * 36
 

@@ -25,6 +25,8 @@ import yaml
 from ..errors import ConfigError
 from .terms import PhysicsTerm, get_term
 
+#: the parameter set used when none is named (config/vehicles/passat_b8_like.yaml: the paper's car)
+DEFAULT_VEHICLE = "passat_b8_like"
 AXLES = ("front", "rear")
 CORNER_AXLE = (0, 0, 1, 1)  # FL, FR, RL, RR -> front, rear
 CORNER_NAMES = ("FL", "FR", "RL", "RR")
@@ -294,7 +296,7 @@ def _read_prior(r: "_Reader", fld: str, section: str, key: str, shape: str) -> P
                  reason=str(e.get("range_source", "")), calibrate=bool(e.get("calibrate", False)))
 
 
-def load_vehicle(name_or_path: str | os.PathLike = "passat_b8_like") -> VehicleParams:
+def load_vehicle(name_or_path: str | os.PathLike = DEFAULT_VEHICLE) -> VehicleParams:
     """Load and validate a vehicle parameter set by name (``config/vehicles/``) or YAML path."""
     path = _resolve("vehicle", name_or_path)
     r = _Reader(path, _load_yaml(path))

@@ -25,6 +25,7 @@ from .params import CORNER_AXLE, FrictionVariant, VehicleParams, load_variant, l
 from .response import Response, selected_labels
 from .road import RoadProfile
 from .terms import AXLE_FRICTION, BUILTIN_TERMS, DAMPER_FRICTION, PhysicsTerm
+from .params import DEFAULT_VEHICLE
 
 INTACT = (1.0, 1.0, 1.0, 1.0)
 
@@ -79,7 +80,7 @@ class Model:
     loaded when first needed), used only by ``params(..., semi_active=True)``.
     """
 
-    def __init__(self, vehicle: VehicleParams | str = "passat_b8_like",
+    def __init__(self, vehicle: VehicleParams | str = DEFAULT_VEHICLE,
                  variant: FrictionVariant | str = "full", dampers=None):
         self._dampers = dampers
         self.vehicle = vehicle if isinstance(vehicle, VehicleParams) else load_vehicle(vehicle)

@@ -31,6 +31,7 @@ from ..model.semiactive import load_damper_family
 from ..sim_core import DAMPER_COMMAND, SIM_IMU, SIM_SUSPENSION
 from .qos import OUTPUT_QOS as QOS  # the same profile as the simulation's outputs (reliable, depth 50)
 from .run import run_node
+from ..model.params import DEFAULT_VEHICLE
 
 NODE_NAME = "susp_damper_controller"
 MAX_SAMPLE_TIME_S = 0.1  # a sample period longer than this is no semi-active control any more [s]
@@ -48,7 +49,7 @@ class DamperControllerNode(Node):
         self.declare_parameter("sample_time_s", 0.01, ParameterDescriptor(
             description="period of the /sim samples [s] (the simulation's publish period)", read_only=True,
             floating_point_range=period))
-        self.declare_parameter("vehicle", "passat_b8_like", ParameterDescriptor(
+        self.declare_parameter("vehicle", DEFAULT_VEHICLE, ParameterDescriptor(
             description="vehicle parameter set (corner geometry)", read_only=True))
         name = str(self.get_parameter("controller").value)
         dt = float(self.get_parameter("sample_time_s").value)

@@ -24,10 +24,11 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from ..errors import SuspInputError
 
 from ..model.vehicle import Model, Stepper, check_oil
+from ..model.params import DEFAULT_VEHICLE
 
 #: name -> (default, description)
 DEFAULTS: dict[str, tuple[Any, str]] = {
-    "vehicle": ("passat_b8_like", "vehicle parameter set name (config/vehicles) or YAML path"),
+    "vehicle": (DEFAULT_VEHICLE, "vehicle parameter set name (config/vehicles) or YAML path"),
     "friction_variant": ("full", "friction variant: full, no_horizontal, no_velocity, dahl_only or a YAML path"),
     "damper_oil_level": ([1.0, 1.0, 1.0, 1.0], "damper oil level FL, FR, RL, RR in [0, 1] (1 = intact)"),
     "step_s": (0.001, "fixed internal integration step [s]"),

@@ -41,6 +41,7 @@ from ..discrepancy.data import SIGNALS, DriveCase, load_cases, mark_quiet, selec
 from ..discrepancy.engine import Evaluator, Structure
 from ..discrepancy.fit import FitResult, fd_jacobian, fit_structure, n_effective
 from ..discrepancy.locate import noise_sigma
+from ...model.params import DEFAULT_VEHICLE
 
 AXLE_WHEELS = {"front": (0, 1), "rear": (2, 3)}
 STATES = ("ok", "degraded", "empty")
@@ -121,7 +122,6 @@ class Inspection:
                         "rms_x_noise": math.sqrt(self.fit_.rss / max(self.fit_.n, 1))}}
 
 
-DEFAULT_VEHICLE = "passat_b8_like"
 
 
 def _vehicle_name(cases: Sequence[DriveCase], config: str | None, notes: list) -> str:

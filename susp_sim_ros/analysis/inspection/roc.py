@@ -38,6 +38,7 @@ import numpy as np
 
 from ...errors import ConfigError
 from ...model.paper import IMU_OUTPUTS
+from ...model.params import DEFAULT_VEHICLE
 
 STATES = ("intact", "one_empty", "one_half", "several")
 METHODS = ("eusama", "phase_shift", "decay_ratio", "model_based")
@@ -82,7 +83,7 @@ def roc_spec(data: dict, source: str, name: str):
     shares = {k: float(v) for k, v in states.items()}
     if any(v < 0 for v in shares.values()) or not math.isclose(sum(shares.values()), 1.0, abs_tol=1e-6):
         raise ConfigError(f"{source}: roc.states: shares must be >= 0 and add up to 1, got {shares}")
-    vehicle = roc.get("vehicle", "passat_b8_like")
+    vehicle = roc.get("vehicle", DEFAULT_VEHICLE)
     vp = _load(source, "roc.vehicle", load_vehicle, vehicle)
     variation = roc.get("variation") or []
     if not isinstance(variation, list) or any(v not in vp.priors for v in variation):

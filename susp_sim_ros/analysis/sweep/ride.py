@@ -31,6 +31,7 @@ import numpy as np
 
 from ...errors import ConfigError
 from .spec import Chunk, StudySpec
+from ...model.params import DEFAULT_VEHICLE
 
 RIDE_KEYS = ("controller", "oil", "road_class", "variant")
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -111,7 +112,7 @@ def ride_task(data: Mapping, run_id: int, run: Mapping) -> dict:
         with _lock:
             model = _cache.get(("ride_model", run["variant"]))
             if model is None:
-                model = _cache[("ride_model", run["variant"])] = Model("passat_b8_like", run["variant"])
+                model = _cache[("ride_model", run["variant"])] = Model(DEFAULT_VEHICLE, run["variant"])
         oil = tuple(float(x) for x in run["oil"].split(","))
         spec = RideSpec(run["road_class"], data["speed_kmh"] / 3.6, data["duration_s"], data["seed"])
         m = run_ride(model, spec, controller=run["controller"], oil=oil, step_s=data["step_s"])

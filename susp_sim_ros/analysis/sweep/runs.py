@@ -13,6 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ...model.layout import P_INDEX
+from ...model.params import DEFAULT_VEHICLE
 
 #: the maneuver geometry a run may set (per run, in ``parameters``)
 MANEUVER_KEYS = ("speed", "bump_height", "bump_length", "steer_amplitude", "steer_frequency")
@@ -26,7 +27,7 @@ def vehicle_key(data: Mapping, run: Mapping) -> str:
     if "vehicle_class" in run:
         c = run["vehicle_class"]
         return "class:" + json.dumps({c: data["vehicle_classes"][c]}, sort_keys=True)
-    return "vehicle:" + run.get("vehicle", "passat_b8_like")
+    return "vehicle:" + run.get("vehicle", DEFAULT_VEHICLE)
 
 
 # ---- run parameters -> model, parameter vector, maneuver ------------------------------------------------
@@ -41,7 +42,7 @@ def vehicle_params(data: Mapping, run: Mapping):
                 over = {k: tuple(v) if isinstance(v, list) else v for k, v in cls.items()}
                 _cache[key] = base.replace(name=f"{base.name}:{run['vehicle_class']}", **over)
             else:
-                _cache[key] = load_vehicle(run.get("vehicle", "passat_b8_like"))
+                _cache[key] = load_vehicle(run.get("vehicle", DEFAULT_VEHICLE))
         return _cache[key]
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from ...errors import ConfigError, SuspInputError
 from ...model.paper import MANEUVERS, PRIMARY_OUTPUT, VARIANTS
 from .runs import MANEUVER_KEYS, maneuver_of, vehicle_key, vehicle_params
+from ...model.params import DEFAULT_VEHICLE
 
 ENGINE_VERSION = 2          # bump when a change alters results, so old stores are not resumed into
 OIL_KEYS = ("oil_front", "oil_rear", "oil_FL", "oil_FR", "oil_RL", "oil_RR")
@@ -161,7 +162,7 @@ def _vehicle_classes(source: str, spec: Any) -> dict:
         where = f"vehicle_classes.{cname}"
         if not isinstance(over, dict):
             raise ConfigError(f"{source}: {where}: expected a mapping of vehicle parameter overrides")
-        cls = {"base": over.get("base", "passat_b8_like")}
+        cls = {"base": over.get("base", DEFAULT_VEHICLE)}
         base = _load(source, f"{where}.base", load_vehicle, cls["base"])
         for k, v in over.items():
             if k == "base":
