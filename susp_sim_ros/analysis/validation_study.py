@@ -65,7 +65,7 @@ def classify_maneuver(text: str) -> str | None:
     return None
 
 
-def classify_state(oil: Sequence[float]) -> str:
+def classify_state(oil: Sequence[float] | np.ndarray) -> str:
     """Vehicle state name of oil levels FL, FR, RL, RR; ``oil_<levels>`` for other combinations."""
     for name in STATES:
         if tuple(float(x) for x in oil) == vehicle_state(name):

@@ -34,6 +34,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -166,11 +167,12 @@ def consider_covariance(J_est: np.ndarray, H: np.ndarray, J_con: np.ndarray, sd_
 
 def vehicle_at(vp: VehicleParams, params: Sequence[CalParam], theta: Sequence[float]) -> VehicleParams:
     """``vp`` with the calibration ``params`` at values ``theta``."""
-    changes: dict[str, object] = {}
+    changes: dict[str, Any] = {}  # field -> new value (float, or an axle pair / table tuple)
     for p, v in zip(params, theta):
         cur = changes.get(p.field, getattr(vp, p.field))
         v = float(v)
         if p.scale:
+            assert p.axle is not None  # a damper-table factor is per axle (calibration_params)
             base = getattr(vp, p.field)
             rows = list(cur)
             rows[p.axle] = tuple(float(x) * v for x in base[p.axle])

@@ -20,6 +20,7 @@ import numpy as np
 from ...errors import RecordingError, SuspInputError
 from ...io.drive import TestDrive
 from ...model.layout import N_U, U_INDEX
+from ...model.road import RoadProfile
 from .. import validation as va
 from ..validation_study import classify_maneuver, classify_state
 
@@ -43,7 +44,7 @@ class DriveCase:
     state: str
     oil: np.ndarray
     U: np.ndarray
-    road: object
+    road: RoadProfile | None
     t0_ns: int
     dt: float
     signals: tuple[str, ...]
@@ -172,7 +173,7 @@ def prepare_case(path: str | Path, drive, *, wheelbase: float, dt: float = 0.001
     oil = np.array(drive.oil_levels(), float) if oil_text not in ("", "unknown") else np.ones(4)
     U, t0 = make_inputs_from_drive(drive, dt)
     windows = va.analysis_windows(drive, wheelbase)
-    wname = va.MANEUVER_WINDOW.get(maneuver, "whole")
+    wname = va.MANEUVER_WINDOW.get(maneuver, "whole") if maneuver is not None else "whole"
     window = windows.get(wname, windows["whole"])
     signals = tuple(signals) if signals is not None else SIGNALS
     unknown = [x for x in signals if x not in SIGNALS]
@@ -217,8 +218,8 @@ def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.0
     from ...io.drive import read_drive
     if not paths:
         raise SuspInputError("give at least one recorded test drive (MCAP)")
-    cases = []
-    names = set()
+    cases: list[DriveCase] = []
+    names: set[str] = set()
     for p in paths:
         p = Path(p)
         if not p.exists():  # a file, or a rosbag2 directory

@@ -138,6 +138,7 @@ class Evaluator:
         P = self.Pn[list(idx)].copy()
         P0 = P.copy()
         for k, c in enumerate(st.cands):
+            assert c.apply is not None  # every library and calibration candidate has one
             c.apply(P, P0, x[st.offsets[k]:st.offsets[k + 1]], self.model)
         return P
 
@@ -188,7 +189,7 @@ class Evaluator:
             return c.quiet
         return self.weights[r][:, 0] > 0
 
-    def bias_values(self, r: int, rates: np.ndarray, lag: float) -> np.ndarray:
+    def bias_values(self, r: int, rates: np.ndarray, lag: float) -> tuple[np.ndarray, np.ndarray]:
         """Estimated gyro bias [deg/s] of drive ``r`` per compared signal (measured - simulated over the
         quiet lead-in), and its standard error."""
         e = -self.case_residual(r, rates, lag, False)

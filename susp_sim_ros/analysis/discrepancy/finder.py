@@ -96,6 +96,9 @@ class DiscrepancyFinder:
     ``progress`` (a bar on stderr: :func:`susp_sim_ros.progress.progress`). Fitted attributes end in ``_``.
     """
 
+    calibrated_fields_: list[str]  # set by fit (annotations only: no class attribute)
+    calibration_: list[dict]
+
     def __init__(self, *, vehicle: str = "passat_b8_like", variant: str = "full",
                  candidates: Sequence[str] | None = None, max_steps: int = 8, heldout: bool = True,
                  progress: bool = False, calibrate: bool = True):
@@ -242,6 +245,7 @@ class DiscrepancyFinder:
                         break
                 if ok:
                     break
+            assert best is not None and best_fit is not None  # opts is not empty: a trial was fitted
             gain = cur.rss - best_fit.rss
             per_before = self._per_drive_rmse(ev, cur)
             per_after = self._per_drive_rmse(ev, best_fit)
@@ -349,6 +353,7 @@ class DiscrepancyFinder:
         share of its handling signals; :mod:`.unmeasured`)."""
         per = self.noise_["per_drive"][c.name]
         pooled = self.noise_["noise_floors"]
+        extra: dict[str, float]  # signal -> variance the unmeasured road adds [native units^2]
         extra = next((u.get("extra_noise_variance", {}) for u in getattr(self, "unmeasured_", [])
                       if u["drive"] == c.name), {})
         return np.array([math.sqrt((per[s] if math.isfinite(per[s]) and per[s] > 0 else pooled[s]) ** 2
@@ -380,7 +385,7 @@ class DiscrepancyFinder:
         """MAP calibration of the base model with the measurement chain; identifiability; the
         measurement-chain terms kept only where the criterion wants them. Sets ``calibration_``."""
         allidx = tuple(range(len(ev.cases)))
-        meas = [n for n in ("sensor_bias", "time_offset") if n in self.candidates]
+        meas: list[str] = [n for n in ("sensor_bias", "time_offset") if n in self.candidates]
         if _steers(ev.cases) and "steering_offset" in self.candidates:
             meas.append("steering_offset")
         params = calibration_params(model.vehicle, model.variant) if self.calibrate else []
@@ -390,16 +395,17 @@ class DiscrepancyFinder:
             self.calibration_, self.identifiability_ = [], None
             return fit_structure(ev, Structure([]))
         cand = calibration_candidate(model, params) if params else None
-        st = Structure(([cand] if cand else []) + meas)
+        st = Structure([cand, *meas] if cand else meas)
         fit1 = fit_structure(ev, st, st.neutral(), allidx, max_nfev=12)
         ident, informed = None, []
         if params:
             k = len(params)
+            assert fit1.jac is not None  # free parameters: fit_structure returns the Jacobian
             ident = identifiability(fit1.jac[:, :k], params, fit1.data_information_scale())
             informed = [p for p, ok in zip(params, ident["informed"]) if ok]
         self.identifiability_ = ident
         cand2 = calibration_candidate(model, informed) if informed else None
-        st2 = Structure(([cand2] if cand2 else []) + meas)
+        st2 = Structure([cand2, *meas] if cand2 else meas)
         x0 = st2.neutral()
         if cand2:
             first = {p.name: v for p, v in zip(params, fit1.x[:len(params)])}
@@ -439,6 +445,7 @@ class DiscrepancyFinder:
         for the discovery stage. Intervals widen with it (the data count less). Calibration values only
         the held-out drive informs keep their joint value in its fold (:func:`_informed_only_by`)."""
         J, r, x = fit.jac, fit.residual, fit.x
+        assert J is not None  # a calibration with free parameters: fit_structure returns the Jacobian
         st = fit.structure
         pidx, pmu, psd = st.prior()
         lo, hi = st.bounds()
@@ -725,10 +732,10 @@ def _jackknife_se(heldout: dict | None, k: int) -> np.ndarray | None:
     three drives), or None."""
     if not heldout or k == 0:
         return None
-    X = [f["params"] for f in heldout["folds"] if len(f.get("params", [])) == k]
-    if len(X) < 3:
+    rows = [f["params"] for f in heldout["folds"] if len(f.get("params", [])) == k]
+    if len(rows) < 3:
         return None
-    X = np.array(X)
+    X = np.array(rows)
     R = len(X)
     return np.sqrt((R - 1) / R * np.sum((X - X.mean(axis=0)) ** 2, axis=0))
 

@@ -72,6 +72,7 @@ def noise_floor(cases: Sequence[DriveCase], sims: Sequence[np.ndarray]) -> dict:
     quiet: dict[str, float] = {}
     pooled: dict[str, list[tuple[float, int]]] = {s: [] for s in SIGNALS}
     for c, y in zip(cases, sims):
+        assert c.t_raw_s is not None and c.y_raw is not None  # set by data.prepare_case
         t = c.dt * np.arange(1, y.shape[0] + 1)
         per[c.name] = {}
         q = c.quiet_raw if c.quiet_raw is not None else np.zeros(c.t_raw_s.size, bool)
@@ -100,11 +101,11 @@ def noise_floor(cases: Sequence[DriveCase], sims: Sequence[np.ndarray]) -> dict:
                 num += v * v * c.y_meas.shape[0]
                 den += c.y_meas.shape[0]
     legacy = math.sqrt(num / den) if den else floors.get("pitch_rate", math.nan)
-    q = list(quiet.values())
+    qv = list(quiet.values())
     return {"noise_floor_deg_s": legacy, "noise_floors": floors, "per_drive": per,
             "units": dict(zip(SIGNALS, SIGNAL_UNIT)),
             "quiet_lead_in_std_deg_s": quiet,
-            "quiet_lead_in_pooled_deg_s": float(np.sqrt(np.mean(np.square(q)))) if q else None,
+            "quiet_lead_in_pooled_deg_s": float(np.sqrt(np.mean(np.square(qv)))) if qv else None,
             "method": f"robust std of {DIFF_ORDER}rd differences of the residual (base simulation - "
                       f"measurement, every sample of the recording, as sampled) / sqrt(20), pooled over "
                       f"drives per signal; cross-check: std over each drive's quiet lead-in"}
@@ -169,7 +170,7 @@ def locate(cases: Sequence[DriveCase], residuals: Sequence[np.ndarray], sigmas: 
                 seg = e[s:s + nwin, j]
                 if np.sqrt(np.mean(seg * seg)) > thr:
                     flags.append((s, s + nwin))
-            merged = []
+            merged: list[list[int]] = []
             for a, b in flags:
                 if merged and a <= merged[-1][1]:
                     merged[-1][1] = b

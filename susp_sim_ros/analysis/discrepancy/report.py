@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
@@ -21,7 +22,7 @@ def _num(x):
 
 def _where(name: str, x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> str:
     cand = BY_NAME[name]
-    axles = set()
+    axles: set[str] = set()
     for j, p in enumerate(cand.params):
         ax = cand.axle_of[j] if j < len(cand.axle_of) else None
         if ax is None:
@@ -30,7 +31,9 @@ def _where(name: str, x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> str:
             axles.add(ax)
     if not axles:  # nothing significant on its own: the axle with the larger relative effect
         eff = [abs(x[j] - p.neutral) / p.step for j, p in enumerate(cand.params)]
-        axles.add(cand.axle_of[int(np.argmax(eff))])
+        ax = cand.axle_of[int(np.argmax(eff))]
+        assert ax is not None  # a None axle returned "all" in the loop above
+        axles.add(ax)
     return axles.pop() if len(axles) == 1 else "all"
 
 
@@ -75,7 +78,7 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
     per_b = ev.get("per_drive_rmse_before", {})
     per_a = ev.get("per_drive_rmse_after", {})
     gain = {d: per_b[d] - per_a.get(d, per_b[d]) for d in per_b}
-    best = max(gain, key=gain.get) if gain else None
+    best = max(gain, key=lambda d: gain[d]) if gain else None
     s = f"{cand.meaning}"
     if "explained_fraction_of_excess" in ev:
         s += (f"; explains {100 * ev['explained_fraction_of_excess']:.0f} % of the residual variance above "
@@ -218,6 +221,7 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
     res = f.result_
     st, x = res.structure, res.x
     base = f.base_variant_
+    var: dict[str, Any]  # the variant YAML: flags, name, terms (a list of dicts)
     var = {"name": name,
            "velocity_scaling": bool(base.velocity_scaling or "damper_friction_velocity" in st.names),
            "oil_scaling": bool(base.oil_scaling or "damper_friction_oil" in st.names),
@@ -384,7 +388,7 @@ def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     var, veh = model_files(f, name)
-    paths = {}
+    paths: dict[str, str | list[str]] = {}
     head = (f"# Written by susp diagnose (the discrepancy finder) from {len(f.cases_)} drives, base "
             f"variant {getattr(f.base_variant_, 'name', f.variant)}.\n")
     p = out / f"{name}.yaml"
