@@ -1,8 +1,10 @@
 """The library of candidate physics terms the discrepancy finder tests (names: interface.md, TERM).
 
 Every candidate is a physically named change of the model with parameters, bounds and a one-line
-meaning, applied to the kernel's flat parameter vector ``P`` (one row per drive). How each maps onto the
-model (design choice, see also the package docstring):
+meaning, applied to the kernel's flat parameter vector ``P`` (one row per drive). Each carries its whole
+meaning: how it edits the parameters (``apply``), whether a variant already has it (``in_variant``), and
+how its fitted values are written into config (``term_params`` for a variant's ``terms:``, ``to_vehicle``
+for the vehicle file). How each maps onto the model (design choice, see also the package docstring):
 
 - the paper's friction scalings (``damper_friction_velocity``, ``damper_friction_oil``,
   ``friction_longitudinal_force``, ``friction_lateral_force``) use the kernel's own scaling switches and
@@ -64,10 +66,28 @@ class Candidate:
     needs: str = ""  # what the drives must contain to identify it: oil_empty, lateral, bump, any
     term_module: str = ""  # physics terms: the module whose import registers the kernel term (written
     #                        into a variant's ``terms:`` so the node can import it)
+    switch: str = ""  # the paper's scalings: the variant flag (FrictionVariant field) the candidate stands for
+    #: how the fitted values are written: ``(x, vp) -> {(section, key): value}`` for the vehicle file
+    to_vehicle: Callable | None = field(default=None, repr=False)
+    #: registered terms: ``x -> {param: {FL, FR, RL, RR}}``, the term's entry in a variant's ``terms:``
+    term_params: Callable | None = field(default=None, repr=False)
 
     @property
     def n_params(self) -> int:
         return len(self.params)
+
+    def in_variant(self, variant) -> bool:
+        """Whether ``variant`` (a :class:`~susp_sim_ros.model.params.FrictionVariant`) already has this
+        physics: its scaling switched on, or its term among the variant's terms."""
+        if self.switch:
+            return bool(getattr(variant, self.switch))
+        return bool(self.term_module) and any(s.term.name == self.name for s in variant.terms)
+
+    def variant_term(self, x: np.ndarray) -> dict | None:
+        """The term's entry in a written variant's ``terms:`` at the fitted values ``x`` (None: not a term)."""
+        if self.term_params is None:
+            return None
+        return {"name": self.name, "module": self.term_module, "params": self.term_params(x)}
 
     def neutral(self) -> np.ndarray:
         return np.array([p.neutral for p in self.params], float)
@@ -158,6 +178,59 @@ def _nothing(P, P0, x, model):
     pass
 
 
+def axle_map(front, rear) -> dict:
+    """A per-axle value as the config files spell it."""
+    return {"front": float(front), "rear": float(rear)}
+
+
+def _velocity_values(x, vp):
+    return {("friction", "velocity_scaling_plateau"): float(x[0]),
+            ("friction", "velocity_scaling_speed"): float(x[1])}
+
+
+def _oil_values(x, vp):
+    fi, ri = vp.damper_friction_intact
+    return {("friction", "damper_level_empty"): axle_map(x[0] * fi, x[1] * ri)}
+
+
+def _longitudinal_values(x, vp):
+    return {("friction", "horizontal_scaling_longitudinal"): axle_map(x[0] * 1e-3, x[1] * 1e-3)}
+
+
+def _lateral_values(x, vp):
+    return {("friction", "horizontal_scaling_lateral"): axle_map(x[0] * 1e-3, x[1] * 1e-3)}
+
+
+def _mass_values(x, vp):
+    return {("body", "sprung_mass"): float(vp.sprung_mass * x[0])}
+
+
+def _inertia_values(x, vp):
+    return {("body", "roll_inertia"): float(vp.roll_inertia * x[0]),
+            ("body", "pitch_inertia"): float(vp.pitch_inertia * x[1])}
+
+
+def _spring_values(x, vp):
+    return {("suspension", "wheel_rate"): axle_map(vp.wheel_rate[0] * x[0], vp.wheel_rate[1] * x[1])}
+
+
+def _relax_values(x, vp):
+    return {("tyre", "relaxation_length"): float(vp.relaxation_length * x[0])}
+
+
+def _amplitude_params(x):
+    return {"extra_level": axle_map(x[0], x[1]), "onset": axle_map(x[2], x[2]), "memory": axle_map(x[3], x[3]),
+            "horizontal": axle_map(1.0, 1.0)}
+
+
+def _viscous_params(x):
+    return {"c": axle_map(x[0], x[1])}
+
+
+def _gas_params(x):
+    return {"f0": float(x[0]), "k": float(x[1])}
+
+
 SINE = "a sine-steer (or slalom) drive: lateral wheel forces of several kN"
 EMPTY = "a drive with oil-empty dampers on that axle (hydraulic damping masks damper friction otherwise)"
 
@@ -167,23 +240,26 @@ LIBRARY: tuple[Candidate, ...] = (
               (CandParam("plateau", "1", 1.0, 1.0, 5.0, 0.5, "s_v at high stroke velocity"),
                CandParam("speed", "m/s", 0.02, 0.003, 0.2, 0.005, "stroke velocity scale of the rise")),
               _velocity, (None, None), "an oil-empty-damper drive with fast strokes (bump crossing)",
-              "oil_empty"),
+              "oil_empty", switch="velocity_scaling", to_vehicle=_velocity_values),
     Candidate("damper_friction_oil", PHYSICS,
               "shock-absorber friction level changes when the damper loses its oil (paper: s_oil)",
               (CandParam("ratio_front", "1", 1.0, 0.2, 5.0, 0.3, "F_empty/F_intact, front"),
                CandParam("ratio_rear", "1", 1.0, 0.2, 5.0, 0.3, "F_empty/F_intact, rear")),
-              _oil, ("front", "rear"), "drives with oil-empty dampers on the axle in question", "oil_empty"),
+              _oil, ("front", "rear"), "drives with oil-empty dampers on the axle in question", "oil_empty",
+              switch="oil_scaling", to_vehicle=_oil_values),
     Candidate("friction_longitudinal_force", PHYSICS,
               "suspension friction grows with the longitudinal wheel force (paper: s_h, Fx)",
               (CandParam("kx_front", "1/kN", 0.0, 0.0, 3.0, 0.3, "relative growth per kN |Fx|, front"),
                CandParam("kx_rear", "1/kN", 0.0, 0.0, 3.0, 0.3, "relative growth per kN |Fx|, rear")),
               _longitudinal, ("front", "rear"),
-              "a braking/accelerating drive or a bump crossing with oil-empty dampers", "any"),
+              "a braking/accelerating drive or a bump crossing with oil-empty dampers", "any",
+              switch="horizontal_scaling", to_vehicle=_longitudinal_values),
     Candidate("friction_lateral_force", PHYSICS,
               "suspension friction grows with the lateral wheel force (paper: s_h, Fy)",
               (CandParam("ky_front", "1/kN", 0.0, 0.0, 3.0, 0.3, "relative growth per kN |Fy|, front"),
                CandParam("ky_rear", "1/kN", 0.0, 0.0, 3.0, 0.3, "relative growth per kN |Fy|, rear")),
-              _lateral, ("front", "rear"), SINE, "lateral"),
+              _lateral, ("front", "rear"), SINE, "lateral", switch="horizontal_scaling",
+              to_vehicle=_lateral_values),
     Candidate("friction_amplitude", PHYSICS,
               "suspension friction grows with deflection amplitude (extra Dahl element above an onset stroke)",
               (CandParam("extra_front", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, front"),
@@ -192,32 +268,34 @@ LIBRARY: tuple[Candidate, ...] = (
                CandParam("memory", "s", 1.0, 0.05, 5.0, 0.2, "how long the peak deflection is remembered")),
               _amplitude, ("front", "rear", None, None),
               "a bump crossing (strokes of several cm), best with oil-empty dampers", "bump",
-              "susp_sim_ros.model.amplitude_friction"),
+              "susp_sim_ros.model.amplitude_friction", term_params=_amplitude_params),
     Candidate("damper_gas_preload", PHYSICS,
               "gas-spring force of a pressurised damper: preload change plus gas stiffness",
               (CandParam("f0", "N", 0.0, -500.0, 500.0, 20.0, "force change at static deflection"),
                CandParam("k", "N/m", 0.0, -20000.0, 20000.0, 1000.0, "gas stiffness")),
-              _gas, (None, None), "a bump crossing (large deflection)", "bump", "susp_sim_ros.model.extra_terms"),
+              _gas, (None, None), "a bump crossing (large deflection)", "bump", "susp_sim_ros.model.extra_terms",
+              term_params=_gas_params),
     Candidate("extra_viscous_damping", PHYSICS,
               "additional linear damping c*v in parallel with the damper (bushings, residual oil)",
               (CandParam("c_front", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, front"),
                CandParam("c_rear", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, rear")),
               _term_axles("extra_viscous_damping", "c"), ("front", "rear"), "any drive with body motion",
-              "any", "susp_sim_ros.model.extra_terms"),
+              "any", "susp_sim_ros.model.extra_terms", term_params=_viscous_params),
     Candidate("mass_error", PARAMETER, "sprung mass differs from the parameter set (loading, tolerance)",
               (CandParam("scale", "1", 1.0, 0.8, 1.2, 0.01, "sprung mass factor"),),
-              _mass, (None,), "a bump crossing (heave/pitch frequencies)", "any"),
+              _mass, (None,), "a bump crossing (heave/pitch frequencies)", "any", to_vehicle=_mass_values),
     Candidate("inertia_error", PARAMETER, "body roll/pitch inertia differs from the parameter set",
               (CandParam("roll_scale", "1", 1.0, 0.7, 1.3, 0.02, "roll inertia factor"),
                CandParam("pitch_scale", "1", 1.0, 0.7, 1.3, 0.02, "pitch inertia factor")),
-              _inertia, (None, None), "sine steer (roll) and bump crossing (pitch)", "any"),
+              _inertia, (None, None), "sine steer (roll) and bump crossing (pitch)", "any",
+              to_vehicle=_inertia_values),
     Candidate("spring_rate_error", PARAMETER, "wheel rates differ from the parameter set",
               (CandParam("front_scale", "1", 1.0, 0.8, 1.2, 0.01, "front wheel-rate factor"),
                CandParam("rear_scale", "1", 1.0, 0.8, 1.2, 0.01, "rear wheel-rate factor")),
-              _spring, ("front", "rear"), "a bump crossing", "any"),
+              _spring, ("front", "rear"), "a bump crossing", "any", to_vehicle=_spring_values),
     Candidate("tyre_relaxation_error", PARAMETER, "tyre relaxation length differs from the parameter set",
               (CandParam("scale", "1", 1.0, 0.2, 5.0, 0.2, "relaxation-length factor"),),
-              _relax, (None,), SINE, "lateral"),
+              _relax, (None,), SINE, "lateral", to_vehicle=_relax_values),
     Candidate("time_offset", MEASUREMENT,
               "the IMU signal lags the inputs (sensor bandwidth, timestamping)",
               (CandParam("lag", "s", 0.0, -0.05, 0.05, 0.001, "measured minus model time (positive: IMU late)"),),
@@ -233,10 +311,6 @@ LIBRARY: tuple[Candidate, ...] = (
 )
 
 BY_NAME = {c.name: c for c in LIBRARY}
-# the paper's scalings: which kernel switch each candidate stands for
-SWITCH_OF = {"damper_friction_velocity": "velocity_scaling", "damper_friction_oil": "oil_scaling",
-             "friction_longitudinal_force": "horizontal_scaling",
-             "friction_lateral_force": "horizontal_scaling"}
 
 
 def neutral_base(P0: np.ndarray) -> np.ndarray:

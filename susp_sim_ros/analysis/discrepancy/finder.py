@@ -42,7 +42,7 @@ from ...model.terms import get_term
 from .calibration import (STEP_OF_SD, calibration_candidate, calibration_entries, calibration_params,
                           consider_covariance, consider_params, identifiability,
                           vehicle_at)
-from .candidates import BY_NAME, CALIBRATION, LIBRARY, PHYSICS, SWITCH_OF
+from .candidates import BY_NAME, CALIBRATION, LIBRARY, PHYSICS
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .data import SIGNAL_UNIT, as_cases
 from .engine import Evaluator, Structure
@@ -81,9 +81,7 @@ def extended_model(vehicle, variant) -> Model:
     for name in (c.name for c in TERM_CANDIDATES):
         if name not in have:
             t = get_term(name)
-            vals = {p.name: (p.default,) * 4 for p in t.params}
-            if name == "friction_amplitude":
-                vals["extra_level"] = (0.0,) * 4
+            vals = {p.name: (p.default,) * 4 for p in t.params}  # every term's default is zero effect
             extra.append(TermSetting(t, vals))
     return Model(vp, dataclasses.replace(var, terms=var.terms + tuple(extra)))
 
@@ -125,11 +123,7 @@ class DiscrepancyFinder:
             cand = BY_NAME[name]
             if cand.kind != PHYSICS:  # parameters are calibrated, the measurement chain with them
                 continue
-            sw = SWITCH_OF.get(name)
-            if sw and getattr(base_variant, sw):
-                in_base.append(name)
-                continue
-            if name == "friction_amplitude" and any(s.term.name == name for s in base_variant.terms):
+            if cand.in_variant(base_variant):
                 in_base.append(name)
                 continue
             # only a structurally absent excitation rules a candidate out before testing (no steering:

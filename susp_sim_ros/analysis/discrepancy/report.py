@@ -9,7 +9,7 @@ import numpy as np
 import yaml
 
 from .calibration import outside_statement
-from .candidates import BY_NAME, MEASUREMENT, PHYSICS
+from .candidates import BY_NAME, MEASUREMENT, PHYSICS, axle_map
 from .data import SIGNAL_UNIT, SIGNALS
 
 VERDICTS = ("missing_physics", "no_significant_discrepancy", "unexplained_residual", "unmeasured_input")
@@ -200,10 +200,6 @@ def _clean(x):
 
 
 # ---- the extended model as config files the node can run -------------------------------------------------
-def _axle_map(front, rear):
-    return {"front": float(front), "rear": float(rear)}
-
-
 def model_files(f, name: str) -> tuple[dict, dict | None]:
     """(variant YAML dict, vehicle YAML dict or None) of the fitted model.
 
@@ -221,65 +217,32 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
     res = f.result_
     st, x = res.structure, res.x
     base = f.base_variant_
-    var: dict[str, Any]  # the variant YAML: flags, name, terms (a list of dicts)
-    var = {"name": name,
-           "velocity_scaling": bool(base.velocity_scaling or "damper_friction_velocity" in st.names),
-           "oil_scaling": bool(base.oil_scaling or "damper_friction_oil" in st.names),
-           "horizontal_scaling": bool(base.horizontal_scaling or "friction_lateral_force" in st.names
-                                      or "friction_longitudinal_force" in st.names),
-           "terms": []}
+    var: dict[str, Any] = {"name": name, "terms": []}
+    for flag in ("velocity_scaling", "oil_scaling", "horizontal_scaling"):
+        var[flag] = bool(getattr(base, flag) or any(c.switch == flag for c in st.cands))
     for s in base.terms:
         var["terms"].append({"name": s.term.name, "params": {k: {"FL": v[0], "FR": v[1], "RL": v[2], "RR": v[3]}
                                                               for k, v in s.values.items()}})
-    if "friction_amplitude" in st.names:
-        p = st.part(x, "friction_amplitude")
-        var["terms"].append({"name": "friction_amplitude", "module": BY_NAME["friction_amplitude"].term_module,
-                             "params": {"extra_level": _axle_map(p[0], p[1]), "onset": _axle_map(p[2], p[2]),
-                                        "memory": _axle_map(p[3], p[3]), "horizontal": _axle_map(1.0, 1.0)}})
-    if "extra_viscous_damping" in st.names:
-        p = st.part(x, "extra_viscous_damping")
-        var["terms"].append({"name": "extra_viscous_damping", "module": BY_NAME["extra_viscous_damping"].term_module,
-                             "params": {"c": _axle_map(p[0], p[1])}})
-    if "damper_gas_preload" in st.names:
-        p = st.part(x, "damper_gas_preload")
-        var["terms"].append({"name": "damper_gas_preload", "module": BY_NAME["damper_gas_preload"].term_module,
-                             "params": {"f0": float(p[0]), "k": float(p[1])}})
     vp = getattr(f, "calibrated_vehicle_", f.model_.vehicle)
     src = Path(vp.source_file) if vp.source_file else None
-    veh_changes = {}
+    veh_changes: dict[tuple[str, str], Any] = {}
     from ...model.params import PARAMETER_TABLE
     for fld, sec, key, shape, _ in PARAMETER_TABLE:  # the calibration's informed values
         if fld in getattr(f, "calibrated_fields_", ()):
             val = getattr(vp, fld)
-            veh_changes[(sec, key)] = (_axle_map(*val) if shape == "axle" else
+            veh_changes[(sec, key)] = (axle_map(*val) if shape == "axle" else
                                        {"front": [float(v) for v in val[0]], "rear": [float(v) for v in val[1]]}
                                        if shape == "table" else float(val))
-    if "damper_friction_velocity" in st.names:
-        p = st.part(x, "damper_friction_velocity")
-        veh_changes[("friction", "velocity_scaling_plateau")] = float(p[0])
-        veh_changes[("friction", "velocity_scaling_speed")] = float(p[1])
-    if "damper_friction_oil" in st.names:
-        p = st.part(x, "damper_friction_oil")
-        fi, ri = vp.damper_friction_intact
-        veh_changes[("friction", "damper_level_empty")] = _axle_map(p[0] * fi, p[1] * ri)
-    if "friction_longitudinal_force" in st.names or (var["horizontal_scaling"] and not base.horizontal_scaling):
-        p = st.part(x, "friction_longitudinal_force") if "friction_longitudinal_force" in st.names else (0, 0)
-        veh_changes[("friction", "horizontal_scaling_longitudinal")] = _axle_map(p[0] * 1e-3, p[1] * 1e-3)
-    if "friction_lateral_force" in st.names or (var["horizontal_scaling"] and not base.horizontal_scaling):
-        p = st.part(x, "friction_lateral_force") if "friction_lateral_force" in st.names else (0, 0)
-        veh_changes[("friction", "horizontal_scaling_lateral")] = _axle_map(p[0] * 1e-3, p[1] * 1e-3)
-    if "mass_error" in st.names:
-        veh_changes[("body", "sprung_mass")] = float(vp.sprung_mass * st.part(x, "mass_error")[0])
-    if "inertia_error" in st.names:
-        p = st.part(x, "inertia_error")
-        veh_changes[("body", "roll_inertia")] = float(vp.roll_inertia * p[0])
-        veh_changes[("body", "pitch_inertia")] = float(vp.pitch_inertia * p[1])
-    if "spring_rate_error" in st.names:
-        p = st.part(x, "spring_rate_error")
-        veh_changes[("suspension", "wheel_rate")] = _axle_map(vp.wheel_rate[0] * p[0], vp.wheel_rate[1] * p[1])
-    if "tyre_relaxation_error" in st.names:
-        factor = st.part(x, "tyre_relaxation_error")[0]
-        veh_changes[("tyre", "relaxation_length")] = float(vp.relaxation_length * factor)
+    # each found term writes itself: a registered term into the variant, the rest into the vehicle file
+    for c in st.cands:
+        entry = c.variant_term(st.part(x, c.name))
+        if entry is not None:
+            var["terms"].append(entry)
+        if c.to_vehicle is not None:
+            veh_changes.update(c.to_vehicle(st.part(x, c.name), vp))
+    if var["horizontal_scaling"] and not base.horizontal_scaling:  # switched on: the absent slope is zero
+        for key in ("horizontal_scaling_longitudinal", "horizontal_scaling_lateral"):
+            veh_changes.setdefault(("friction", key), axle_map(0.0, 0.0))
     if not veh_changes or src is None:
         return var, None
     data = yaml.safe_load(src.read_text())
