@@ -438,11 +438,8 @@ class DiscrepancyFinder:
         friction term absorbed by mass, stiffness or damper factors), which then stays in the residual
         for the discovery stage. Intervals widen with it (the data count less). Calibration values only
         the held-out drive informs keep their joint value in its fold (:func:`_informed_only_by`)."""
-        J, r, x = fit.jac, fit.residual, fit.x
+        J, r = fit.jac, fit.residual
         assert J is not None  # a calibration with free parameters: fit_structure returns the Jacobian
-        st = fit.structure
-        pidx, pmu, psd = st.prior()
-        lo, hi = st.bounds()
         edges = np.cumsum([0] + [self.evaluator_.n_res[q] for q in fit.idx])
         scores = {}
         for w in DATA_WEIGHTS:
@@ -450,18 +447,8 @@ class DiscrepancyFinder:
             for h in range(len(fit.idx)):
                 held = np.zeros(len(r), bool)
                 held[edges[h]:edges[h + 1]] = True
-                tr = ~held
-                ne_t = max(fit.n_eff * tr.sum() / len(r), 1.0)
-                pw = math.sqrt(tr.sum() / ne_t / w)
-                fixed = set(_informed_only_by(fit, held, pw))
-                free = [j for j in range(len(x)) if j not in fixed]
-                A, b = J[tr][:, free], -r[tr]
-                pr = prior_rows(free, x, pidx, pmu, psd, pw)
-                if pr is not None:
-                    A, b = np.vstack([A, pr[0]]), np.concatenate([b, pr[1]])
-                d = np.zeros(len(x))
-                d[free], *_ = np.linalg.lstsq(A, b, rcond=None)
-                d = np.clip(x + d, lo, hi) - x
+                ne_t = max(fit.n_eff * (~held).sum() / len(r), 1.0)
+                d = _fold_step(fit, held, math.sqrt((~held).sum() / ne_t / w))
                 e = r[held] + J[held] @ d
                 sq += float(e @ e)
             scores[w] = sq
@@ -689,19 +676,20 @@ def _informed_only_by(fit: FitResult, held: np.ndarray, pw: float | None = None)
     return [int(j) for j, sd in zip(pidx, psd) if info[j] < (pw / sd) ** 2]
 
 
-def _fold_refit(fit: FitResult, held: np.ndarray) -> tuple[float, float]:
-    """Squared whitened residual on the ``held`` rows and on the others after refitting ``fit`` on the
-    others only: one Gauss-Newton step from the joint fit with the priors, clipped to the bounds."""
-    r = fit.residual
+def _fold_step(fit: FitResult, held: np.ndarray, pw: float | None = None) -> np.ndarray:
+    """The parameter step that refits ``fit`` on the rows outside ``held``: one Gauss-Newton step from the
+    joint fit with the priors (their rows weighted ``pw``, default the structure's), clipped to the
+    bounds; values only the ``held`` rows inform stay (:func:`_informed_only_by`)."""
+    r, J, x = fit.residual, fit.jac, fit.x
+    assert J is not None  # callers pass fits with free parameters
     tr = ~held
-    if fit.jac is None or not len(fit.x):
-        return float(r[held] @ r[held]), float(r[tr] @ r[tr])
-    st, J, x = fit.structure, fit.jac, fit.x
+    st = fit.structure
     pidx, pmu, psd = st.prior()
     lo, hi = st.bounds()
-    ne_t = max(fit.n_eff * tr.sum() / len(r), 1.0)
-    pw = math.sqrt(tr.sum() / ne_t) * st.prior_gain
-    fixed = set(_informed_only_by(fit, held))
+    if pw is None:
+        ne_t = max(fit.n_eff * tr.sum() / len(r), 1.0)
+        pw = math.sqrt(tr.sum() / ne_t) * st.prior_gain
+    fixed = set(_informed_only_by(fit, held, pw))
     free = [j for j in range(len(x)) if j not in fixed]
     A, b = J[tr][:, free], -r[tr]
     pr = prior_rows(free, x, pidx, pmu, psd, pw)
@@ -711,8 +699,17 @@ def _fold_refit(fit: FitResult, held: np.ndarray) -> tuple[float, float]:
     d[free], *_ = np.linalg.lstsq(A, b, rcond=None)
     # within the parameters' bounds, as the nonlinear refit: a parameter the training drives hardly
     # inform must not predict the held-out drive from an impossible value
-    d = np.clip(x + d, lo, hi) - x
-    e = r + J @ d
+    return np.clip(x + d, lo, hi) - x
+
+
+def _fold_refit(fit: FitResult, held: np.ndarray) -> tuple[float, float]:
+    """Squared whitened residual on the ``held`` rows and on the others after refitting ``fit`` on the
+    others only (:func:`_fold_step`)."""
+    r = fit.residual
+    tr = ~held
+    if fit.jac is None or not len(fit.x):
+        return float(r[held] @ r[held]), float(r[tr] @ r[tr])
+    e = r + fit.jac @ _fold_step(fit, held)
     return float(e[held] @ e[held]), float(e[tr] @ e[tr])
 
 
