@@ -100,15 +100,14 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
 def verdict(f) -> tuple[str, str]:
     """The verdict and its reason in plain words. All figures in whitened units (x noise) pooled over
     every compared signal, so a yaw-rate or acceleration residual counts like a pitch-rate one."""
-    before, after = _pooled_noise_ratio(f)
+    # what remains is judged on the pooled signals or on the maneuvers' own gyro signals, whichever keeps
+    # more: a residual in the pitch rate of a bump crossing is not diluted by clean accelerometer channels
+    before, after = max(_pooled_noise_ratio(f), _primary_noise_ratio(f), key=lambda ba: ba[1])
     phys = [n for n in f.result_.structure.names if n in BY_NAME and BY_NAME[n].kind == PHYSICS]
     significant = bool(f.windows_)
     excess_before = max(before ** 2 - 1.0, 0.0)
     excess_after = max(after ** 2 - 1.0, 0.0)
     explained = 1.0 - excess_after / excess_before if excess_before > 0 else 1.0
-    # what remains is judged on the pooled signals and on the maneuver's own gyro signals: a residual in
-    # the pitch rate of a bump crossing is not diluted by clean accelerometer channels
-    after = max(after, _primary_noise_ratio(f))
     unmeasured = getattr(f, "unmeasured_", [])
     if unmeasured and not phys:
         return "unmeasured_input", "; ".join(u["statement"] for u in unmeasured)
@@ -149,14 +148,14 @@ def _pooled_noise_ratio(f) -> tuple[float, float]:
     return math.sqrt(f.base_fit_.rss / f.base_fit_.n), math.sqrt(f.result_.rss / f.result_.n)
 
 
-def _primary_noise_ratio(f) -> float:
-    """Held-out RMS of the maneuvers' primary gyro signals over the gyro noise floor (0 without a
-    held-out figure)."""
+def _primary_noise_ratio(f) -> tuple[float, float]:
+    """Held-out RMS of the maneuvers' primary gyro signals over the gyro noise floor, of the base model
+    and of the final model ((0, 0) without held-out figures)."""
     ho = f.heldout_ or {}
-    a, nf = ho.get("after_deg_s"), getattr(f, "noise_floor_", None)
-    if a is None or not nf or not math.isfinite(a):
-        return 0.0
-    return float(a / nf)
+    b, a, nf = ho.get("before_deg_s"), ho.get("after_deg_s"), getattr(f, "noise_floor_", None)
+    if a is None or b is None or not nf or not (math.isfinite(a) and math.isfinite(b)):
+        return 0.0, 0.0
+    return float(b / nf), float(a / nf)
 
 
 UNEXPLAINED_RATIO = 1.5
