@@ -20,6 +20,7 @@ import numpy as np
 from ...errors import RecordingError, SuspInputError
 from ...io.drive import TestDrive
 from ...model.layout import N_U, U_INDEX
+from ...model.paper import IMU_OUTPUTS, IMU_SIGNALS
 from ...model.road import RoadProfile
 from .. import validation as va
 from ..validation_study import classify_maneuver, classify_state
@@ -143,10 +144,10 @@ def make_inputs_from_drive(drive, dt: float = 0.001, hold: bool = False) -> tupl
 
 
 #: Every IMU signal the finder can compare (interface.md, SIGNAL), its model output and unit.
-SIGNALS = ("roll_rate", "pitch_rate", "yaw_rate", "accel_x", "accel_y", "accel_z")
-SIGNAL_OUTPUT = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE", "AX_SF", "AY_SF", "AZ_SF")
+SIGNALS = IMU_SIGNALS
+SIGNAL_OUTPUT = IMU_OUTPUTS
 SIGNAL_UNIT = ("deg/s", "deg/s", "deg/s", "m/s^2", "m/s^2", "m/s^2")
-GYRO = ("roll_rate", "pitch_rate", "yaw_rate")
+GYRO = IMU_SIGNALS[:3]
 
 
 def primary_signals(maneuver: str | None) -> tuple[str, ...]:

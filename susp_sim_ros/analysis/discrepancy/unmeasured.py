@@ -30,6 +30,7 @@ from scipy import signal as sps
 from ...model import simulate
 from ...model.iso8608 import CLASS_GD_N0, class_of, random_road
 from ...model.layout import U_INDEX
+from ...model.paper import IMU_OUTPUTS, IMU_SIGNALS
 from ...model.vehicle import make_inputs
 from .data import DriveCase
 
@@ -39,7 +40,7 @@ BODY_BAND_HZ = (0.7, 3.0)
 WHEEL_BAND_HZ = (7.0, 20.0)
 CLASS_BAND_HZ = (0.5, 20.0)
 EXCESS = 4.0
-_OUTPUT = {"accel_z": "AZ_SF", "pitch_rate": "PITCH_RATE", "roll_rate": "ROLL_RATE"}
+_OUTPUT = {s: IMU_OUTPUTS[IMU_SIGNALS.index(s)] for s in VERTICAL}
 _TO_UNITS = {"accel_z": 1.0, "pitch_rate": math.degrees(1.0), "roll_rate": math.degrees(1.0)}
 
 
