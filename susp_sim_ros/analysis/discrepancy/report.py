@@ -93,7 +93,10 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
               f"of the residual above noise and is selected in {100 * ev['selected_in_fraction_of_refits']:.0f} % "
               f"of the leave-one-drive-out refits")
     if cand.kind == PHYSICS:
-        s += "; no recalibration of the base model within its priors explains it (fitted jointly with them)"
+        s += "; no recalibration of the base model within its priors explains it (fitted jointly with them"
+        if "recalibration_rss" in ev:
+            s += ", and it explains more than refitting every ranged vehicle value within its prior does"
+        s += ")"
     return s
 
 
