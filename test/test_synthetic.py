@@ -34,8 +34,7 @@ def synthetic_model():
 def test_term_is_registered_through_the_term_interface():
     t = get_term("friction_amplitude")
     assert t is syn.FRICTION_AMPLITUDE is af.FRICTION_AMPLITUDE and t.component == "axle"
-    assert [p.name for p in t.params] == ["extra_level", "onset", "scale", "band", "sigma", "horizontal", "memory",
-                                             "blend"]
+    assert [p.name for p in t.params] == ["extra_level", "onset", "scale", "band", "sigma", "horizontal", "memory"]
     # the bundled generator uses the stroke-amplitude form without horizontal scaling (bags unchanged)
     setting = next(s for s in syn.synthetic_variant().terms if s.term.name == "friction_amplitude")
     assert not {"memory", "horizontal"} & set(setting.values)
@@ -122,9 +121,9 @@ def test_amplitude_friction_is_clearly_present_in_the_rear_empty_bump_drive():
 def _amplitude_term_run(d, *, memory=0.0, horizontal=0.0, sh=1.0, dt=1e-3, extra=20.0):
     """Drive corner 0 of the amplitude-friction term through deflections ``d`` [m]; its Dahl force [N] and
     remembered amplitude [m] per step."""
-    p = np.zeros(4 * 8)
+    p = np.zeros(4 * 7)
     p[0:4], p[4:8], p[8:12], p[12:16], p[16:20] = extra, 0.0, 0.005, 0.001, 1e5
-    p[20:24], p[24:28], p[28:32] = horizontal, memory, 1.0  # blend 1: the remembered peak alone
+    p[20:24], p[24:28] = horizontal, memory
     s = np.zeros(4 * 7)
     c = np.zeros((4, N_CTX))
     c[:, C_INDEX["DT"]] = dt

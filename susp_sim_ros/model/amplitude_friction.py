@@ -7,8 +7,8 @@ amplitude. It is the hidden physics of the synthetic measurement vehicle behind 
 (:mod:`susp_sim_ros.analysis.synthetic`) and a candidate of the discrepancy finder.
 
 Parameters per corner (``p[po + 4*j + i]``): 0 ``extra_level`` [N], 1 ``onset`` [m], 2 ``scale`` [m],
-3 ``band`` [m], 4 ``sigma`` [N/m], 5 ``horizontal`` [1], 6 ``memory`` [s], 7 ``blend`` [1]. States per
-corner (``s[so + 4*k + i]``): 0 Dahl force [N], 1 deflection [m] (sum of the increments from static
+3 ``band`` [m], 4 ``sigma`` [N/m], 5 ``horizontal`` [1], 6 ``memory`` [s]. States per corner
+(``s[so + 4*k + i]``): 0 Dahl force [N], 1 deflection [m] (sum of the increments from static
 equilibrium), 2 deflection at the last reversal [m], 3 extreme deflection of the current stroke [m],
 4 stroke direction (+1, -1, 0 before the first move), 5 amplitude of the last completed stroke [m],
 6 remembered peak deflection from the static position [m] (used with ``memory`` > 0).
@@ -67,17 +67,16 @@ def friction_amplitude_update(p, po, s, so, i, c, dx):
         s[so + _REV + i] = ext
         s[so + _EXT + i] = d
         s[so + _DIR + i] = -direction
-    amp = 0.5 * abs(s[so + _EXT + i] - s[so + _REV + i])
-    if s[so + _ALAST + i] > amp:
-        amp = s[so + _ALAST + i]
     memory = p[po + 24 + i]
     if memory > 0.0:  # peak deflection from the static position, forgotten with time constant ``memory``
-        peak = s[so + _PEAK + i] * math.exp(-c[i, _C_DT] / memory)
-        if abs(d) > peak:
-            peak = abs(d)
-        s[so + _PEAK + i] = peak
-        blend = p[po + 28 + i]
-        amp = (1.0 - blend) * amp + blend * peak
+        amp = s[so + _PEAK + i] * math.exp(-c[i, _C_DT] / memory)
+        if abs(d) > amp:
+            amp = abs(d)
+        s[so + _PEAK + i] = amp
+    else:
+        amp = 0.5 * abs(s[so + _EXT + i] - s[so + _REV + i])
+        if s[so + _ALAST + i] > amp:
+            amp = s[so + _ALAST + i]
     level = friction_amplitude_level(p[po + i], p[po + 4 + i], p[po + 8 + i], amp)
     if p[po + 20 + i] > 0.5:
         level *= c[i, _C_SH]
@@ -101,10 +100,7 @@ FRICTION_AMPLITUDE = register_term(PhysicsTerm(
             TermParam("sigma", "N/m", "Dahl stiffness", 1e5, 1.0),
             TermParam("horizontal", "1", "1: the level is scaled by the axle friction's horizontal-force "
                       "scaling s_h, 0: not", 0.0, 0.0, 1.0),
-            TermParam("memory", "s", "0: the amplitude is that of the current or last stroke; > 0: blended "
-                      "with the peak deflection from the static position, forgotten with this time constant",
-                      0.0, 0.0),
-            TermParam("blend", "1", "with memory > 0: the share of the remembered peak deflection in the "
-                      "amplitude (0: stroke amplitude only, 1: peak deflection only)", 1.0, 0.0, 1.0)),
+            TermParam("memory", "s", "0: the amplitude is that of the current or last stroke; > 0: the peak "
+                      "deflection from the static position, forgotten with this time constant", 0.0, 0.0)),
     n_states=7, force=friction_amplitude_force, update=friction_amplitude_update,
     stored_energy=_amplitude_energy))

@@ -135,14 +135,13 @@ def _term_axles(name, param):
 
 
 def _amplitude(P, P0, x, model):
-    """Extra level per axle, one onset, one memory and one blend: the level grows with an amplitude that
-    blends the stroke amplitude with the peak deflection from the static position, forgotten with the
-    memory time constant (a stroke amplitude seen through the joints' elastomers), and follows the axle
-    friction's horizontal-force scaling (the extra friction sits in the same joints)."""
+    """Extra level per axle, one onset and one memory: the level grows with the peak deflection from the
+    static position, forgotten with the memory time constant (a stroke amplitude seen through the
+    joints' elastomers), and follows the axle friction's horizontal-force scaling (the extra friction
+    sits in the same joints)."""
     _term_axles("friction_amplitude", "extra_level")(P, P0, x, model)
     P[:, model.term_param_slice("friction_amplitude", "onset")] = x[2]
     P[:, model.term_param_slice("friction_amplitude", "memory")] = x[3]
-    P[:, model.term_param_slice("friction_amplitude", "blend")] = x[4]
     P[:, model.term_param_slice("friction_amplitude", "horizontal")] = 1.0
 
 
@@ -221,7 +220,7 @@ def _relax_values(x, vp):
 
 def _amplitude_params(x):
     return {"extra_level": axle_map(x[0], x[1]), "onset": axle_map(x[2], x[2]), "memory": axle_map(x[3], x[3]),
-            "blend": axle_map(x[4], x[4]), "horizontal": axle_map(1.0, 1.0)}
+            "horizontal": axle_map(1.0, 1.0)}
 
 
 def _viscous_params(x):
@@ -266,10 +265,8 @@ LIBRARY: tuple[Candidate, ...] = (
               (CandParam("extra_front", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, front"),
                CandParam("extra_rear", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, rear"),
                CandParam("onset", "m", 0.005, 0.0, 0.02, 0.002, "stroke amplitude where the extra sets in"),
-               CandParam("memory", "s", 1.0, 0.05, 5.0, 0.2, "how long the peak deflection is remembered"),
-               CandParam("blend", "1", 0.5, 0.0, 1.0, 0.1,
-                         "share of the remembered peak deflection in the amplitude (rest: stroke amplitude)")),
-              _amplitude, ("front", "rear", None, None, None),
+               CandParam("memory", "s", 1.0, 0.05, 5.0, 0.2, "how long the peak deflection is remembered")),
+              _amplitude, ("front", "rear", None, None),
               "a bump crossing (strokes of several cm), best with oil-empty dampers", "bump",
               "susp_sim_ros.model.amplitude_friction", term_params=_amplitude_params),
     Candidate("damper_gas_preload", PHYSICS,
