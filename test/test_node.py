@@ -335,6 +335,25 @@ def test_entry_points_refuse_a_bad_parameter_with_exit_code_2(module, ros_args, 
     assert not rclpy.ok()
 
 
+def test_a_shutdown_between_two_waits_is_a_normal_stop(capsys):
+    """SIGINT shuts rclpy's context down from its signal handler at any moment; when that falls between
+    run_node's ``rclpy.ok()`` and the executor's next wait, the wait fails (RCLError, invalid context).
+    Reproduced deterministically: ``stop_when`` shuts the context down and says "go on"."""
+    import rclpy
+    from rclpy.node import Node
+    from _ros_helpers import ros_env
+    from susp_sim_ros.ros.run import run_node
+    ros_env()
+
+    def shut_down_now(node):
+        rclpy.shutdown()
+        return False
+
+    assert run_node(lambda: Node("shutdown_race_probe"), "probe", ["prog"], stop_when=shut_down_now) == 0
+    assert "Traceback" not in capsys.readouterr().err
+    assert not rclpy.ok()
+
+
 def test_controller_parameters_are_read_only_and_ranged():
     """The controller reads its parameters at start only: rclpy refuses a change instead of accepting one
     that would have no effect; the sample period's range is in its descriptor."""

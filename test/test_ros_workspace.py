@@ -111,14 +111,15 @@ def test_ament_python_layout_for_colcon():
 
 
 def _known_topics() -> set[str]:
-    """Topics the node publishes or subscribes (sim_core's constants, ros/node.py's subscriptions) and those of
+    """Topics the node publishes or subscribes (sim_core's constants, the subscriptions in ros/) and those of
     a recorded drive (interface.md where present, else DRIVE_TOPICS)."""
     from susp_sim_ros import sim_core
     topics = {sim_core.SIM_IMU, sim_core.SIM_ODOM, sim_core.SIM_SUSPENSION, sim_core.DIAGNOSTICS}
-    for n in ast.walk(ast.parse((ROOT / "susp_sim_ros" / "ros" / "node.py").read_text())):
-        if isinstance(n, ast.Call) and getattr(n.func, "attr", "") == "create_subscription":
-            if isinstance(n.args[1], ast.Constant):
-                topics.add(n.args[1].value)
+    for module in sorted((ROOT / "susp_sim_ros" / "ros").glob("*.py")):
+        for n in ast.walk(ast.parse(module.read_text())):
+            if isinstance(n, ast.Call) and getattr(n.func, "attr", "") == "create_subscription":
+                if isinstance(n.args[1], ast.Constant):
+                    topics.add(n.args[1].value)
     if INTERFACE.exists():
         topics |= set(re.findall(r"^\| `(/[\w/]+)` \|", INTERFACE.read_text(), re.M))
     else:

@@ -2,7 +2,8 @@
 
 :func:`run_node` is ``main`` of ``susp_sim_node`` and ``susp_damper_controller``: init rclpy, build the
 node, spin a ``SingleThreadedExecutor``, turn a bad parameter into a one-line error and exit code 2 (never
-a traceback), destroy the node and shut rclpy down on every path.
+a traceback), destroy the node and shut rclpy down on every path. A signal that shuts the context down
+while the executor is between two waits is a normal stop (exit code 0), not a traceback.
 """
 from __future__ import annotations
 
@@ -57,6 +58,12 @@ def run_node(make_node: Callable[[], N], name: str, args: list[str] | None = Non
     except (SuspInputError, InvalidParameterValueException) as exc:
         print(f"{name}: error: {exc}", file=sys.stderr)
         return 2
+    except Exception:
+        # rclpy's SIGINT/SIGTERM handler shuts the context down at any moment, also between the loop's
+        # ``rclpy.ok()`` and the executor's next wait, which then fails to create its timeout timer
+        # (RCLError "the given context is not valid"). That is the requested shutdown, not a failure.
+        if rclpy.ok():
+            raise
     finally:
         if node is not None:
             node.destroy_node()
