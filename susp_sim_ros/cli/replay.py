@@ -146,6 +146,23 @@ def _check_messages(path, rec, msgs, types: dict[str, str]) -> None:
                                  f"{m.log_time_ns} ns does not deserialise ({type(exc).__name__}: {exc})") from None
 
 
+HANDSHAKE_MIN_S = 5.0  # the first instant's acknowledgement is awaited at least this long [s]
+
+
+def _delivered(publishers, timeout_s: float) -> bool:
+    """Whether every reliable subscriber acknowledged what ``publishers`` sent, waiting up to ``timeout_s``.
+
+    A publisher sees a subscription as soon as *it* has discovered it, but the subscriber drops data from a
+    writer it has not discovered yet; a loaded host can take longer than any fixed pause for that, and a
+    10x replay is over by then (the subscriber then gets only the writer's history, the last 100 messages).
+    An acknowledgement comes only from a subscriber that has matched this writer, so waiting for it after
+    the first instant makes the start of the recording reach every subscriber."""
+    from rclpy.duration import Duration
+    end = time.monotonic() + timeout_s
+    return all(p.wait_for_all_acked(Duration(nanoseconds=int(max(end - time.monotonic(), 0.0) * 1e9)))
+               for p in publishers)
+
+
 def run(args) -> dict:
     rec, play, msgs = plan(args)
     topics = rec.topics()
@@ -178,7 +195,8 @@ def run(args) -> dict:
     deadline = time.monotonic() + args.wait_subscribers
     while time.monotonic() < deadline and not all(p.get_subscription_count() for p in everything):
         time.sleep(0.02)
-    if any(p.get_subscription_count() for p in everything):
+    handshake = any(p.get_subscription_count() for p in everything)
+    if handshake:
         time.sleep(0.2)  # matched: give the subscribers' side of discovery a moment
     progress = None
     if not args.no_progress:
@@ -195,6 +213,14 @@ def run(args) -> dict:
             last_shown = t0
             t_sent = None
             for t, m in _timeline(msgs, t0, t1, clock_ns):
+                if handshake and t_sent is not None and t != t_sent:
+                    # the first instant is out: the clock starts once every subscriber has it
+                    handshake = False
+                    if not _delivered(everything, max(deadline - time.monotonic(), HANDSHAKE_MIN_S)):
+                        print(f"susp replay: warning: the first messages of {args.recording} were not "
+                              "acknowledged by every subscriber; a slow subscriber may miss the start",
+                              file=sys.stderr)
+                    start = time.monotonic() - (t_sent - t0) * 1e-9 / args.rate
                 wait = start + (t - t0) * 1e-9 / args.rate - time.monotonic()
                 if wait > 0:
                     time.sleep(wait)
