@@ -17,11 +17,14 @@ most :data:`INFORMED_SHRINK` of the prior's; an eigen-direction of ``F`` with ei
 :data:`INFORMED_EIGEN` that no single parameter carries is reported as an informed *combination*. The
 parameters the drives do not inform are held at their prior value and reported as not informed.
 
-Intervals: the values the vehicle file gives a range but does not calibrate (the Dahl pre-sliding
-stiffness, tyre damping, unsprung masses, ...; :func:`consider_params`) stay at their file value, but
-the calibrated values' intervals are those of the joint posterior with them marginalised out
+Intervals: the values the vehicle file gives a range but does not calibrate (tyre damping, unsprung
+masses, roll centres, ...; :func:`consider_params`) and the calibration values the drives do not inform
+stay at their file value, but the calibrated values' intervals include what that can cost
 (:func:`consider_covariance`), so an estimate that leans on an assumed value carries that value's
-uncertainty.
+uncertainty. The priors' spread itself is checked against the data: where the calibrated values sit
+further from their priors than the priors claim, the intervals widen by the empirical-Bayes factor of
+:meth:`~.fit.FitResult.prior_scale`. The 95 % interval is the widest of these and the leave-one-drive-out
+spread of the refits.
 
 The calibration enters the model through one path: the calibrated values replace the vehicle's
 (:meth:`VehicleParams.replace`), and :meth:`~susp_sim_ros.model.vehicle.Model.params` builds the
@@ -53,7 +56,8 @@ NEEDS_SWITCH = {"sv_plateau": "velocity_scaling", "sv_speed": "velocity_scaling"
 #: Fields that can never be negative or zero (their hard lower bound stays above zero).
 POSITIVE = {"sprung_mass", "unsprung_mass", "cg_height", "roll_inertia", "pitch_inertia", "yaw_inertia",
             "wheel_rate", "tyre_stiffness", "cornering_stiffness", "relaxation_length", "steering_ratio",
-            "damper_friction_intact", "sv_speed", "damper_measured_intact", "damper_measured_empty"}
+            "damper_friction_intact", "sv_speed", "damper_measured_intact", "damper_measured_empty",
+            "dahl_stiffness"}
 
 
 @dataclass(frozen=True)
@@ -119,10 +123,10 @@ def calibration_params(vp: VehicleParams, variant: FrictionVariant,
 
 def consider_params(vp: VehicleParams, variant: FrictionVariant) -> list[CalParam]:
     """The "consider" parameters: values the vehicle file gives a plausible range but does not let the
-    calibration move (``calibrate: false``, e.g. the Dahl pre-sliding stiffness, tyre damping, unsprung
-    mass, steering ratio). They stay at their file value, but their range is an uncertainty the
-    calibrated values inherit (:func:`consider_covariance`). Degenerate ranges (a definition, such as the
-    1 mm/s friction reference speed) and damper tables are not uncertain in this sense."""
+    calibration move (``calibrate: false``, e.g. tyre damping, unsprung mass, steering ratio). They stay
+    at their file value, but their range is an uncertainty the calibrated values inherit
+    (:func:`consider_covariance`). Degenerate ranges (a definition, such as the 1 mm/s friction reference
+    speed) and damper tables are not uncertain in this sense."""
     out = []
     for fld, pr in vp.priors.items():
         if pr.calibrate or pr.shape == "table":
@@ -144,13 +148,14 @@ def consider_params(vp: VehicleParams, variant: FrictionVariant) -> list[CalPara
 
 def consider_covariance(J_est: np.ndarray, H: np.ndarray, J_con: np.ndarray, sd_con: np.ndarray,
                         weight: float) -> np.ndarray:
-    """Covariance the estimated parameters gain when the consider parameters are not taken as exact
-    but as uncertain within their priors: the linearised posterior of the estimated and the consider
-    parameters jointly, with the consider parameters marginalised out, minus the posterior at fixed
-    consider values (compare the "consider covariance" of orbit determination, Tapley, Schutz & Born,
-    Statistical Orbit Determination, 2004, sec. 6.3, which omits what the data tell about the consider
-    parameters and so can exceed the prior). The point estimate keeps the consider parameters at their
-    file values; only the intervals widen.
+    """Covariance the estimated parameters gain because the consider parameters are held at their file
+    values while the car's may lie anywhere in their priors: the estimate follows a consider value's error
+    with the sensitivity ``S = -H^-1 H_ec``, so its error covariance grows by ``S P_cc S^T`` (the consider
+    covariance of orbit determination: Tapley, Schutz & Born, Statistical Orbit Determination, 2004,
+    sec. 6.3). Unlike the posterior with the consider values marginalised out, it does not let the data
+    narrow the consider values: the point estimate did not move them, so their error stays as large as
+    their prior says. The point estimate keeps the consider parameters at their file values; only the
+    intervals widen.
 
     ``J_est``/``J_con``: Jacobians of the whitened residual w.r.t. the estimated and the consider
     parameters; ``H``: the posterior information of the estimated parameters (data and priors);
@@ -160,9 +165,8 @@ def consider_covariance(J_est: np.ndarray, H: np.ndarray, J_con: np.ndarray, sd_
     if J_con.shape[1] == 0 or k == 0:
         return np.zeros((k, k))
     Hec = weight * (J_est.T @ J_con)
-    Hcc = weight * (J_con.T @ J_con) + np.diag(1.0 / sd_con ** 2)
-    joint = np.block([[H, Hec], [Hec.T, Hcc]])
-    return np.linalg.pinv(joint)[:k, :k] - np.linalg.pinv(H)
+    S = np.linalg.pinv(H) @ Hec
+    return (S * sd_con[None, :] ** 2) @ S.T
 
 
 def vehicle_at(vp: VehicleParams, params: Sequence[CalParam], theta: Sequence[float]) -> VehicleParams:

@@ -272,6 +272,9 @@ class DiscrepancyFinder:
         self.result_, self.path_, self.accepted_ = cur, path, accepted
         self.ranking_ = ranking or []
         self.consider_se_ = self._consider_se(ev, cur)
+        self.prior_scale_ = cur.prior_scale() if self.calibrate else 1.0
+        if self.identifiability_ is not None:
+            self.identifiability_["prior_scale"] = self.prior_scale_
         # 5. leave-one-drive-out of the whole result against the base model
         self.heldout_ = self._heldout(ev, cur) if self.heldout else None
         self.jackknife_se_ = _jackknife_se(self.heldout_, len(cur.x))
@@ -306,9 +309,9 @@ class DiscrepancyFinder:
         return self._ci95(self.result_)
 
     def _ci95(self, fit: FitResult) -> tuple[np.ndarray, np.ndarray]:
-        lo, hi = fit.ci95()
         if fit is not getattr(self, "result_", None):
-            return lo, hi
+            return fit.ci95()
+        lo, hi = fit.ci95(getattr(self, "prior_scale_", 1.0))
         se = (hi - lo) / (2 * 1.96)
         cons = getattr(self, "consider_se_", None)
         if cons is not None and len(cons) == len(fit.x):
@@ -319,14 +322,17 @@ class DiscrepancyFinder:
         return fit.x - 1.96 * se, fit.x + 1.96 * se
 
     def _consider_se(self, ev: Evaluator, fit: FitResult) -> np.ndarray | None:
-        """Standard errors the final parameters inherit from the vehicle file's uncalibrated ranges
-        (:func:`~.calibration.consider_params`, :func:`~.calibration.consider_covariance`): one batch of
-        simulations with each consider parameter stepped by a tenth of its standard deviation. This is
-        what lets a calibrated value's interval include the truth when the data pin it only through an
-        assumed value (the Dahl pre-sliding stiffness, the tyre damping, ...)."""
+        """Standard errors the final parameters inherit from the values held at their file value: the
+        vehicle file's uncalibrated ranges (:func:`~.calibration.consider_params`) and the calibration
+        values the drives do not inform (:func:`~.calibration.consider_covariance`): one batch of
+        simulations with each of them stepped by a tenth of its standard deviation. This is what lets a
+        calibrated value's interval include the truth when the data pin it only through an assumed value
+        (the unsprung masses, the tyre damping, a friction level the drives do not inform, ...)."""
         if not self.calibrate or fit.jac is None or not len(fit.x):
             return None
-        cons = consider_params(self.model_.vehicle, self.model_.variant)
+        informed = {p.name for p in self.informed_}
+        cons = [p for p in self.calibration_params_ if p.name not in informed]  # held at their prior
+        cons += consider_params(self.model_.vehicle, self.model_.variant)
         if not cons:
             return None
         st = fit.structure

@@ -162,6 +162,7 @@ def _primary_noise_ratio(f) -> tuple[float, float]:
 
 
 UNEXPLAINED_RATIO = 1.5
+PRIOR_SCALE_NOTE = 1.2  # the report says so when the priors are this much too narrow for the calibrated values
 
 
 def interface_json(f) -> dict:
@@ -477,6 +478,10 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
         if e["outside_prior"]:
             L.append(f"\n- **Finding:** {outside_statement(e)}")
     ident = getattr(f, "identifiability_", None)
+    if ident and ident.get("prior_scale", 1.0) > PRIOR_SCALE_NOTE:
+        L += ["", f"The calibrated values sit {ident['prior_scale']:.1f}x further from their priors than the "
+              "priors' documented spread says (another or a loaded car, or a wrong parameter set?): the "
+              "intervals of what only the priors pin (the car's overall scale) are widened by that factor."]
     if ident and ident.get("combinations"):
         L += ["", "Informed only as combinations (weights of one informed direction):"]
         L += ["- " + ", ".join(f"{k} {w:+.2f}" for k, w in c["weights"].items()) for c in ident["combinations"]]
