@@ -39,7 +39,7 @@ from ...model.layout import U_INDEX
 from ...model.response import Response
 from ...model.params import TermSetting
 from ...model.terms import get_term
-from .calibration import (STEP_OF_SD, calibration_candidate, calibration_entries, calibration_params,
+from .calibration import (STEP_OF_SD, CalParam, calibration_candidate, calibration_entries, calibration_params,
                           consider_covariance, consider_params, identifiability,
                           vehicle_at)
 from .candidates import BY_NAME, CALIBRATION, LIBRARY, PHYSICS
@@ -330,20 +330,11 @@ class DiscrepancyFinder:
         (the unsprung masses, the tyre damping, a friction level the drives do not inform, ...)."""
         if not self.calibrate or fit.jac is None or not len(fit.x):
             return None
-        informed = {p.name for p in self.informed_}
-        cons = [p for p in self.calibration_params_ if p.name not in informed]  # held at their prior
-        cons += consider_params(self.model_.vehicle, self.model_.variant)
+        cons = self._held_values()
         if not cons:
             return None
         st = fit.structure
-        cal = calibration_candidate(self.model_, list(self.informed_) + cons)
-        has_cal = CALIBRATION in st.names
-        st2 = Structure([cal if c.name == CALIBRATION else c for c in st.cands] if has_cal
-                        else [cal, *st.cands], st.data_weight)
-        x2 = np.concatenate([np.concatenate([st.part(fit.x, CALIBRATION) if has_cal else np.zeros(0),
-                                             [p.prior for p in cons]]) if n == CALIBRATION else st.part(fit.x, n)
-                             for n in st2.names])
-        at = int(st2.offsets[st2.names.index(CALIBRATION)]) + len(self.informed_)
+        st2, x2, at = self._with_held_values(st, fit.x, cons)
         sd = np.array([p.sd for p in cons])
         h = STEP_OF_SD * sd
         X = np.repeat(x2[None], len(cons) + 1, axis=0)
@@ -444,28 +435,40 @@ class DiscrepancyFinder:
 
     def _recalibrate(self, ev: Evaluator, cur: FitResult) -> FitResult:
         """The current structure with every value the vehicle file gives a range refitted within its prior
-        (the calibration's informed values, the uninformed ones and the consider values: Dahl stiffness,
-        tyre damping, unsprung masses, roll centres, ...): the most a recalibration of the known physics
+        (the calibration's informed values and the held ones, :meth:`_held_values`: unsprung masses, tyre
+        damping, roll centres, ...): the most a recalibration of the known physics
         can explain. A candidate term is named only when it explains more than this (its fit's residual
         is below this one's): "no recalibration within the priors explains the same residual"."""
         allidx = tuple(range(len(ev.cases)))
-        m = self.model_
         if not self.calibrate:
             return cur
-        informed = {p.name for p in self.informed_}
-        extra = [p for p in calibration_params(m.vehicle, m.variant) if p.name not in informed]
-        extra += consider_params(m.vehicle, m.variant)
+        extra = self._held_values()
         if not extra:
             return cur
-        cal = calibration_candidate(m, list(self.informed_) + extra)
-        st = cur.structure
+        st2, x2, _ = self._with_held_values(cur.structure, cur.x, extra)
+        return fit_structure(ev, st2, x2, allidx, max_nfev=RECALIBRATION_NFEV)
+
+    def _held_values(self) -> list[CalParam]:
+        """The ranged values the calibration holds at their file value: the calibration values the drives
+        do not inform and the vehicle file's uncalibrated ranges (:func:`~.calibration.consider_params`:
+        unsprung masses, tyre damping, roll centres, ...)."""
+        informed = {p.name for p in self.informed_}
+        return ([p for p in self.calibration_params_ if p.name not in informed]
+                + consider_params(self.model_.vehicle, self.model_.variant))
+
+    def _with_held_values(self, st: Structure, x: np.ndarray,
+                          held: Sequence[CalParam]) -> tuple[Structure, np.ndarray, int]:
+        """Structure ``st`` (parameters ``x``) with its calibration widened by the ``held`` values after the
+        informed ones, at their file values: the widened structure, its parameters and the index of the
+        first held value."""
+        cal = calibration_candidate(self.model_, list(self.informed_) + list(held))
         has_cal = CALIBRATION in st.names
         st2 = Structure([cal if c.name == CALIBRATION else c for c in st.cands] if has_cal else [cal, *st.cands],
                         st.data_weight)
-        x2 = np.concatenate([np.concatenate([st.part(cur.x, CALIBRATION) if has_cal else np.zeros(0),
-                                             [p.prior for p in extra]]) if n == CALIBRATION else st.part(cur.x, n)
+        x2 = np.concatenate([np.concatenate([st.part(x, CALIBRATION) if has_cal else np.zeros(0),
+                                             [p.prior for p in held]]) if n == CALIBRATION else st.part(x, n)
                              for n in st2.names])
-        return fit_structure(ev, st2, x2, allidx, max_nfev=RECALIBRATION_NFEV)
+        return st2, x2, int(st2.offsets[st2.names.index(CALIBRATION)]) + len(self.informed_)
 
     def _data_weight(self, fit: FitResult) -> tuple[float, dict]:
         """How much the drives may pull the calibration away from its priors, chosen by leave-one-drive-
