@@ -165,7 +165,8 @@ class Evaluator:
         self.vehicle_seconds += M * R * self.n_max * self.dt
         if self.progress is not None:
             self.progress.update(M * R)
-        return (Y * _TO_REPORT_UNITS).reshape(M, R, Y.shape[1], len(SIGNAL_OUTPUT))
+        Y *= _TO_REPORT_UNITS  # in place: Y is this call's own array, tens of MB for a Jacobian batch
+        return Y.reshape(M, R, Y.shape[1], len(SIGNAL_OUTPUT))
 
     # -- residuals ----------------------------------------------------------------------------------
     def case_residual(self, r: int, rates: np.ndarray, lag: float, bias: bool) -> np.ndarray:
