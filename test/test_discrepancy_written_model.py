@@ -208,3 +208,23 @@ def test_susp_diagnose_writes_the_documented_files(tmp_path):
     m = Model(vehicle if vehicle.exists() else BASE_VEHICLE, out / "diagnosed_dahl_only.yaml")
     assert m.variant.name == "diagnosed_dahl_only"
     assert "friction_variant:=" in (out / "diagnosed_dahl_only.md").read_text()
+
+
+def test_a_switched_on_scaling_writes_the_slope_that_was_not_found_as_zero():
+    """From `no_horizontal`, finding only the lateral-force friction switches the horizontal-force scaling
+    on: the written vehicle file carries the fitted lateral slopes and a zero longitudinal slope, not the
+    file's 0.15 per kN front (which the fit never had)."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.engine import Structure
+    from susp_sim_ros.analysis.discrepancy.report import model_files
+    from susp_sim_ros.model import Model, load_variant
+    model = Model("passat_b8_like", "no_horizontal")
+    f = SimpleNamespace(result_=SimpleNamespace(structure=Structure(["friction_lateral_force"]),
+                                                x=np.array([0.4, 0.2])),
+                        base_variant_=load_variant("no_horizontal"), model_=model,
+                        calibrated_vehicle_=model.vehicle, calibrated_fields_=(), cases_=[None, None])
+    var, veh = model_files(f, "diagnosed_no_horizontal")
+    assert var["horizontal_scaling"] is True
+    fr = veh["friction"]
+    assert fr["horizontal_scaling_lateral"]["value"] == {"front": pytest.approx(4e-4), "rear": pytest.approx(2e-4)}
+    assert fr["horizontal_scaling_longitudinal"]["value"] == {"front": 0.0, "rear": 0.0}

@@ -9,7 +9,7 @@ import numpy as np
 import yaml
 
 from .calibration import outside_statement
-from .candidates import BY_NAME, MEASUREMENT, PHYSICS, axle_map
+from .candidates import BY_NAME, LIBRARY, MEASUREMENT, PHYSICS, axle_map
 from .data import SIGNAL_UNIT, SIGNALS
 
 VERDICTS = ("missing_physics", "no_significant_discrepancy", "unexplained_residual", "unmeasured_input")
@@ -256,9 +256,13 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
             var["terms"].append(entry)
         if c.to_vehicle is not None:
             veh_changes.update(c.to_vehicle(st.part(x, c.name), vp))
-    if var["horizontal_scaling"] and not base.horizontal_scaling:  # switched on: the absent slope is zero
-        for key in ("horizontal_scaling_longitudinal", "horizontal_scaling_lateral"):
-            veh_changes.setdefault(("friction", key), axle_map(0.0, 0.0))
+    # a scaling this result switches on enables every value under it: the candidates of that switch that
+    # were not found write their neutral values (the other horizontal-force slope stays zero, not the file's)
+    for c in LIBRARY:
+        if (c.switch and var[c.switch] and not getattr(base, c.switch) and c.name not in st.names
+                and c.to_vehicle is not None):
+            for key, val in c.to_vehicle(c.neutral(), vp).items():
+                veh_changes.setdefault(key, val)
     if not veh_changes or src is None:
         return var, None
     data = yaml.safe_load(src.read_text())
