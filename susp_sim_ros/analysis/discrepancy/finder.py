@@ -439,14 +439,13 @@ class DiscrepancyFinder:
         damping, roll centres, ...): the most a recalibration of the known physics
         can explain. A candidate term is named only when it explains more than this (its fit's residual
         is below this one's): "no recalibration within the priors explains the same residual"."""
-        allidx = tuple(range(len(ev.cases)))
         if not self.calibrate:
             return cur
         extra = self._held_values()
         if not extra:
             return cur
         st2, x2, _ = self._with_held_values(cur.structure, cur.x, extra)
-        return fit_structure(ev, st2, x2, allidx, max_nfev=RECALIBRATION_NFEV)
+        return fit_structure(ev, st2, x2, tuple(range(len(ev.cases))), max_nfev=RECALIBRATION_NFEV)
 
     def _held_values(self) -> list[CalParam]:
         """The ranged values the calibration holds at their file value: the calibration values the drives

@@ -121,17 +121,17 @@ class FitResult:
         ratio = self.n_eff / self.n if self.n_eff > 0 else 1.0
         return ratio / s2 * self.structure.data_weight
 
-    def information(self) -> np.ndarray:
+    def information(self, prior_scale: float = 1.0) -> np.ndarray:
         """Posterior information: Gauss-Newton information of the data (scaled by
         :meth:`data_information_scale`, the same weighting as the objective) plus the priors' (the
-        calibration's parameters)."""
+        calibration's parameters; ``prior_scale``: a factor on their standard deviations, :meth:`prior_scale`)."""
         J = self.jac
         k = len(self.x)
         if J is None or k == 0:
             return np.zeros((k, k))
         H = (J.T @ J) * self.data_information_scale()
         pidx, _, psd = self.structure.prior()
-        H[pidx, pidx] += 1.0 / psd ** 2
+        H[pidx, pidx] += 1.0 / (prior_scale * psd) ** 2
         return H
 
     def prior_scale(self) -> float:
@@ -171,11 +171,9 @@ class FitResult:
         d2 = (c * (lam[use] + 1.0) / lam[use]) ** 2
         v = 1.0 / lam[use]
 
-        def nll(t2: float) -> float:
-            return float(np.sum(np.log(t2 + v) + d2 / (t2 + v)))
-
-        grid = np.linspace(1.0, PRIOR_SCALE_MAX ** 2, 400)
-        return float(math.sqrt(grid[int(np.argmin([nll(t2) for t2 in grid]))]))
+        t2 = np.linspace(1.0, PRIOR_SCALE_MAX ** 2, 400)[:, None]  # candidate tau^2, a grid search
+        nll = np.sum(np.log(t2 + v) + d2 / (t2 + v), axis=1)
+        return float(math.sqrt(t2[int(np.argmin(nll)), 0]))
 
     def covariance(self, prior_scale: float = 1.0) -> np.ndarray:
         """Posterior covariance, the inverse of :meth:`information`; ``prior_scale``: a factor on the
@@ -183,10 +181,7 @@ class FitResult:
         k = len(self.x)
         if self.jac is None or k == 0:
             return np.zeros((k, k))
-        H = self.information()
-        if prior_scale != 1.0:
-            pidx, _, psd = self.structure.prior()
-            H[pidx, pidx] -= (1.0 - 1.0 / prior_scale ** 2) / psd ** 2
+        H = self.information(prior_scale)
         try:
             cov = np.linalg.pinv(H)
         except np.linalg.LinAlgError:
