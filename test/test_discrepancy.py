@@ -11,6 +11,7 @@ from susp_sim_ros.analysis.discrepancy.candidates import LIBRARY
 from susp_sim_ros.analysis.discrepancy.data import prepare_case
 from susp_sim_ros.analysis.discrepancy.engine import Evaluator, Structure
 from susp_sim_ros.analysis.discrepancy.finder import extended_model
+from susp_sim_ros.analysis.discrepancy.fit import fd_jacobian
 from susp_sim_ros.analysis.discrepancy.locate import noise_sigma
 from susp_sim_ros.analysis.synthetic import HiddenPhysics, generate_drive
 
@@ -65,6 +66,36 @@ def test_every_candidate_at_neutral_is_the_base_model(bump_rear_amp):
     x = st.neutral()
     # exact: neutral values switch the paper's scalings on at s = 1 and add terms at zero level
     np.testing.assert_allclose(ev.simulate(st, x[None])[0, 0], base, atol=1e-12)
+
+
+def test_runs_are_simulated_once_and_only_as_far_as_they_are_compared(bump_rear_amp):
+    """Lags only shift the comparison: three time offsets are one run, cut after the last compared sample
+    (plus the largest lag the fit may try), and that run is the start of a run to the drive's end."""
+    ev = Evaluator(extended_model("passat_b8_like", "dahl_only"), [bump_rear_amp])
+    whole = ev.simulate(Structure([]), np.zeros((1, 0)), to_end=True)[0, 0]
+    assert len(whole) == ev.n_max
+    before = ev.vehicle_seconds
+    lags = ev.simulate(Structure(["time_offset"]), np.array([[0.0], [0.01], [-0.05]]))
+    assert ev.vehicle_seconds - before == pytest.approx(len(lags[0, 0]) * ev.dt)
+    assert lags[1, 0] is lags[0, 0] and lags[2, 0] is lags[0, 0]
+    n = len(lags[0, 0])
+    assert bump_rear_amp.t_grid_s.max() + 0.05 <= n * ev.dt and n < ev.n_max  # a shorter run, long enough
+    np.testing.assert_array_equal(lags[0, 0], whole[:n])
+    e_cut = ev.case_residual(0, lags[0, 0], -0.05, False)
+    np.testing.assert_array_equal(e_cut, ev.case_residual(0, whole, -0.05, False))
+
+
+def test_jacobian_from_a_known_residual_is_the_same(bump_rear_amp):
+    """fit_structure simulates the Jacobian only at accepted points, from the residual it has: the same
+    numbers as simulating residual and Jacobian in one batch."""
+    ev = Evaluator(extended_model("passat_b8_like", "dahl_only"), [bump_rear_amp])
+    st = Structure(["friction_amplitude", "time_offset"])
+    x = st.neutral() + 0.5 * st.steps()
+    r0, J = fd_jacobian(ev, st, x, [0])
+    r1, J1 = fd_jacobian(ev, st, x, [0], r0=r0.copy())
+    np.testing.assert_array_equal(r1, r0)
+    np.testing.assert_array_equal(J1, J)
+    assert np.any(J != 0.0, axis=0).all()  # every parameter moves the residual
 
 
 def test_amplitude_friction_found_on_a_single_rear_empty_bump(bump_rear_amp):

@@ -113,7 +113,7 @@ def test_written_model_reproduces_the_fitted_rmse_on_every_drive(diagnosed):
     base, f, paths = diagnosed
     ev = f.evaluator_
     fitted_rmse = _fitted_rmse(f)
-    fitted_rates = ev.simulate(f.result_.structure, f.result_.x[None])[0]
+    fitted_rates = ev.simulate(f.result_.structure, f.result_.x[None], to_end=True)[0]
     m = Model(*_files(paths))
     P = np.stack([m.params(c.oil) for c in ev.cases])
     rows = np.arange(len(ev.cases))

@@ -15,11 +15,10 @@ equilibrium), 2 deflection at the last reversal [m], 3 extreme deflection of the
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
+from .inline_math import TINY, expm1_nonpos
 from .layout import C_INDEX
 from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 
@@ -27,59 +26,60 @@ _F, _DEF, _REV, _EXT, _DIR, _ALAST, _PEAK = 0, 4, 8, 12, 16, 20, 24
 _C_SH, _C_DT = C_INDEX["SH"], C_INDEX["DT"]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def friction_amplitude_force(p, po, s, so, i, c):
     """Force of the extra Dahl element [N] (its state)."""
     return s[so + _F + i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def friction_amplitude_level(extra, onset, scale, amplitude):
     """Extra friction level [N] at deflection amplitude ``amplitude`` [m]:
     ``extra * (1 - exp(-max(A - onset, 0) / scale))``: zero up to the onset, saturating smoothly."""
     excess = amplitude - onset
-    if excess <= 0.0:
-        return 0.0
-    return extra * (1.0 - math.exp(-excess / scale))
+    level = -extra * expm1_nonpos(-max(excess, 0.0) / scale)
+    return level if excess > 0.0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def friction_amplitude_update(p, po, s, so, i, c, dx):
     """Track the stroke amplitude (half the travel between reversals; a reversal counts once the
     deflection has come back by more than ``band`` from the stroke's extreme, so wheel-hop ripple on a
     body stroke does not reset it), then the exact Dahl update at the level of
     ``max(last completed stroke, current stroke)`` amplitude, times the axle friction's horizontal-force
     scaling ``s_h`` (model-spec 1) where ``horizontal`` is set: the extra friction sits in the same
-    joints as the axle friction, so wheel forces that load those joints load it too."""
+    joints as the axle friction, so wheel forces that load those joints load it too.
+
+    Written with selects only (no branches, no libm call), like :func:`~.terms.dahl_exact`, so the
+    kernel's loop over the term updates stays vectorised across vehicles (``docs/kernel_design.md``)."""
     d = s[so + _DEF + i] + dx
-    s[so + _DEF + i] = d
     direction = s[so + _DIR + i]
     ext = s[so + _EXT + i]
+    rev = s[so + _REV + i]
+    last = s[so + _ALAST + i]
     band = p[po + 12 + i]
-    if direction == 0.0:
-        if dx != 0.0:
-            s[so + _DIR + i] = 1.0 if dx > 0.0 else -1.0
-            s[so + _EXT + i] = d
-    elif (d - ext) * direction > 0.0:
-        s[so + _EXT + i] = d  # the stroke goes on
-    elif (ext - d) * direction > band:  # reversal: the stroke from REV to EXT is complete
-        s[so + _ALAST + i] = 0.5 * abs(ext - s[so + _REV + i])
-        s[so + _REV + i] = ext
-        s[so + _EXT + i] = d
-        s[so + _DIR + i] = -direction
+    moving = direction != 0.0
+    start = (not moving) and dx != 0.0  # the first move sets the stroke direction
+    goes_on = moving and (d - ext) * direction > 0.0
+    reversal = moving and (not goes_on) and (ext - d) * direction > band  # the stroke REV..EXT is complete
+    s[so + _DEF + i] = d
+    s[so + _DIR + i] = (1.0 if dx > 0.0 else -1.0) if start else (-direction if reversal else direction)
+    ext_new = d if (start or goes_on or reversal) else ext
+    rev_new = ext if reversal else rev
+    last_new = 0.5 * abs(ext - rev) if reversal else last
+    s[so + _EXT + i] = ext_new
+    s[so + _REV + i] = rev_new
+    s[so + _ALAST + i] = last_new
     memory = p[po + 24 + i]
-    if memory > 0.0:  # peak deflection from the static position, forgotten with time constant ``memory``
-        amp = s[so + _PEAK + i] * math.exp(-c[i, _C_DT] / memory)
-        if abs(d) > amp:
-            amp = abs(d)
-        s[so + _PEAK + i] = amp
-    else:
-        amp = 0.5 * abs(s[so + _EXT + i] - s[so + _REV + i])
-        if s[so + _ALAST + i] > amp:
-            amp = s[so + _ALAST + i]
+    remembers = memory > 0.0
+    # peak deflection from the static position, forgotten with time constant ``memory``
+    decay = 1.0 + expm1_nonpos(-c[i, _C_DT] / max(memory, TINY))
+    peak = max(s[so + _PEAK + i] * decay, abs(d))
+    s[so + _PEAK + i] = peak if remembers else s[so + _PEAK + i]
+    stroke = max(0.5 * abs(ext_new - rev_new), last_new)
+    amp = peak if remembers else stroke
     level = friction_amplitude_level(p[po + i], p[po + 4 + i], p[po + 8 + i], amp)
-    if p[po + 20 + i] > 0.5:
-        level *= c[i, _C_SH]
+    level = level * c[i, _C_SH] if p[po + 20 + i] > 0.5 else level
     s[so + _F + i] = dahl_exact(s[so + _F + i], level, p[po + 16 + i], dx)
 
 

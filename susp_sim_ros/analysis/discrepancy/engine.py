@@ -21,6 +21,7 @@ from .data import SIGNAL_OUTPUT, SIGNAL_UNIT, DriveCase
 
 RATES = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")
 MIN_QUIET_BIAS = 20  # quiet lead-in samples for a standstill-style bias estimate
+RUN_QUANTUM_S = 0.5  # a run's length is rounded up to this, so drives of similar length share a batch
 _TO_REPORT_UNITS = np.array([np.degrees(1.0) if u == "deg/s" else 1.0 for u in SIGNAL_UNIT])
 
 
@@ -108,6 +109,13 @@ class Evaluator:
         self.P0 = np.stack([model.params(c.oil) for c in self.cases])
         self.Pn = neutral_base(self.P0)
         self.n_max = max(c.n_steps for c in self.cases)
+        #: steps each drive is simulated for when only its compared samples are needed: up to its last
+        #: compared sample plus the largest time offset the fit may try (a run is causal, so the compared
+        #: samples are the same as those of a run to the end)
+        late = -BY_NAME["time_offset"].params[0].lower
+        quantum = math.ceil(RUN_QUANTUM_S / self.cases[0].dt)  # drives of similar length run in one batch
+        self.n_compared = np.array([min(self.n_max, quantum * math.ceil(
+            (math.ceil((float(c.t_grid_s.max()) + late) / c.dt) + 2) / quantum)) for c in self.cases], np.int64)
         U = np.zeros((len(self.cases), self.n_max, self.cases[0].U.shape[1]))
         for r, c in enumerate(self.cases):
             U[r, :c.n_steps] = c.U
@@ -143,37 +151,61 @@ class Evaluator:
         return P
 
     # -- simulation ---------------------------------------------------------------------------------
-    def simulate(self, st: Structure, X: np.ndarray, idx: Sequence[int] | None = None) -> np.ndarray:
-        """IMU signals (M, len(idx), n_max, 6) in :data:`~.data.SIGNALS` order (rates [deg/s], specific
-        forces [m/s^2]) for parameter vectors ``X`` (M, n)."""
+    def simulate(self, st: Structure, X: np.ndarray, idx: Sequence[int] | None = None, *,
+                 to_end: bool = False) -> np.ndarray:
+        """IMU signals for parameter vectors ``X`` (M, n): an object array (M, len(idx)) whose items are
+        (n_steps, 6) arrays in :data:`~.data.SIGNALS` order (rates [deg/s], specific forces [m/s^2]) at
+        the step times ``dt * (1 .. n_steps)``.
+
+        Runs that are the same (one drive, the same kernel parameters and inputs: a finite-difference
+        column of a parameter that drive does not use, or of the time offset, which only shifts the
+        comparison) are simulated once; the kernel gives a vehicle the same bits in any lane of any
+        batch. Each drive is simulated up to its last compared sample (:attr:`n_compared`; the rest of
+        items are that long), or to the longest drive's end with ``to_end`` (the raw samples outside the
+        comparison window: noise floors). Drives of one length run in one batch; items are views of
+        the batch outputs (no copies), one item shared by the same runs."""
         idx = list(range(len(self.cases))) if idx is None else list(idx)
         X = np.atleast_2d(X)
         M, R = X.shape[0], len(idx)
         P = np.concatenate([self.rows(st, x, idx) for x in X])
-        u_row = np.tile(np.array(idx), M)
-        U = self.U
-        if "steering_offset" in st.names:  # the inputs differ per parameter set: one input row each
-            U = np.repeat(self.U[idx][None], M, axis=0).reshape((M * R,) + self.U.shape[1:])
-            for m, x in enumerate(X):
-                U[m * R:(m + 1) * R, :, U_INDEX["SWA"]] -= st.steer_offset(x)
-            u_row = np.arange(M * R)
-        res = simulate_batch(self.model, P, U, dt=self.dt, roads=self.roads, u_row=u_row,
-                             road_row=np.tile(np.array(idx), M), outputs=SIGNAL_OUTPUT)
-        Y, done = res.values, res.steps_done
-        bad = done < U.shape[1]
-        Y[bad] = 1e3  # a diverged run: a huge residual, never a crash
-        self.vehicle_seconds += M * R * self.n_max * self.dt
+        drive = np.tile(np.array(idx, np.int64), M)
+        steer = (np.repeat([st.steer_offset(x) for x in X], R) if "steering_offset" in st.names
+                 else np.zeros(M * R))
+        first: dict[tuple, int] = {}
+        run_of = np.array([first.setdefault((int(drive[b]), float(steer[b]), P[b].tobytes()), len(first))
+                           for b in range(M * R)], np.int64)
+        runs = np.unique(run_of, return_index=True)[1]  # one lane of each distinct run, in run order
+        P, drive, steer = P[runs], drive[runs], steer[runs]
+        U, u_row = self.U, drive
+        if np.any(steer != 0.0):  # the inputs differ per run: one input row each
+            U = self.U[drive].copy()
+            U[:, :, U_INDEX["SWA"]] -= steer[:, None]
+            u_row = np.arange(len(runs))
+        n_run = np.full(len(runs), self.n_max) if to_end else self.n_compared[drive]
+        signals = np.empty(len(runs), object)
+        for n in np.unique(n_run):
+            lanes = np.nonzero(n_run == n)[0]
+            res = simulate_batch(self.model, P[lanes], U[:, :n], dt=self.dt, roads=self.roads,
+                                 u_row=u_row[lanes], road_row=drive[lanes], outputs=SIGNAL_OUTPUT)
+            Y = res.values
+            Y[res.steps_done < n] = 1e3  # a diverged run: a huge residual, never a crash
+            Y *= _TO_REPORT_UNITS  # in place: this call's own array, tens of MB for a Jacobian batch
+            for q, lane in enumerate(lanes):
+                signals[lane] = Y[q]
+            self.vehicle_seconds += len(lanes) * n * self.dt
         if self.progress is not None:
-            self.progress.update(M * R)
-        Y *= _TO_REPORT_UNITS  # in place: Y is this call's own array, tens of MB for a Jacobian batch
-        return Y.reshape(M, R, Y.shape[1], len(SIGNAL_OUTPUT))
+            self.progress.update(len(runs))
+        out = np.empty((M, R), object)
+        out.ravel()[:] = signals[run_of]
+        return out
 
     # -- residuals ----------------------------------------------------------------------------------
     def case_residual(self, r: int, rates: np.ndarray, lag: float, bias: bool) -> np.ndarray:
         """Residual (n_grid, n_sig) simulated - measured (native units) of drive ``r`` from its simulated
-        signals (n_max, 6); ``lag`` [s]: the measured signal is the model output delayed by ``lag``."""
+        signals (n_steps, 6) (an item of :meth:`simulate`); ``lag`` [s]: the measured signal is the
+        model output delayed by ``lag``."""
         c = self.cases[r]
-        t = c.dt * np.arange(1, self.n_max + 1)
+        t = c.dt * np.arange(1, len(rates) + 1)
         tq = c.t_grid_s - lag
         sim = np.column_stack([np.interp(tq, t, rates[:, a]) for a in c.axes])
         e = sim - c.y_meas

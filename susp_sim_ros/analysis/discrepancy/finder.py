@@ -172,7 +172,7 @@ class DiscrepancyFinder:
         self.cases_, self.evaluator_ = cases, ev
         allidx = tuple(range(len(cases)))
         # 1. base run, quiet lead-ins, noise floors per signal
-        sims = ev.simulate(Structure([]), np.zeros((1, 0)))[0]
+        sims = ev.simulate(Structure([]), np.zeros((1, 0)), to_end=True)[0]
         for r, c in enumerate(cases):
             mark_quiet(c, sims[r][:, :3])
         self.noise_ = noise_floor(cases, list(sims))
@@ -635,9 +635,10 @@ class DiscrepancyFinder:
     # -- estimator API ------------------------------------------------------------------------------
     def _new_data(self, drives) -> tuple[Evaluator, np.ndarray]:
         """An evaluator of the fitted model over new drives (any form :func:`~.data.as_cases` takes)
-        and their base-model signals (R, n_max, 6), quiet lead-ins marked as in :meth:`fit`."""
+        and their base-model signals (R,) of (n_steps, 6) arrays (:meth:`~.engine.Evaluator.simulate`),
+        quiet lead-ins marked as in :meth:`fit`."""
         ev = Evaluator(self.model_, as_cases(drives, wheelbase=self.model_.vehicle.wheelbase))
-        sims = ev.simulate(Structure([]), np.zeros((1, 0)))[0]
+        sims = ev.simulate(Structure([]), np.zeros((1, 0)), to_end=True)[0]
         for r, c in enumerate(ev.cases):
             mark_quiet(c, sims[r][:, :3])
         return ev, sims

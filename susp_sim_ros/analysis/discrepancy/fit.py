@@ -84,16 +84,21 @@ def bic(rss: float, n: int, k: int, n_eff: float) -> float:
     return ne * math.log(max(rss, 1e-300) / n) + k * math.log(ne)
 
 
-def fd_jacobian(ev: Evaluator, st: Structure, x: np.ndarray, idx: Sequence[int]):
+def fd_jacobian(ev: Evaluator, st: Structure, x: np.ndarray, idx: Sequence[int],
+                r0: np.ndarray | None = None):
     """Raw residual at ``x`` and its forward-difference Jacobian (one batch); steps flip direction at an
-    upper bound."""
+    upper bound. ``r0``: the raw residual at ``x`` when it is known already (not simulated again)."""
     lo, hi = st.bounds()
     h = st.steps()
     h = np.where(x + h > hi, -h, h)
-    X = np.vstack([x] + [x + h[j] * np.eye(len(x))[j] for j in range(len(x))]) if len(x) else x[None]
-    R = raw_residuals(ev, st, X, idx)
-    J = ((R[1:] - R[0]) / h[:, None]).T if len(x) else np.zeros((R.shape[1], 0))
-    return R[0], J
+    X = x[None] + np.diag(h) if len(x) else np.zeros((0, 0))
+    if r0 is None:
+        X = np.vstack([x[None], X])
+    R = raw_residuals(ev, st, X, idx) if len(X) else np.zeros((0, 0))
+    if r0 is None:
+        r0, R = R[0], R[1:]
+    J = ((R - r0) / h[:, None]).T if len(x) else np.zeros((r0.size, 0))
+    return r0, J
 
 
 @dataclass
@@ -205,17 +210,20 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
     idx = tuple(range(len(ev.cases))) if idx is None else tuple(idx)
     x0 = st.neutral() if x0 is None else np.asarray(x0, float)
     lo, hi = st.bounds()
-    cache: dict = {}
+    # the last point asked for: its key, raw and debiased residual, Jacobian once asked for. The
+    # Jacobian is simulated only where the solver asks for it (accepted steps), not at rejected trials.
+    last: dict = {}
 
-    def resid(x):
+    def resid(x, with_jac: bool = True):
         key = x.tobytes()
-        if key not in cache:
-            r, J = fd_jacobian(ev, st, x, idx)
-            if st.bias:
-                r, J = debias(ev, r, idx), debias(ev, J, idx)
-            cache.clear()
-            cache[key] = (r, J)
-        return cache[key]
+        if last.get("key") != key:
+            last.clear()
+            last.update(key=key, raw=raw_residuals(ev, st, x[None], idx)[0], J=None)
+            last["r"] = debias(ev, last["raw"], idx) if st.bias else last["raw"]
+        if with_jac and last["J"] is None:
+            _, J = fd_jacobian(ev, st, x, idx, r0=last["raw"])
+            last["J"] = debias(ev, J, idx) if st.bias else J
+        return last["r"], last["J"]
 
     n = sum(ev.n_res[r] for r in idx)
     ne = n_effective(ev, idx)
@@ -232,16 +240,18 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
     prior_jac = np.zeros((len(pidx), st.n_params))
     prior_jac[np.arange(len(pidx)), pidx] = pw / psd
 
-    def full(x):
-        r, J = resid(x)
-        if not len(pidx):
-            return r, J
-        return np.concatenate([r, pw * (x[pidx] - pmu) / psd]), np.vstack([J, prior_jac])
+    def fun(x):
+        r, _ = resid(x, with_jac=False)
+        return np.concatenate([r, pw * (x[pidx] - pmu) / psd]) if len(pidx) else r
+
+    def jac(x):
+        _, J = resid(x)
+        return np.vstack([J, prior_jac]) if len(pidx) else J
 
     x0 = np.clip(x0, lo, hi)
     x_scale = st.steps().copy()
     x_scale[pidx] *= 10.0  # a prior parameter's step is a tenth of its prior sd
-    sol = least_squares(lambda x: full(x)[0], x0, jac=lambda x: full(x)[1], bounds=(lo, hi),
+    sol = least_squares(fun, x0, jac=lambda x, *_: jac(x), bounds=(lo, hi),
                         x_scale=x_scale, method="trf",
                         max_nfev=max_nfev, xtol=1e-4, ftol=1e-6)
     r, J = resid(sol.x)
