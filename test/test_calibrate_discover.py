@@ -254,3 +254,29 @@ def test_the_priors_spread_is_checked_against_the_data():
     lo, hi = far.ci95(tau)
     assert hi[0] - lo[0] > 2.5 * (hi1[0] - lo1[0])       # the uninformed direction widens
     assert hi[2] - lo[2] == pytest.approx(hi1[2] - lo1[2], rel=0.05)  # an informed value hardly
+
+
+def test_a_value_the_other_drives_move_only_together_with_another_is_held_in_their_fold():
+    """Leave-one-drive-out keeps a calibration value at the joint fit when the other drives do not inform
+    it. What they inform is its information with every other parameter free: in the training rows the
+    prior value a moves the residual exactly as the free term b does (its own column is large, its
+    information given b is nil), so only the held-out drive tells a; with b independent, the training
+    rows inform a and it is refitted."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.finder import _informed_only_by
+    from susp_sim_ros.analysis.discrepancy.fit import FitResult
+    rng = np.random.default_rng(5)
+    t, u = rng.normal(size=(2, 400))
+    held_rows = np.column_stack([rng.normal(size=100), np.zeros(100)])
+    st = SimpleNamespace(prior=lambda: (np.array([0]), np.zeros(1), np.ones(1)), prior_gain=1.0, data_weight=1.0)
+    held = np.r_[np.ones(100, bool), np.zeros(400, bool)]
+
+    def fit(train_cols):
+        J = np.vstack([held_rows, train_cols])
+        return FitResult(structure=st, x=np.zeros(2), rss=500.0, n=500, k_bic=2, bic=0.0, success=True,
+                         message="", nfev=1, residual=np.zeros(500), jac=J, n_eff=500.0)
+
+    collinear = fit(np.column_stack([t, t]))
+    assert np.sum(collinear.jac[~held, 0] ** 2) > 100.0   # its own column: far above the prior's 1
+    assert _informed_only_by(collinear, held, pw=1.0) == [0]
+    assert _informed_only_by(fit(np.column_stack([t, u])), held, pw=1.0) == []

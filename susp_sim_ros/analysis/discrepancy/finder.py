@@ -706,16 +706,27 @@ def _informed_only_by(fit: FitResult, held: np.ndarray, pw: float | None = None)
     """Calibration parameters (with a prior) that the rows outside ``held`` inform less than their prior
     does (the oil-empty damper of the only drive with an empty damper). A leave-one-drive-out refit keeps
     them at the joint fit's value: no other drive can predict them, and reverting them to the prior would
-    judge the prior, not the model. ``pw``: the prior rows' weight (default: the structure's)."""
+    judge the prior, not the model. ``pw``: the prior rows' weight (default: the structure's).
+
+    What the other rows tell about a value is its information with every other parameter free (the
+    Schur complement of the training rows' Gauss-Newton information, the other values' priors included),
+    not its own column's: a drive that moves the value only together with others (the rear-empty sine
+    steer, where the oil-empty rear damper trades against the friction terms) does not inform it."""
     if fit.jac is None or not len(fit.x):
         return []
     tr = ~held
     pidx, _, psd = fit.structure.prior()
+    if not len(pidx):
+        return []
     if pw is None:
         ne_t = max(fit.n_eff * tr.sum() / len(held), 1.0)
         pw = math.sqrt(tr.sum() / ne_t) * fit.structure.prior_gain
-    info = np.einsum("ij,ij->j", fit.jac[tr], fit.jac[tr])
-    return [int(j) for j, sd in zip(pidx, psd) if info[j] < (pw / sd) ** 2]
+    prior_info = np.zeros(len(fit.x))
+    prior_info[pidx] = (pw / psd) ** 2
+    J = fit.jac[tr]
+    A = J.T @ J + np.diag(prior_info)
+    info = 1.0 / np.maximum(np.diag(np.linalg.pinv(A, hermitian=True)), 1e-300) - prior_info
+    return [int(j) for j in pidx if info[j] < prior_info[j]]
 
 
 def _fold_step(fit: FitResult, held: np.ndarray, pw: float | None = None) -> np.ndarray:
