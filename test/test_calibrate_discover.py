@@ -280,3 +280,33 @@ def test_a_value_the_other_drives_move_only_together_with_another_is_held_in_the
     assert np.sum(collinear.jac[~held, 0] ** 2) > 100.0   # its own column: far above the prior's 1
     assert _informed_only_by(collinear, held, pw=1.0) == [0]
     assert _informed_only_by(fit(np.column_stack([t, u])), held, pw=1.0) == []
+
+
+def test_the_measurement_chain_is_decided_again_on_the_model_with_its_physics(monkeypatch):
+    """A sensor bias the calibration stage dropped (the missing physics still dominated its criterion) is
+    added on the final model when it pays there (BIC lower by at least 10), recorded in the selection
+    path; a measurement term that does not pay stays out."""
+    from types import SimpleNamespace
+
+    from susp_sim_ros.analysis.discrepancy import finder as fm
+    from susp_sim_ros.analysis.discrepancy.engine import Structure
+
+    def run(gain):
+        st = Structure(["friction_amplitude"])
+        cur = SimpleNamespace(structure=st, x=st.neutral(), bic=100.0, rss=5000.0, n=4000)
+
+        def fake_fit(ev, s, x0, idx, max_nfev):
+            new = (set(s.names) - set(st.names)).pop()
+            return SimpleNamespace(structure=s, x=x0, bic=100.0 - gain.get(new, 0.0), rss=4500.0, n=4000)
+
+        monkeypatch.setattr(fm, "fit_structure", fake_fit)
+        monkeypatch.setattr(fm, "_steers", lambda cases: False)
+        path = [{}]
+        out = fm.DiscrepancyFinder()._measurement_chain(SimpleNamespace(cases=[0, 1]), cur, path)
+        return out.structure.names, path
+
+    names, path = run({"sensor_bias": 40.0, "time_offset": 5.0})
+    assert names == ("friction_amplitude", "sensor_bias")
+    assert path[-1]["added"] == ["sensor_bias"] and path[-1]["delta_bic"] == 40.0 and len(path) == 2
+    names, path = run({"sensor_bias": 9.0})
+    assert names == ("friction_amplitude",) and len(path) == 1
