@@ -11,7 +11,7 @@ from susp_sim_ros.analysis.discrepancy.candidates import LIBRARY
 from susp_sim_ros.analysis.discrepancy.data import prepare_case
 from susp_sim_ros.analysis.discrepancy.engine import Evaluator, Structure
 from susp_sim_ros.analysis.discrepancy.finder import extended_model
-from susp_sim_ros.analysis.discrepancy.fit import fd_jacobian
+from susp_sim_ros.analysis.discrepancy.fit import fd_jacobian, fit_structure
 from susp_sim_ros.analysis.discrepancy.locate import noise_sigma
 from susp_sim_ros.analysis.synthetic import HiddenPhysics, generate_drive
 
@@ -96,6 +96,20 @@ def test_jacobian_from_a_known_residual_is_the_same(bump_rear_amp):
     np.testing.assert_array_equal(r1, r0)
     np.testing.assert_array_equal(J1, J)
     assert np.any(J != 0.0, axis=0).all()  # every parameter moves the residual
+
+
+def test_a_fit_keeps_fixed_parameters_and_moves_the_others(bump_rear_amp):
+    """fit_structure(..., fixed=...): the fixed values stay where they start (the final leave-one-drive-out
+    holds the values only the held-out drive informs this way) while the others are fitted."""
+    ev = Evaluator(extended_model("passat_b8_like", "dahl_only"), [bump_rear_amp])
+    st = Structure(["friction_amplitude"])
+    x0 = st.neutral()
+    x0[:2] = 5.0  # extra levels front, rear [N]
+    fit = fit_structure(ev, st, x0, max_nfev=4, fixed=[2, 3])
+    np.testing.assert_array_equal(fit.x[2:], x0[2:])
+    r0 = ev.residuals(st, x0[None])[0]
+    assert fit.x[1] != x0[1] and fit.rss < 0.9 * float(r0 @ r0)  # the rear level fitted, the fit better
+    assert np.all(fit.jac[:, 2:] == 0.0) and np.any(fit.jac[:, :2] != 0.0)
 
 
 def test_amplitude_friction_found_on_a_single_rear_empty_bump(bump_rear_amp):

@@ -586,7 +586,7 @@ class DiscrepancyFinder:
         """Leave-one-drive-out: the final structure (calibration included) refitted without each drive
         predicts it; against the base model. Per signal and for the primary gyro signals [deg/s].
         Calibration values that only the held-out drive informs keep the joint fit's value
-        (:func:`_informed_only_by`)."""
+        (:func:`_informed_only_by`) throughout the refit, so the other values fit the drives with it."""
         R = len(ev.cases)
         if R == 1:
             return self._heldout_halves(ev, final)
@@ -598,11 +598,10 @@ class DiscrepancyFinder:
         for h in range(R):
             train = tuple(r for r in range(R) if r != h)
             if final.structure.n_params and train:
-                x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV).x
                 held = np.zeros(len(final.residual), bool)
                 held[edges[h]:edges[h + 1]] = True
-                keep = _informed_only_by(final, held)
-                x[keep] = final.x[keep]
+                x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV,
+                                  fixed=_informed_only_by(final, held)).x
             else:
                 x = final.x
             e_after = ev.case_residuals(final.structure, x, [h])[h]

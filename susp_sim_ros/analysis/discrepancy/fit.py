@@ -85,19 +85,23 @@ def bic(rss: float, n: int, k: int, n_eff: float) -> float:
 
 
 def fd_jacobian(ev: Evaluator, st: Structure, x: np.ndarray, idx: Sequence[int],
-                r0: np.ndarray | None = None):
+                r0: np.ndarray | None = None, cols: Sequence[int] | None = None):
     """Raw residual at ``x`` and its forward-difference Jacobian (one batch); steps flip direction at an
-    upper bound. ``r0``: the raw residual at ``x`` when it is known already (not simulated again)."""
+    upper bound. ``r0``: the raw residual at ``x`` when it is known already (not simulated again);
+    ``cols``: only these parameters' columns (default all)."""
     lo, hi = st.bounds()
     h = st.steps()
     h = np.where(x + h > hi, -h, h)
-    X = x[None] + np.diag(h) if len(x) else np.zeros((0, 0))
+    cols = np.arange(len(x)) if cols is None else np.asarray(cols, np.int64)
+    h = h[cols]
+    X = np.repeat(x[None], len(cols), axis=0)
+    X[np.arange(len(cols)), cols] += h
     if r0 is None:
         X = np.vstack([x[None], X])
     R = raw_residuals(ev, st, X, idx) if len(X) else np.zeros((0, 0))
     if r0 is None:
         r0, R = R[0], R[1:]
-    J = ((R - r0) / h[:, None]).T if len(x) else np.zeros((r0.size, 0))
+    J = ((R - r0) / h[:, None]).T if len(cols) else np.zeros((r0.size, 0))
     return r0, J
 
 
@@ -205,11 +209,15 @@ class FitResult:
 
 
 def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
-                  idx: Sequence[int] | None = None, max_nfev: int = 30) -> FitResult:
-    """Least-squares fit of ``st``'s parameters over drives ``idx`` (all by default)."""
+                  idx: Sequence[int] | None = None, max_nfev: int = 30,
+                  fixed: Sequence[int] = ()) -> FitResult:
+    """Least-squares fit of ``st``'s parameters over drives ``idx`` (all by default); the parameters
+    ``fixed`` (indices) stay at their ``x0`` values (their Jacobian columns are not simulated and are
+    zero in the result)."""
     idx = tuple(range(len(ev.cases))) if idx is None else tuple(idx)
     x0 = st.neutral() if x0 is None else np.asarray(x0, float)
     lo, hi = st.bounds()
+    free = np.setdiff1d(np.arange(st.n_params), np.asarray(fixed, np.int64))
     # the last point asked for: its key, raw and debiased residual, Jacobian once asked for. The
     # Jacobian is simulated only where the solver asks for it (accepted steps), not at rejected trials.
     last: dict = {}
@@ -221,7 +229,8 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
             last.update(key=key, raw=raw_residuals(ev, st, x[None], idx)[0], J=None)
             last["r"] = debias(ev, last["raw"], idx) if st.bias else last["raw"]
         if with_jac and last["J"] is None:
-            _, J = fd_jacobian(ev, st, x, idx, r0=last["raw"])
+            J = np.zeros((last["raw"].size, st.n_params))
+            _, J[:, free] = fd_jacobian(ev, st, x, idx, r0=last["raw"], cols=free)
             last["J"] = debias(ev, J, idx) if st.bias else J
         return last["r"], last["J"]
 
@@ -240,23 +249,31 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
     prior_jac = np.zeros((len(pidx), st.n_params))
     prior_jac[np.arange(len(pidx)), pidx] = pw / psd
 
-    def fun(x):
+    x0 = np.clip(x0, lo, hi)
+
+    def full_x(z):
+        x = x0.copy()
+        x[free] = z
+        return x
+
+    def fun(z):
+        x = full_x(z)
         r, _ = resid(x, with_jac=False)
         return np.concatenate([r, pw * (x[pidx] - pmu) / psd]) if len(pidx) else r
 
-    def jac(x):
-        _, J = resid(x)
-        return np.vstack([J, prior_jac]) if len(pidx) else J
+    def jac(z):
+        _, J = resid(full_x(z))
+        return (np.vstack([J, prior_jac]) if len(pidx) else J)[:, free]
 
-    x0 = np.clip(x0, lo, hi)
     x_scale = st.steps().copy()
     x_scale[pidx] *= 10.0  # a prior parameter's step is a tenth of its prior sd
-    sol = least_squares(fun, x0, jac=lambda x, *_: jac(x), bounds=(lo, hi),
-                        x_scale=x_scale, method="trf",
+    sol = least_squares(fun, x0[free], jac=lambda z, *_: jac(z), bounds=(lo[free], hi[free]),
+                        x_scale=x_scale[free], method="trf",
                         max_nfev=max_nfev, xtol=1e-4, ftol=1e-6)
-    r, J = resid(sol.x)
+    x = full_x(sol.x)
+    r, J = resid(x)
     rss = float(r @ r)
-    return FitResult(st, sol.x, rss, n, k, bic(rss, n, k, ne), bool(sol.success), str(sol.message),
+    return FitResult(st, x, rss, n, k, bic(rss, n, k, ne), bool(sol.success), str(sol.message),
                      int(sol.nfev), r, J, idx, ne)
 
 
