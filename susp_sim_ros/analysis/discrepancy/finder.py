@@ -17,7 +17,8 @@ calibration explains.
    (:mod:`.candidates`), each refitted jointly with the informed calibration parameters (so a residual a
    recalibration within the priors explains is never named); a term is accepted only if it lowers the
    information criterion clearly, explains a real share of the residual above noise, improves the drives
-   held out from its fit (leave-one-drive-out) and is selected in most of those refits;
+   held out from its fit (leave-one-drive-out) and is selected in most of those refits; backward
+   elimination, then the measurement chain decided again on the model with its physics terms;
 5. leave-one-drive-out of the whole result (calibration included) against the base model;
 6. verdict: ``missing_physics``, ``unmeasured_input``, ``no_significant_discrepancy`` or
    ``unexplained_residual`` (:func:`.report.verdict`).
