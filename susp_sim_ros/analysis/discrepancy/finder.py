@@ -304,6 +304,14 @@ class DiscrepancyFinder:
                 cur = f_wo
         return cur
 
+    def _measurement_terms(self, ev: Evaluator) -> list[str]:
+        """The measurement-chain candidates the drives can show: sensor bias and time offset, and the
+        steering offset where a drive steers."""
+        meas: list[str] = [n for n in ("sensor_bias", "time_offset") if n in self.candidates]
+        if _steers(ev.cases) and "steering_offset" in self.candidates:
+            meas.append("steering_offset")
+        return meas
+
     def _measurement_chain(self, ev: Evaluator, cur: FitResult, path: list) -> FitResult:
         """The measurement-chain terms (sensor bias, time offset, steering offset) decided again on the
         model with its physics terms: at the calibration the criterion weighs a term's gain against a
@@ -311,11 +319,8 @@ class DiscrepancyFinder:
         drive, worth its parameters on the final model, could not pay for itself there. A term is added
         when it lowers the criterion by :data:`MIN_DELTA_BIC`; the step is recorded in the path."""
         allidx = tuple(range(len(ev.cases)))
-        meas = [n for n in ("sensor_bias", "time_offset") if n in self.candidates]
-        if _steers(ev.cases) and "steering_offset" in self.candidates:
-            meas.append("steering_offset")
         n = cur.n
-        for name in meas:
+        for name in self._measurement_terms(ev):
             if name in cur.structure.names:
                 continue
             st = cur.structure.with_(name)
@@ -412,9 +417,7 @@ class DiscrepancyFinder:
         """MAP calibration of the base model with the measurement chain; identifiability; the
         measurement-chain terms kept only where the criterion wants them. Sets ``calibration_``."""
         allidx = tuple(range(len(ev.cases)))
-        meas: list[str] = [n for n in ("sensor_bias", "time_offset") if n in self.candidates]
-        if _steers(ev.cases) and "steering_offset" in self.candidates:
-            meas.append("steering_offset")
+        meas = self._measurement_terms(ev)
         params = calibration_params(model.vehicle, model.variant) if self.calibrate else []
         self.calibration_params_ = params
         self.calibrated_vehicle_, self.calibrated_fields_, self.informed_ = model.vehicle, [], []

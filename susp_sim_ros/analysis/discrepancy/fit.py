@@ -85,23 +85,23 @@ def bic(rss: float, n: int, k: int, n_eff: float) -> float:
 
 
 def fd_jacobian(ev: Evaluator, st: Structure, x: np.ndarray, idx: Sequence[int],
-                r0: np.ndarray | None = None, cols: Sequence[int] | None = None):
+                r0: np.ndarray | None = None, cols: Sequence[int] | np.ndarray | None = None):
     """Raw residual at ``x`` and its forward-difference Jacobian (one batch); steps flip direction at an
     upper bound. ``r0``: the raw residual at ``x`` when it is known already (not simulated again);
     ``cols``: only these parameters' columns (default all)."""
     lo, hi = st.bounds()
     h = st.steps()
     h = np.where(x + h > hi, -h, h)
-    cols = np.arange(len(x)) if cols is None else np.asarray(cols, np.int64)
-    h = h[cols]
-    X = np.repeat(x[None], len(cols), axis=0)
-    X[np.arange(len(cols)), cols] += h
+    c = np.arange(len(x)) if cols is None else np.asarray(cols, np.int64)
+    h = h[c]
+    X = np.repeat(x[None], len(c), axis=0)
+    X[np.arange(len(c)), c] += h
     if r0 is None:
         X = np.vstack([x[None], X])
     R = raw_residuals(ev, st, X, idx) if len(X) else np.zeros((0, 0))
     if r0 is None:
         r0, R = R[0], R[1:]
-    J = ((R - r0) / h[:, None]).T if len(cols) else np.zeros((r0.size, 0))
+    J = ((R - r0) / h[:, None]).T if len(c) else np.zeros((r0.size, 0))
     return r0, J
 
 
