@@ -160,8 +160,8 @@ class Evaluator:
         Runs that are the same (one drive, the same kernel parameters and inputs: a finite-difference
         column of a parameter that drive does not use, or of the time offset, which only shifts the
         comparison) are simulated once; the kernel gives a vehicle the same bits in any lane of any
-        batch. Each drive is simulated up to its last compared sample (:attr:`n_compared`; the rest of
-        items are that long), or to the longest drive's end with ``to_end`` (the raw samples outside the
+        batch. Each drive is simulated up to its last compared sample (:attr:`n_compared` steps, the
+        length of its items), or to the longest drive's end with ``to_end`` (the raw samples outside the
         comparison window: noise floors). Drives of one length run in one batch; items are views of
         the batch outputs (no copies), one item shared by the same runs."""
         idx = list(range(len(self.cases))) if idx is None else list(idx)
