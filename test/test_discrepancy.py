@@ -110,6 +110,9 @@ def test_a_fit_keeps_fixed_parameters_and_moves_the_others(bump_rear_amp):
     r0 = ev.residuals(st, x0[None])[0]
     assert fit.x[1] != x0[1] and fit.rss < 0.9 * float(r0 @ r0)  # the rear level fitted, the fit better
     assert np.all(fit.jac[:, 2:] == 0.0) and np.any(fit.jac[:, :2] != 0.0)
+    held = fit_structure(ev, st, x0, max_nfev=4, fixed=range(st.n_params))  # a fold may hold them all
+    np.testing.assert_array_equal(held.x, x0)
+    assert held.rss == pytest.approx(float(r0 @ r0))
 
 
 def test_amplitude_friction_found_on_a_single_rear_empty_bump(bump_rear_amp):

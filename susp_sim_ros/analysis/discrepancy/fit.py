@@ -267,6 +267,10 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
 
     x_scale = st.steps().copy()
     x_scale[pidx] *= 10.0  # a prior parameter's step is a tenth of its prior sd
+    if not len(free):  # everything held: the structure at x0
+        r, J = resid(x0)
+        rss = float(r @ r)
+        return FitResult(st, x0, rss, n, k, bic(rss, n, k, ne), True, "every parameter fixed", 1, r, J, idx, ne)
     sol = least_squares(fun, x0[free], jac=lambda z, *_: jac(z), bounds=(lo[free], hi[free]),
                         x_scale=x_scale[free], method="trf",
                         max_nfev=max_nfev, xtol=1e-4, ftol=1e-6)
