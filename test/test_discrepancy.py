@@ -105,7 +105,7 @@ def test_a_fit_keeps_fixed_parameters_and_moves_the_others(bump_rear_amp):
     st = Structure(["friction_amplitude"])
     x0 = st.neutral()
     x0[:2] = 5.0  # extra levels front, rear [N]
-    fit = fit_structure(ev, st, x0, max_nfev=4, fixed=[2, 3])
+    fit = fit_structure(ev, st, x0, max_nfev=4, fixed=[2, 3, 4])
     np.testing.assert_array_equal(fit.x[2:], x0[2:])
     r0 = ev.residuals(st, x0[None])[0]
     assert fit.x[1] != x0[1] and fit.rss < 0.9 * float(r0 @ r0)  # the rear level fitted, the fit better
@@ -113,6 +113,43 @@ def test_a_fit_keeps_fixed_parameters_and_moves_the_others(bump_rear_amp):
     held = fit_structure(ev, st, x0, max_nfev=4, fixed=range(st.n_params))  # a fold may hold them all
     np.testing.assert_array_equal(held.x, x0)
     assert held.rss == pytest.approx(float(r0 @ r0))
+
+
+def test_amplitude_candidate_slips_over_the_axle_frictions_presliding_travel(bump_rear_amp):
+    """The amplitude candidate's extra Dahl element sits in the axle friction's joints: its presliding
+    travel (level / stiffness) is the axle friction's, per corner, for the fitted levels; the variant it
+    writes carries the same stiffness."""
+    from susp_sim_ros.analysis.discrepancy.candidates import BY_NAME
+    model = extended_model("passat_b8_like", "dahl_only")
+    ev = Evaluator(model, [bump_rear_amp])
+    st = Structure(["friction_amplitude"])
+    x = np.array([12.0, 30.0, 0.002, 0.8, 0.3])
+    P = ev.rows(st, x)[0]
+    sl = model.term_param_slice
+
+    def travel(term, level):
+        return P[sl(term, level)] / P[sl(term, "sigma")]
+    np.testing.assert_allclose(travel("friction_amplitude", "extra_level"), travel("axle_friction", "level"),
+                               rtol=1e-12)
+    assert np.all(P[sl("friction_amplitude", "stroke_weight")] == 0.3)
+    written = BY_NAME["friction_amplitude"].variant_term(x, model.vehicle)["params"]["sigma"]
+    np.testing.assert_allclose([written["front"], written["rear"]], P[sl("friction_amplitude", "sigma")][[0, 2]],
+                               rtol=1e-12)
+
+
+def test_values_only_the_held_out_drive_informs_are_calibrated_on_it(bump_rear_amp):
+    """The final leave-one-drive-out calibrates the values only the held-out drive informs on that drive,
+    every other value fixed at the fold's; with no such values the fold's values predict unchanged."""
+    from susp_sim_ros.analysis.discrepancy.finder import _recalibrate_on_drive
+    ev = Evaluator(extended_model("passat_b8_like", "dahl_only"), [bump_rear_amp])
+    st = Structure(["friction_amplitude"])
+    x = st.neutral()
+    x[:2] = 5.0  # extra levels front, rear [N]; the drive's truth: rear 24 N
+    np.testing.assert_array_equal(_recalibrate_on_drive(ev, st, x, 0, []), x)
+    y = _recalibrate_on_drive(ev, st, x, 0, [1])
+    np.testing.assert_array_equal(np.delete(y, 1), np.delete(x, 1))
+    r0, r1 = ev.residuals(st, x[None])[0], ev.residuals(st, y[None])[0]
+    assert y[1] > 10.0 and float(r1 @ r1) < 0.8 * float(r0 @ r0)
 
 
 def test_amplitude_friction_found_on_a_single_rear_empty_bump(bump_rear_amp):

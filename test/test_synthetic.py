@@ -34,7 +34,8 @@ def synthetic_model():
 def test_term_is_registered_through_the_term_interface():
     t = get_term("friction_amplitude")
     assert t is syn.FRICTION_AMPLITUDE is af.FRICTION_AMPLITUDE and t.component == "axle"
-    assert [p.name for p in t.params] == ["extra_level", "onset", "scale", "band", "sigma", "horizontal", "memory"]
+    assert [p.name for p in t.params] == ["extra_level", "onset", "scale", "band", "sigma", "horizontal", "memory",
+                                          "stroke_weight"]
     # the bundled generator uses the stroke-amplitude form without horizontal scaling (bags unchanged)
     setting = next(s for s in syn.synthetic_variant().terms if s.term.name == "friction_amplitude")
     assert not {"memory", "horizontal"} & set(setting.values)
@@ -118,12 +119,12 @@ def test_amplitude_friction_is_clearly_present_in_the_rear_empty_bump_drive():
     assert without < 0.6 * with_term
 
 
-def _amplitude_term_run(d, *, memory=0.0, horizontal=0.0, sh=1.0, dt=1e-3, extra=20.0):
+def _amplitude_term_run(d, *, memory=0.0, horizontal=0.0, sh=1.0, dt=1e-3, extra=20.0, stroke_weight=0.0):
     """Drive corner 0 of the amplitude-friction term through deflections ``d`` [m]; its Dahl force [N] and
     remembered amplitude [m] per step."""
-    p = np.zeros(4 * 7)
+    p = np.zeros(4 * 8)
     p[0:4], p[4:8], p[8:12], p[12:16], p[16:20] = extra, 0.0, 0.005, 0.001, 1e5
-    p[20:24], p[24:28] = horizontal, memory
+    p[20:24], p[24:28], p[28:32] = horizontal, memory, stroke_weight
     s = np.zeros(4 * 7)
     c = np.zeros((4, N_CTX))
     c[:, C_INDEX["DT"]] = dt
@@ -145,6 +146,22 @@ def test_amplitude_memory_forgets_the_peak_deflection_with_its_time_constant():
     assert amp[199] == pytest.approx(0.02, rel=1e-9)
     # back at the static position the remembered peak decays as exp(-t / tau)
     np.testing.assert_allclose(amp[200 + 499], 0.02 * np.exp(-500 * dt / tau), rtol=1e-6)
+
+
+def test_amplitude_stroke_weight_blends_the_stroke_and_the_remembered_peak():
+    """An offset stroke (from +20 mm to +10 mm and back, rebound never reaching the static position): the
+    stroke amplitude is 5 mm, the peak deflection 20 mm. Weight 1 is the stroke form (memory 0), weight
+    0 the peak form, weight 0.5 in between: the extra level, seen as the saturated friction force."""
+    d = np.concatenate([np.linspace(0.0, 0.02, 400), np.linspace(0.02, 0.01, 400),
+                        np.linspace(0.01, 0.02, 400)])
+    stroke, _ = _amplitude_term_run(d, memory=0.0, dt=1e-4)
+    peak, _ = _amplitude_term_run(d, memory=100.0, stroke_weight=0.0, dt=1e-4)
+    as_stroke, _ = _amplitude_term_run(d, memory=100.0, stroke_weight=1.0, dt=1e-4)
+    half, _ = _amplitude_term_run(d, memory=100.0, stroke_weight=0.5, dt=1e-4)
+    np.testing.assert_allclose(as_stroke, stroke, rtol=1e-12, atol=1e-12)
+    assert stroke[-1] == pytest.approx(20.0 * (1.0 - np.exp(-0.005 / 0.005)), rel=1e-3)
+    assert peak[-1] == pytest.approx(20.0 * (1.0 - np.exp(-0.02 / 0.005)), rel=1e-3)
+    assert half[-1] == pytest.approx(20.0 * (1.0 - np.exp(-0.0125 / 0.005)), rel=1e-3)
 
 
 def test_amplitude_level_follows_the_axle_horizontal_scaling_when_asked():

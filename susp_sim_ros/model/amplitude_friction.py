@@ -7,7 +7,8 @@ amplitude. It is the hidden physics of the synthetic measurement vehicle behind 
 (:mod:`susp_sim_ros.analysis.synthetic`) and a candidate of the discrepancy finder.
 
 Parameters per corner (``p[po + 4*j + i]``): 0 ``extra_level`` [N], 1 ``onset`` [m], 2 ``scale`` [m],
-3 ``band`` [m], 4 ``sigma`` [N/m], 5 ``horizontal`` [1], 6 ``memory`` [s]. States per corner
+3 ``band`` [m], 4 ``sigma`` [N/m], 5 ``horizontal`` [1], 6 ``memory`` [s], 7 ``stroke_weight`` [1]. States
+per corner
 (``s[so + 4*k + i]``): 0 Dahl force [N], 1 deflection [m] (sum of the increments from static
 equilibrium), 2 deflection at the last reversal [m], 3 extreme deflection of the current stroke [m],
 4 stroke direction (+1, -1, 0 before the first move), 5 amplitude of the last completed stroke [m],
@@ -77,7 +78,8 @@ def friction_amplitude_update(p, po, s, so, i, c, dx):
     peak = max(s[so + _PEAK + i] * decay, abs(d))
     s[so + _PEAK + i] = peak if remembers else s[so + _PEAK + i]
     stroke = max(0.5 * abs(ext_new - rev_new), last_new)
-    amp = peak if remembers else stroke
+    w = p[po + 28 + i]
+    amp = (w * stroke + (1.0 - w) * peak) if remembers else stroke
     level = friction_amplitude_level(p[po + i], p[po + 4 + i], p[po + 8 + i], amp)
     level = level * c[i, _C_SH] if p[po + 20 + i] > 0.5 else level
     s[so + _F + i] = dahl_exact(s[so + _F + i], level, p[po + 16 + i], dx)
@@ -101,6 +103,9 @@ FRICTION_AMPLITUDE = register_term(PhysicsTerm(
             TermParam("horizontal", "1", "1: the level is scaled by the axle friction's horizontal-force "
                       "scaling s_h, 0: not", 0.0, 0.0, 1.0),
             TermParam("memory", "s", "0: the amplitude is that of the current or last stroke; > 0: the peak "
-                      "deflection from the static position, forgotten with this time constant", 0.0, 0.0)),
+                      "deflection from the static position, forgotten with this time constant", 0.0, 0.0),
+            TermParam("stroke_weight", "1", "with memory > 0: the amplitude is this weight times the stroke "
+                      "amplitude plus (1 - weight) times the remembered peak deflection (0: the peak only)",
+                      0.0, 0.0, 1.0)),
     n_states=7, force=friction_amplitude_force, update=friction_amplitude_update,
     stored_energy=_amplitude_energy))

@@ -30,6 +30,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ...model.amplitude_friction import FRICTION_AMPLITUDE
+from ...model.inline_math import TINY
 from ...model.layout import P_INDEX
 
 PHYSICS, PARAMETER, MEASUREMENT = "physics", "parameter", "measurement"
@@ -69,7 +71,7 @@ class Candidate:
     switch: str = ""  # the paper's scalings: the variant flag (FrictionVariant field) the candidate stands for
     #: how the fitted values are written: ``(x, vp) -> {(section, key): value}`` for the vehicle file
     to_vehicle: Callable | None = field(default=None, repr=False)
-    #: registered terms: ``x -> {param: {FL, FR, RL, RR}}``, the term's entry in a variant's ``terms:``
+    #: registered terms: ``(x, vp) -> {param: {front, rear}}``, the term's entry in a variant's ``terms:``
     term_params: Callable | None = field(default=None, repr=False)
 
     @property
@@ -83,11 +85,12 @@ class Candidate:
             return bool(getattr(variant, self.switch))
         return bool(self.term_module) and any(s.term.name == self.name for s in variant.terms)
 
-    def variant_term(self, x: np.ndarray) -> dict | None:
-        """The term's entry in a written variant's ``terms:`` at the fitted values ``x`` (None: not a term)."""
+    def variant_term(self, x: np.ndarray, vp) -> dict | None:
+        """The term's entry in a written variant's ``terms:`` at the fitted values ``x`` with the vehicle
+        ``vp`` (calibrated) it was fitted on (None: not a term)."""
         if self.term_params is None:
             return None
-        return {"name": self.name, "module": self.term_module, "params": self.term_params(x)}
+        return {"name": self.name, "module": self.term_module, "params": self.term_params(x, vp)}
 
     def neutral(self) -> np.ndarray:
         return np.array([p.neutral for p in self.params], float)
@@ -135,14 +138,30 @@ def _term_axles(name, param):
 
 
 def _amplitude(P, P0, x, model):
-    """Extra level per axle, one onset and one memory: the level grows with the peak deflection from the
-    static position, forgotten with the memory time constant (a stroke amplitude seen through the
-    joints' elastomers), and follows the axle friction's horizontal-force scaling (the extra friction
-    sits in the same joints)."""
+    """Extra level per axle, one onset, one memory and one stroke weight: the level grows with the
+    deflection amplitude, taken as ``w`` x the stroke amplitude (half the travel between reversals) plus
+    ``1 - w`` x the peak deflection from the static position, forgotten with the memory time constant
+    (which of the two a car's joints follow is the data's to say), and follows the axle friction's
+    horizontal-force scaling. The extra friction sits in the same joints as the axle friction, so it
+    slips over the same presliding travel: its Dahl stiffness is the axle friction's times the extra
+    level over the axle level (:func:`amplitude_sigma`), not a free value."""
     _term_axles("friction_amplitude", "extra_level")(P, P0, x, model)
     P[:, model.term_param_slice("friction_amplitude", "onset")] = x[2]
     P[:, model.term_param_slice("friction_amplitude", "memory")] = x[3]
+    P[:, model.term_param_slice("friction_amplitude", "stroke_weight")] = x[4]
     P[:, model.term_param_slice("friction_amplitude", "horizontal")] = 1.0
+    P[:, model.term_param_slice("friction_amplitude", "sigma")] = amplitude_sigma(
+        P[:, model.term_param_slice("friction_amplitude", "extra_level")],
+        P[:, model.term_param_slice("axle_friction", "level")], P[:, model.term_param_slice("axle_friction", "sigma")])
+
+
+def amplitude_sigma(extra, axle_level, axle_sigma):
+    """Dahl stiffness [N/m] of the extra amplitude friction with the axle friction's presliding travel
+    (``axle_level / axle_sigma`` [m]): ``extra * axle_sigma / axle_level`` (per corner or axle; arrays or
+    floats), at least the term's lower bound (a zero extra level has no force whatever its stiffness)."""
+    lower = FRICTION_AMPLITUDE.params[FRICTION_AMPLITUDE.param_index("sigma")].lower
+    return np.maximum(np.asarray(extra, float) * np.asarray(axle_sigma, float) /
+                      np.maximum(np.asarray(axle_level, float), TINY), lower)
 
 
 def _gas(P, P0, x, model):
@@ -218,16 +237,17 @@ def _relax_values(x, vp):
     return {("tyre", "relaxation_length"): float(vp.relaxation_length * x[0])}
 
 
-def _amplitude_params(x):
+def _amplitude_params(x, vp):
+    sig = amplitude_sigma(x[:2], vp.axle_friction, vp.dahl_stiffness)
     return {"extra_level": axle_map(x[0], x[1]), "onset": axle_map(x[2], x[2]), "memory": axle_map(x[3], x[3]),
-            "horizontal": axle_map(1.0, 1.0)}
+            "stroke_weight": axle_map(x[4], x[4]), "sigma": axle_map(*sig), "horizontal": axle_map(1.0, 1.0)}
 
 
-def _viscous_params(x):
+def _viscous_params(x, vp):
     return {"c": axle_map(x[0], x[1])}
 
 
-def _gas_params(x):
+def _gas_params(x, vp):
     return {"f0": float(x[0]), "k": float(x[1])}
 
 
@@ -265,8 +285,10 @@ LIBRARY: tuple[Candidate, ...] = (
               (CandParam("extra_front", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, front"),
                CandParam("extra_rear", "N", 0.0, 0.0, 200.0, 10.0, "extra level at large amplitude, rear"),
                CandParam("onset", "m", 0.005, 0.0, 0.02, 0.002, "stroke amplitude where the extra sets in"),
-               CandParam("memory", "s", 1.0, 0.05, 5.0, 0.2, "how long the peak deflection is remembered")),
-              _amplitude, ("front", "rear", None, None),
+               CandParam("memory", "s", 1.0, 0.05, 5.0, 0.2, "how long the peak deflection is remembered"),
+               CandParam("stroke_weight", "1", 0.0, 0.0, 1.0, 0.2, "weight of the stroke amplitude against the "
+                         "remembered peak deflection")),
+              _amplitude, ("front", "rear", None, None, None),
               "a bump crossing (strokes of several cm), best with oil-empty dampers", "bump",
               "susp_sim_ros.model.amplitude_friction", term_params=_amplitude_params),
     Candidate("damper_gas_preload", PHYSICS,

@@ -251,7 +251,7 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
                                        if shape == "table" else float(val))
     # each found term writes itself: a registered term into the variant, the rest into the vehicle file
     for c in st.cands:
-        entry = c.variant_term(st.part(x, c.name))
+        entry = c.variant_term(st.part(x, c.name), vp)
         if entry is not None:
             var["terms"].append(entry)
         if c.to_vehicle is not None:
