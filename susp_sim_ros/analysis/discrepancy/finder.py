@@ -49,6 +49,7 @@ from .data import SIGNAL_UNIT, as_cases
 from .engine import Evaluator, Structure
 from .fit import FitResult, debias, fit_structure, prior_rows, raw_residuals, screen
 from .locate import base_outputs, locate, noise_floor
+from .road_estimate import GYRO_VERTICAL, estimate_road, road_usability
 from .unmeasured import detect_unmeasured_road
 
 MIN_DELTA_BIC = 10.0
@@ -178,6 +179,7 @@ class DiscrepancyFinder:
             mark_quiet(c, sims[r][:, :3])
         self.noise_ = noise_floor(cases, list(sims))
         # 2. which signals each drive excites; unmeasured road input
+        self.estimated_roads_: dict = {}
         self.unmeasured_ = self._choose_signals(ev, sims)
         sigmas = [self._case_sigma(c) for c in cases]
         ev.set_noise(sigmas)
@@ -403,14 +405,31 @@ class DiscrepancyFinder:
                 if sig in primary_signals(c.maneuver) or spread > EXCITED_RATIO * per.get(sig, math.inf):
                     keep.append(sig)
             if not has_road_input(c):
-                hit = detect_unmeasured_road(c, ev.case_residual(r, sims[r], 0.0, False), per, self.model_)
+                resid = ev.case_residual(r, sims[r], 0.0, False)
+                hit = detect_unmeasured_road(c, resid, per, self.model_)
                 if hit is not None:
+                    self._estimate_road(c, resid, per, hit)
                     found.append(hit)
                     keep = [s for s in keep if s not in hit["signals"]]
             if not keep:
                 keep = [s for s in GYRO if s in c.signals][:1]
             select_signals(c, keep)
         return found
+
+    def _estimate_road(self, c: DriveCase, resid: np.ndarray, per: dict, hit: dict) -> None:
+        """The road of an ``unmeasured_input`` drive estimated from its body motion
+        (:mod:`.road_estimate`) into ``estimated_roads_``, its usability figures into ``hit``."""
+        gd = hit.get("gd_n0_m3")
+        if not gd:
+            return
+        est = estimate_road(c, resid, per, self.model_, gd)
+        cross = (estimate_road(c, resid, per, self.model_, gd, signals=GYRO_VERTICAL)
+                 if set(est.signals) - set(GYRO_VERTICAL) and set(GYRO_VERTICAL) <= set(est.signals) else None)
+        self.estimated_roads_[c.name] = est.road
+        hit["road_estimate"] = {"estimated_from": list(est.signals), "band_hz": list(est.band_hz),
+                                "path_m": [float(est.road.s[0]), float(est.road.s[-1])],
+                                "rms_m": {"left": float(np.std(est.road.zl)), "right": float(np.std(est.road.zr))},
+                                **road_usability(c, self.model_, est, resid, cross)}
 
     # -- calibration --------------------------------------------------------------------------------
     def _calibrate(self, ev: Evaluator, model: Model) -> FitResult:

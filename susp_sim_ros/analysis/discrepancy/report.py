@@ -191,7 +191,9 @@ def interface_json(f) -> dict:
         classes = [x["iso8608_class"] for x in u if x.get("iso8608_class")]
         rep["unmeasured_input"] = {"kind": "road", "signals": sorted({s for x in u for s in x["signals"]}),
                                    "iso8608_class": max(classes) if classes else None,
-                                   "drives": [x["drive"] for x in u]}
+                                   "drives": [x["drive"] for x in u],
+                                   "road_estimates": {x["drive"]: x["road_estimate"] for x in u
+                                                      if "road_estimate" in x}}
     return rep
 
 
@@ -388,6 +390,9 @@ def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
         paths["vehicle"] = str(pv)
     if plots:
         paths["plots"] = plot_overlays(f, out, name)
+    roads = write_estimated_roads(f, out, name)
+    if roads:
+        paths["estimated_roads"] = roads
     rep = f.report()
     detail = {"result": rep, "path": f.path_, "noise": f.noise_, "heldout": f.heldout_,
               "ranking": ranking_table(f), "tested": f.testable_, "in_base_model": f.in_base_,
@@ -401,6 +406,25 @@ def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
     p.write_text(markdown(f, rep, paths, name))
     paths["report"] = str(p)
     return paths
+
+
+def write_estimated_roads(f, out: Path, name: str) -> list[str]:
+    """Each ``unmeasured_input`` drive once more, with the road estimated from its body motion as its
+    ``/road/profile`` (``<name>_<drive>_estimated_road.mcap``): a drive the model can run on its road
+    (``susp validate``, ``susp diagnose``). Drives read from files only (the recording is copied, not
+    rebuilt)."""
+    import dataclasses
+    from ...io.drive import write_drive
+    written = []
+    for c in f.cases_:
+        road = getattr(f, "estimated_roads_", {}).get(c.name)
+        if road is None or c.drive is None:
+            continue
+        meta = dict(c.drive.metadata, road_source=f"estimated by susp diagnose ({name}) from the body motion")
+        p = out / f"{name}_{c.name}_estimated_road.mcap"
+        write_drive(p, dataclasses.replace(c.drive, road=road, metadata=meta), overwrite=True)
+        written.append(str(p))
+    return written
 
 
 def ranking_table(f) -> list[dict]:
@@ -491,6 +515,20 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
         L += ["- " + ", ".join(f"{k} {w:+.2f}" for k, w in c["weights"].items()) for c in ident["combinations"]]
     for u in getattr(f, "unmeasured_", []):
         L += ["", f"**Unmeasured input:** {u['statement']}."]
+        re_ = u.get("road_estimate")
+        if re_:
+            fit = ", ".join(f"{s} {re_['rmse_flat_road'][s]:.3g} -> {v:.3g}"
+                            for s, v in re_["rmse_estimated_road"].items())
+            (b0, b1), (s0, s1) = re_["band_hz"], re_["path_m"]
+            L += ["", f"Road estimated from the body motion ({', '.join(re_['estimated_from'])}; "
+                  f"{b0:g}-{b1:g} Hz, path {s0:.0f}-{s1:.0f} m, "
+                  f"RMS left {1e3 * re_['rms_m']['left']:.1f} mm, right {1e3 * re_['rms_m']['right']:.1f} mm). "
+                  f"RMSE flat road -> estimated road: {fit}."]
+            cc = re_.get("cross_check")
+            if cc:
+                L.append(f"Cross-check, estimated from {', '.join(cc['estimated_from'])} only: " + ", ".join(
+                    f"{s} {cc['rmse_flat_road'][s]:.3g} -> {v:.3g}" for s, v in cc["rmse_estimated_road"].items())
+                         + " (a signal the estimate never saw).")
     L += ["", "## Findings (missing physics)", ""]
     for t in rep["terms"]:
         L.append(f"- **{t['name']}** ({t['where']}): {t['evidence'].get('statement', '')}.")
