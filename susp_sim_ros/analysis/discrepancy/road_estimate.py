@@ -67,6 +67,7 @@ class RoadEstimate:
     speed_m_s: float           # the drive's mean speed [m/s]
     gd_n0_m3: float            # the prior road spectrum's Gd(n0) [m^3]
     band_hz: tuple[float, float]
+    responses: tuple = dataclasses.field(repr=False, default=())  # (f, H, signals) it used
 
 
 def track_responses(model, speed: float, gd_n0: float, oil, signals) -> tuple[np.ndarray, np.ndarray]:
@@ -104,17 +105,22 @@ def _gd_a() -> float:
 
 
 def estimate_road(case: DriveCase, resid: np.ndarray, noise: dict, model, gd_n0: float,
-                  signals=VERTICAL) -> RoadEstimate:
+                  signals=VERTICAL, responses: tuple | None = None) -> RoadEstimate:
     """The road under ``case`` (module doc) from ``resid`` (the flat-road model minus the measurement on
     the case's comparison samples, native units, columns ``case.signals``), the signals' noise sigma
-    ``noise`` and the prior spectrum ``Gd(n0) = gd_n0`` [m^3]; from the ``signals`` among the case's."""
+    ``noise`` and the prior spectrum ``Gd(n0) = gd_n0`` [m^3]; from the ``signals`` among the case's.
+    ``responses``: ``(f, H, signals)`` of :func:`track_responses` for this drive, if already measured
+    (for a superset of the signals)."""
     sig = tuple(s for s in signals if s in case.signals and math.isfinite(noise.get(s, math.nan)))
     if not sig:
         raise ValueError(f"{case.name}: none of {signals} is recorded with a noise floor; no road to estimate")
     t = case.t_grid_s
     fs = 1.0 / float(np.median(np.diff(t)))
     speed = float(np.mean(case.U[:, U_INDEX["V"]]))
-    f_h, H = track_responses(model, speed, gd_n0, case.oil, sig)
+    if responses is None:
+        responses = (*track_responses(model, speed, gd_n0, case.oil, sig), sig)
+    f_h, H_all, sig_all = responses
+    H = H_all[:, [sig_all.index(s) for s in sig], :]
     y = -np.column_stack([resid[:, case.signals.index(s)] for s in sig])  # measured minus flat-road model
     y = y - y.mean(axis=0)
     n = y.shape[0]
@@ -140,7 +146,7 @@ def estimate_road(case: DriveCase, resid: np.ndarray, noise: dict, model, gd_n0:
     s = np.interp(t, t_steps, path)
     keep = np.concatenate([[True], np.diff(s) > 0])
     road = RoadProfile(s[keep], u[keep, 0], u[keep, 1])
-    return RoadEstimate(road, sig, speed, gd_n0, (lo, hi))
+    return RoadEstimate(road, sig, speed, gd_n0, (lo, hi), (f_h, H, sig))
 
 
 def road_usability(case: DriveCase, model, est: RoadEstimate, resid_flat: np.ndarray,
