@@ -39,7 +39,8 @@ import numpy as np
 from scipy import signal as sps
 
 from ...model import simulate
-from ...model.iso8608 import N0, WAVINESS, random_road
+from ...model.inline_math import TINY
+from ...model.iso8608 import CLASS_GD_N0, N0, WAVINESS, random_road
 from ...model.layout import U_INDEX
 from ...model.road import RoadProfile
 from ...model.vehicle import make_inputs
@@ -52,8 +53,9 @@ ESTIMATION_BAND_HZ = (0.5, 20.0)
 FRF_RUN_S, FRF_DT_S, FRF_SEGMENT_S = 64.0, 0.001, 8.0
 #: settling time [s] dropped from each such run
 FRF_SETTLE_S = 3.0
-#: the random road of those runs (its seed: any fixed one; its class: the drive's estimate)
-FRF_SEED = 8608
+#: the random road of those runs (its seed: any fixed one; its class: the drive's estimate), starting
+#: this far [m] behind the front axle and ending as far beyond the run
+FRF_SEED, FRF_ROAD_MARGIN_M = 8608, 10.0
 #: a cross-signal check needs at least this many gyro signals to estimate two tracks from
 GYRO_VERTICAL = ("pitch_rate", "roll_rate")
 
@@ -75,33 +77,24 @@ def track_responses(model, speed: float, gd_n0: float, oil, signals) -> tuple[np
     ``signals`` to the left and right track height under the front axle at ``speed`` [m/s] (module doc,
     step 1), over a random road of spectrum ``Gd(n0) = gd_n0`` [m^3]."""
     n = int(FRF_RUN_S / FRF_DT_S)
-    base = random_road("A", speed * FRF_RUN_S + 20.0, seed=FRF_SEED, start=-10.0)
-    z = base.zl * math.sqrt(gd_n0 / _gd_a())
+    base = random_road("A", speed * FRF_RUN_S + 2 * FRF_ROAD_MARGIN_M, seed=FRF_SEED, start=-FRF_ROAD_MARGIN_M)
+    z = base.zl * math.sqrt(gd_n0 / CLASS_GD_N0["A"])
     t = np.arange(1, n + 1) * FRF_DT_S
     u = np.interp(speed * t, base.s, z)
     keep = t >= FRF_SETTLE_S
     nper = int(FRF_SEGMENT_S / FRF_DT_S)
-    H = None
-    f = np.zeros(0)
+    f, puu = sps.welch(u[keep], fs=1.0 / FRF_DT_S, nperseg=nper)
+    H = np.zeros((f.size, len(signals), 2), complex)
+    zero = np.zeros_like(z)
     for k in range(2):
-        zero = np.zeros_like(z)
         road = RoadProfile(base.s, z if k == 0 else zero, zero if k == 0 else z)
         res = simulate(model, make_inputs(n, speed, 0.0), dt=FRF_DT_S, road=road, oil=oil,
                        outputs=[_OUTPUT[s] for s in signals])
-        f, puu = sps.welch(u[keep], fs=1.0 / FRF_DT_S, nperseg=nper)
-        if H is None:
-            H = np.zeros((f.size, len(signals), 2), complex)
         for j, s in enumerate(signals):
             y = res.y[keep, j] * _TO_UNITS[s]
             _, puy = sps.csd(u[keep], y, fs=1.0 / FRF_DT_S, nperseg=nper)
-            H[:, j, k] = puy / np.maximum(puu, 1e-300)
-    assert H is not None
+            H[:, j, k] = puy / np.maximum(puu, TINY)
     return f, H
-
-
-def _gd_a() -> float:
-    from ...model.iso8608 import CLASS_GD_N0
-    return CLASS_GD_N0["A"]
 
 
 def estimate_road(case: DriveCase, resid: np.ndarray, noise: dict, model, gd_n0: float,
