@@ -469,3 +469,30 @@ def test_table_with_quoted_fields_equals_a_parsed_and_rewritten_one(tmp_path):
     csv.writer(buf, lineterminator="\n").writerows(rows)
     assert buf.getvalue() == text and res["runs_ok"] == 4
     assert [int(r[0]) for r in rows[1:]] == [0, 1, 2, 3]
+
+
+def test_a_kill_between_chunk_file_and_log_line_is_mended_on_resume(tmp_path):
+    """A chunk file renamed into place whose log line a kill prevented, and a log line the kill cut: on
+    reopening, the cut line is dropped (it would swallow the next one) and the chunk gets its line,
+    marked recovered, in the session that wrote it; the log holds every finished chunk once."""
+    from susp_sim_ros.analysis.sweep.store import ResultStore
+    spec = load_study(write_study(tmp_path, TINY))
+    out = tmp_path / "out"
+    store = ResultStore(spec, out)
+    store.begin_session()
+    n = [len(c.runs) for c in spec.chunks]
+    for cid in (0, 1):
+        store.write_chunk(cid, {"ok": [True] * n[cid], "metrics": np.zeros((n[cid], len(spec.metric_columns())))},
+                          0.1)
+    log = out / "chunks" / "log.jsonl"
+    lines = log.read_text().splitlines(keepends=True)
+    log.write_text(lines[0] + lines[1][:10])      # chunk 1: its file whole, its line cut by the kill
+    again = ResultStore(spec, out)
+    assert again.done == {0, 1} and log.read_text().endswith("\n")
+    entries = again.log()
+    assert [e["chunk"] for e in entries] == [0, 1]
+    assert entries[1]["recovered"] is True and entries[1]["session"] == 0 and "recovered" not in entries[0]
+    again.begin_session()
+    m = np.zeros((n[2], len(spec.metric_columns())))
+    again.write_chunk(2, {"ok": [True] * n[2], "metrics": m}, 0.1)
+    assert [(e["chunk"], e["session"]) for e in again.log()] == [(0, 0), (1, 0), (2, 1)]

@@ -5,6 +5,7 @@ Layout of ``OUT``::
     manifest.json          the study (normalised), its hash, and one entry per session (start, resumed chunks)
     chunks/c000017.csv     the rows of finished chunk 17 (sweep); chunks/d000003.json: drive 3 (drives)
     chunks/log.jsonl       one line per chunk computed: chunk id, session, runs, wall time of its task
+                           (``recovered``: its file was written, its line lost to a kill)
     results.csv            (or .parquet) all rows by run id, once every chunk is in; drives: drives.csv
 
 A chunk file is written to a temporary name and renamed into place (atomic on POSIX), so a killed study
@@ -90,6 +91,25 @@ class ResultStore:
         self._values: dict[int, tuple] = {}         # chunk id -> (ok, metrics) of this session
         self._texts: dict[str, dict] = {}            # swept key -> value -> its csv text
         self.done = self._finished()
+        self._reconcile_log()
+
+    def _reconcile_log(self) -> None:
+        """Mend the log after a kill: a line the kill cut is dropped (the next line would be appended to
+        it and lost too), and a chunk whose file was written but whose line was not (killed between the
+        two) gets its line, marked ``recovered``, in the session that wrote it (the last one; its wall
+        time unknown). The log then holds every finished chunk exactly once."""
+        path = self.chunk_dir / "log.jsonl"
+        if path.exists():
+            text = path.read_text()
+            if text and not text.endswith("\n"):
+                _atomic_write(path, text[:text.rfind("\n") + 1].encode())
+        missing = sorted(self.done - {e.get("chunk") for e in self.log()})
+        if missing:
+            with open(path, "a") as f:
+                for cid in missing:
+                    f.write(json.dumps({"chunk": cid, "session": max(self.session - 1, 0),
+                                        "runs": len(self.spec.chunks[cid].runs), "elapsed_s": None,
+                                        "task_chunks": None, "recovered": True}) + "\n")
 
     def begin_session(self) -> None:
         """Record this session in the manifest (before its first chunk is written)."""
