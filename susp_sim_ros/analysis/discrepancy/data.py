@@ -147,6 +147,9 @@ def make_inputs_from_drive(drive, dt: float = 0.001, hold: bool = False) -> tupl
 SIGNALS = IMU_SIGNALS
 SIGNAL_OUTPUT = IMU_OUTPUTS
 SIGNAL_UNIT = ("deg/s", "deg/s", "deg/s", "m/s^2", "m/s^2", "m/s^2")
+#: signal -> (model output, factor from the output's SI unit to the signal's unit)
+SIGNAL_OF_OUTPUT = {s: (o, math.degrees(1.0) if u == "deg/s" else 1.0)
+                    for s, o, u in zip(SIGNALS, SIGNAL_OUTPUT, SIGNAL_UNIT)}
 GYRO = IMU_SIGNALS[:3]
 
 

@@ -17,12 +17,12 @@ import numpy as np
 from ...model import Model, simulate_batch
 from ...model.layout import U_INDEX
 from .candidates import BY_NAME, Candidate, neutral_base
-from .data import SIGNAL_OUTPUT, SIGNAL_UNIT, DriveCase
+from .data import SIGNAL_OF_OUTPUT, SIGNAL_OUTPUT, SIGNALS, DriveCase
 
 RATES = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")
 MIN_QUIET_BIAS = 20  # quiet lead-in samples for a standstill-style bias estimate
 RUN_QUANTUM_S = 0.5  # a run's length is rounded up to this, so drives of similar length share a batch
-_TO_REPORT_UNITS = np.array([np.degrees(1.0) if u == "deg/s" else 1.0 for u in SIGNAL_UNIT])
+_TO_REPORT_UNITS = np.array([SIGNAL_OF_OUTPUT[s][1] for s in SIGNALS])
 
 
 class Structure:

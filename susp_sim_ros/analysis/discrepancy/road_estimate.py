@@ -44,8 +44,9 @@ from ...model.iso8608 import CLASS_GD_N0, N0, WAVINESS, random_road
 from ...model.layout import U_INDEX
 from ...model.road import RoadProfile
 from ...model.vehicle import make_inputs
-from .data import DriveCase
-from .unmeasured import _OUTPUT, _TO_UNITS, VERTICAL
+from .data import SIGNAL_OF_OUTPUT, DriveCase
+from .engine import Evaluator, Structure
+from .unmeasured import VERTICAL
 
 #: band [Hz] of the estimated road (in time, at the drive's speed)
 ESTIMATION_BAND_HZ = (0.5, 20.0)
@@ -56,7 +57,7 @@ FRF_SETTLE_S = 3.0
 #: the random road of those runs (its seed: any fixed one; its class: the drive's estimate), starting
 #: this far [m] behind the front axle and ending as far beyond the run
 FRF_SEED, FRF_ROAD_MARGIN_M = 8608, 10.0
-#: a cross-signal check needs at least this many gyro signals to estimate two tracks from
+#: the gyro signals a cross-check estimates the road from (two signals for two tracks)
 GYRO_VERTICAL = ("pitch_rate", "roll_rate")
 
 
@@ -89,9 +90,9 @@ def track_responses(model, speed: float, gd_n0: float, oil, signals) -> tuple[np
     for k in range(2):
         road = RoadProfile(base.s, z if k == 0 else zero, zero if k == 0 else z)
         res = simulate(model, make_inputs(n, speed, 0.0), dt=FRF_DT_S, road=road, oil=oil,
-                       outputs=[_OUTPUT[s] for s in signals])
+                       outputs=[SIGNAL_OF_OUTPUT[s][0] for s in signals])
         for j, s in enumerate(signals):
-            y = res.y[keep, j] * _TO_UNITS[s]
+            y = res.y[keep, j] * SIGNAL_OF_OUTPUT[s][1]
             _, puy = sps.csd(u[keep], y, fs=1.0 / FRF_DT_S, nperseg=nper)
             H[:, j, k] = puy / np.maximum(puu, TINY)
     return f, H
@@ -123,13 +124,13 @@ def estimate_road(case: DriveCase, resid: np.ndarray, noise: dict, model, gd_n0:
     f = np.fft.rfftfreq(nfft, 1.0 / fs)
     lo, hi = ESTIMATION_BAND_HZ[0], min(ESTIMATION_BAND_HZ[1], 0.45 * fs)
     band = (f >= lo) & (f <= hi)
-    Hf = np.stack([np.stack([np.interp(f[band], f_h, H[:, j, k].real) + 1j * np.interp(f[band], f_h, H[:, j, k].imag)
-                             for k in range(2)], axis=-1) for j in range(len(sig))], axis=1)  # (nb, n_sig, 2)
-    su = gd_n0 * (f[band] / (speed * N0)) ** -WAVINESS / speed  # one-sided road PSD in time [m^2/Hz]
-    nn = np.array([2.0 * noise[s] ** 2 / fs for s in sig])     # one-sided white noise PSD [unit^2/Hz]
-    Hh = np.conj(np.swapaxes(Hf, 1, 2))                          # (nb, 2, n_sig)
-    A = np.einsum("b,bjk,bkl->bjl", su, Hf, Hh) + np.diag(nn)[None]
-    G = su[:, None, None] * np.linalg.solve(np.swapaxes(A, 1, 2), np.swapaxes(Hh, 1, 2)).swapaxes(1, 2)
+    fb = f[band]
+    Hf = np.stack([np.interp(fb, f_h, col.real) + 1j * np.interp(fb, f_h, col.imag)
+                   for col in H.reshape(f_h.size, -1).T], axis=1).reshape(fb.size, len(sig), 2)
+    su = gd_n0 * (fb / (speed * N0)) ** -WAVINESS / speed  # one-sided road PSD in time [m^2/Hz]
+    nn = np.array([2.0 * noise[s] ** 2 / fs for s in sig])  # one-sided white noise PSD [unit^2/Hz]
+    Hh = np.conj(np.swapaxes(Hf, 1, 2))                      # (nb, 2, n_sig)
+    G = su[:, None, None] * Hh @ np.linalg.inv(su[:, None, None] * Hf @ Hh + np.diag(nn))  # (nb, 2, n_sig)
     U = np.zeros((f.size, 2), complex)
     U[band] = np.einsum("bks,bs->bk", G, Y[band])
     u = np.fft.irfft(U, nfft, axis=0)[:n]
@@ -147,16 +148,15 @@ def road_usability(case: DriveCase, model, est: RoadEstimate, resid_flat: np.nda
     """How much of the vertical signals the estimated road explains: per signal the RMSE [native units]
     on the flat road and on ``est``; with ``cross`` (a road estimated without some signal), that road's
     RMSE on the signals it was not estimated from (a check that cannot fit itself)."""
-    from .engine import Evaluator, Structure
-
-    def rmse_on(road: RoadProfile) -> dict:
-        c2 = dataclasses.replace(case, road=road, quiet=None, quiet_raw=None)
-        ev = Evaluator(model, [c2])
-        sims = ev.simulate(Structure([]), np.zeros((1, 0)), to_end=True)[0]
-        e = ev.case_residual(0, sims[0], 0.0, False)
+    def vertical_rmse(e: np.ndarray) -> dict:
         return {s: float(np.sqrt(np.mean(e[:, j] ** 2))) for j, s in enumerate(case.signals) if s in VERTICAL}
 
-    flat = {s: float(np.sqrt(np.mean(resid_flat[:, j] ** 2))) for j, s in enumerate(case.signals) if s in VERTICAL}
+    def rmse_on(road: RoadProfile) -> dict:
+        ev = Evaluator(model, [dataclasses.replace(case, road=road, quiet=None, quiet_raw=None)])
+        sims = ev.simulate(Structure([]), np.zeros((1, 0)), to_end=True)[0]
+        return vertical_rmse(ev.case_residual(0, sims[0], 0.0, False))
+
+    flat = vertical_rmse(resid_flat)
     out = {"rmse_flat_road": flat, "rmse_estimated_road": rmse_on(est.road)}
     if cross is not None:
         unseen = [s for s in flat if s not in cross.signals]

@@ -30,9 +30,8 @@ from scipy import signal as sps
 from ...model import simulate
 from ...model.iso8608 import CLASS_GD_N0, class_of, random_road
 from ...model.layout import U_INDEX
-from ...model.paper import IMU_OUTPUTS, IMU_SIGNALS
 from ...model.vehicle import make_inputs
-from .data import DriveCase
+from .data import SIGNAL_OF_OUTPUT, DriveCase
 
 VERTICAL = ("accel_z", "pitch_rate", "roll_rate")
 HANDLING = ("yaw_rate", "accel_y")  # kept in the fit; their road-band content counts as noise there
@@ -40,8 +39,6 @@ BODY_BAND_HZ = (0.7, 3.0)
 WHEEL_BAND_HZ = (7.0, 20.0)
 CLASS_BAND_HZ = (0.5, 20.0)
 EXCESS = 4.0
-_OUTPUT = {s: IMU_OUTPUTS[IMU_SIGNALS.index(s)] for s in VERTICAL}
-_TO_UNITS = {"accel_z": 1.0, "pitch_rate": math.degrees(1.0), "roll_rate": math.degrees(1.0)}
 
 
 def _band_power(f: np.ndarray, p: np.ndarray, band: tuple[float, float]) -> float:
@@ -111,8 +108,8 @@ def _roughness_class(model, speed: float, fs: float, sig: str, p_meas: float, oi
     dt, duration = 0.001, 30.0
     n = int(duration / dt)
     road = random_road("A", speed * duration + 10.0, seed=8608, start=-5.0)
-    res = simulate(model, make_inputs(n, speed, 0.0), dt=dt, road=road, oil=oil, outputs=[_OUTPUT[sig]])
-    y = res.y[:, 0] * _TO_UNITS[sig]
+    res = simulate(model, make_inputs(n, speed, 0.0), dt=dt, road=road, oil=oil, outputs=[SIGNAL_OF_OUTPUT[sig][0]])
+    y = res.y[:, 0] * SIGNAL_OF_OUTPUT[sig][1]
     y = y[int(3.0 / dt):]  # settle
     f, p = _psd(y, 1.0 / dt)
     hi = min(CLASS_BAND_HZ[1], 0.45 * fs)

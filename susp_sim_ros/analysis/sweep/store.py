@@ -60,6 +60,7 @@ class ResultStore:
     def __init__(self, spec: StudySpec, out: str | Path, *, fresh: bool = False):
         self.spec, self.out = spec, Path(out)
         self.chunk_dir = self.out / "chunks"
+        self.log_path = self.chunk_dir / "log.jsonl"
         self.manifest_path = self.out / "manifest.json"
         try:
             self.out.mkdir(parents=True, exist_ok=True)
@@ -98,14 +99,13 @@ class ResultStore:
         it and lost too), and a chunk whose file was written but whose line was not (killed between the
         two) gets its line, marked ``recovered``, in the session that wrote it (the last one; its wall
         time unknown). The log then holds every finished chunk exactly once."""
-        path = self.chunk_dir / "log.jsonl"
-        if path.exists():
-            text = path.read_text()
+        if self.log_path.exists():
+            text = self.log_path.read_text()
             if text and not text.endswith("\n"):
-                _atomic_write(path, text[:text.rfind("\n") + 1].encode())
+                _atomic_write(self.log_path, text[:text.rfind("\n") + 1].encode())
         missing = sorted(self.done - {e.get("chunk") for e in self.log()})
         if missing:
-            with open(path, "a") as f:
+            with open(self.log_path, "a") as f:
                 for cid in missing:
                     f.write(json.dumps({"chunk": cid, "session": max(self.session - 1, 0),
                                         "runs": len(self.spec.chunks[cid].runs), "elapsed_s": None,
@@ -188,16 +188,15 @@ class ResultStore:
             data = json.dumps(result, default=_fmt).encode()
         _atomic_write(self._chunk_path(cid), data)
         self.done.add(cid)
-        with open(self.chunk_dir / "log.jsonl", "a") as f:
+        with open(self.log_path, "a") as f:
             f.write(json.dumps({"chunk": cid, "session": self.session, "runs": len(chunk.runs),
                                 "elapsed_s": round(elapsed_s, 6), "task_chunks": task_chunks}) + "\n")
 
     def log(self) -> list[dict]:
-        path = self.chunk_dir / "log.jsonl"
-        if not path.exists():
+        if not self.log_path.exists():
             return []
         out = []
-        for line in path.read_text().splitlines():
+        for line in self.log_path.read_text().splitlines():
             try:
                 out.append(json.loads(line))
             except ValueError:          # a line cut by a kill
