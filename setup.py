@@ -13,7 +13,7 @@ package_name = "susp_sim_ros"
 setup(
     name=package_name,
     version="0.1.0",
-    packages=find_packages(exclude=["test", "test.*", "benchmarks"]),
+    packages=find_packages(exclude=["test", "test.*", "benchmarks", "truth_generators", "truth_generators.*"]),
     package_data={package_name: ["model/_kernel_template.py"]},
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),

@@ -1,6 +1,6 @@
 """Mismatch benchmark of the discrepancy finder (``susp diagnose``) on truth drives that are NOT our model.
 
-The truth drives come from the independent simulator (:mod:`susp_sim_ros.analysis.independent_sim`,
+The truth drives come from the independent simulator (:mod:`truth_generators.independent_sim`,
 every difference listed in ``docs/independent_sim.md``), written as MCAP drives to a temporary directory
 and read back by ``DiscrepancyFinder(variant=BASE).fit(paths)``; its ``report()`` (the ``susp diagnose
 --json`` dict) is scored against the known truth. In short, the generator differs from the model the
@@ -85,7 +85,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder  # noqa: E402
-from susp_sim_ros.analysis.independent_sim import (TruthCar, TruthFriction, TruthHidden,  # noqa: E402
+from truth_generators.independent_sim import (TruthCar, TruthFriction, TruthHidden,  # noqa: E402
                                                    TruthManeuver, TruthSensor, make_drive, write_drive)
 from susp_sim_ros.io.drive import ImuSeries  # noqa: E402
 from susp_sim_ros.model.paper import IMU_SIGNALS  # noqa: E402

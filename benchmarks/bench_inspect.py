@@ -4,7 +4,7 @@ Truth drives of slow bump crossings from two generators, written as MCAP drives 
 kept in the file but withheld from the estimator) and read back by
 :func:`susp_sim_ros.analysis.inspection.inspect_drives`:
 
-- the independent simulator (:mod:`susp_sim_ros.analysis.independent_sim`, not our model: own
+- the independent simulator (:mod:`truth_generators.independent_sim`, not our model: own
   integrator, damper-curve shape, friction scalings and values, ``docs/independent_sim.md``): the car
   ``TruthCar().perturbed(rng, 0.0, PERTURB)`` (sprung mass, inertias, cornering stiffnesses, wheel rates
   and tyre stiffness each up to +-10 % off, within the vehicle file's class ranges) and
@@ -33,8 +33,10 @@ from pathlib import Path
 
 import numpy as np
 
-from susp_sim_ros.analysis import independent_sim as ind
-from susp_sim_ros.analysis.inspection import inspect_drives
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from susp_sim_ros.analysis.inspection import inspect_drives  # noqa: E402
+from truth_generators import independent_sim as ind  # noqa: E402
 
 PERTURB = 0.10
 GYRO_NOISE = 0.1

@@ -11,7 +11,7 @@ speed and steering at 100 Hz from this process for ``--duration`` seconds, and r
   instant the sample represents, i.e. up to which the inputs received so far were integrated);
 - ``deadline_misses``: ticks published more than one period late (or skipped), from ``/diagnostics``;
 - ``host_stall_max_ms``: the longest stall of the machine itself in the same run: the largest lateness
-  of a plain sleeping-thread probe (:mod:`susp_sim_ros.host_probe`: one process per CPU, pinned, 1 ms
+  of a plain sleeping-thread probe (:mod:`host_probe`: one process per CPU, pinned, 1 ms
   period, SCHED_FIFO above the node's threads when permitted), running from before the node starts
   until after it stops;
 - ``misses_unexplained``: deadline misses no host stall explains (:mod:`susp_sim_ros.analysis.host_stalls`:
@@ -53,7 +53,7 @@ def _env() -> dict[str, str]:
 
 
 def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
-    from susp_sim_ros.host_probe import HostProbe
+    from host_probe import HostProbe
     # the machine's own stalls over the whole run; the probes end with the run, also when it fails
     with HostProbe(max_duration_s=duration + 300.0) as host:
         return _run(duration, rate_hz, probe_rt, host)

@@ -11,7 +11,7 @@ checks the recording. Reported (``--json``: one JSON object on stdout, logs on s
 - ``deadline_misses`` (ticks published more than one period late), ``ticks``, ``rtf``, ``jitter_p99_ms``
   and ``jitter_max_ms``, from the node's last ``/diagnostics``;
 - ``host_stall_max_ms`` and ``misses_unexplained`` as in ``bench_node.py``: the longest stall a plain
-  sleeping-thread probe (:mod:`susp_sim_ros.host_probe`) saw during the run, and the misses no host stall
+  sleeping-thread probe (:mod:`host_probe`) saw during the run, and the misses no host stall
   explains (:mod:`susp_sim_ros.analysis.host_stalls`); ``misses_by_host`` lists the explained ones;
 - the recording: ``published_inputs`` (what this process sent) and ``recorded_inputs`` per topic,
   ``recorded_sim`` per ``/sim`` topic, ``sim_gaps`` (missing 10 ms ticks in the recorded
@@ -280,7 +280,7 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     if path.exists():
         path.unlink()
     from susp_sim_ros.analysis.host_stalls import Miss, attribute
-    from susp_sim_ros.host_probe import HostProbe
+    from host_probe import HostProbe
     host = HostProbe(max_duration_s=duration + 300.0).start()  # the machine's own stalls, whole run
     try:
         probe = Probe(rate_hz, realtime=realtime_probe)

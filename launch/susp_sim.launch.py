@@ -45,6 +45,9 @@ ARGUMENTS = {
                               "(the first start compiles the model)"),
     "shutdown_after_replay": ("true", "end the launch when the replay ends"),
     "rosbag_out": ("", "output directory of an additional `ros2 bag record -s mcap` (empty: none)"),
+    "discovery_range": ("LOCALHOST", "ROS_AUTOMATIC_DISCOVERY_RANGE of the launched processes: LOCALHOST keeps "
+                                     "publishers on other hosts off the node's inputs; SUBNET or SYSTEM_DEFAULT "
+                                     "to take inputs from another machine"),
 }
 
 RECORDED_TOPICS = ["/sim/imu/data", "/sim/odom", "/sim/suspension", "/diagnostics", "/vehicle/speed",
@@ -74,14 +77,17 @@ def launch_actions(context):
         except ValueError:
             raise ValueError(f"launch argument damper_oil_level:={arg['damper_oil_level']!r}: expected four "
                              "comma-separated numbers FL,FR,RL,RR") from None
+    # discovery stays on this host unless asked: a process elsewhere on the same domain publishing steering
+    # or speed would otherwise feed the node (the node warns when an input has two publishers)
+    env = {"ROS_AUTOMATIC_DISCOVERY_RANGE": arg["discovery_range"]}
     actions = [Node(package=PACKAGE, executable=NODE_EXECUTABLE, name=NODE_EXECUTABLE, output="screen",
-                    parameters=[params_file, overrides])]
+                    parameters=[params_file, overrides], additional_env=env)]
     if bag:
         cli = os.path.join(get_package_prefix(PACKAGE), "lib", PACKAGE, CLI_EXECUTABLE)
         cmd = [cli, "replay", bag, "--rate", arg["rate"], "--wait-subscribers", arg["replay_wait_s"]]
         if _flag(arg["loop"], "loop"):
             cmd.append("--loop")
-        replay = ExecuteProcess(cmd=cmd, name="susp_replay", output="screen")
+        replay = ExecuteProcess(cmd=cmd, name="susp_replay", output="screen", additional_env=env)
         actions.append(replay)
         if _flag(arg["shutdown_after_replay"], "shutdown_after_replay"):
             actions.append(RegisterEventHandler(OnProcessExit(
@@ -89,7 +95,7 @@ def launch_actions(context):
     if arg["rosbag_out"]:
         cmd = ["ros2", "bag", "record", "-s", "mcap", "-o", arg["rosbag_out"]] + \
             (["--use-sim-time"] if sim_time else []) + ["--topics", *RECORDED_TOPICS]
-        actions.append(ExecuteProcess(cmd=cmd, name="rosbag_record", output="screen"))
+        actions.append(ExecuteProcess(cmd=cmd, name="rosbag_record", output="screen", additional_env=env))
     return actions
 
 

@@ -19,7 +19,7 @@ interface's snake_case names, SI units, ``to_pandas()``/``to_csv()``); nothing c
     table = resp.to_pandas()                           # index time_s, one column per signal
 
     drive = ss.read_drive("bags/bump_crossing_rear_empty.mcap")
-    sim = ss.run_lockstep(drive, model=model)          # the drive through the node's core: a Response
+    sim = ss.run_lockstep(drive, model=model)          # the drive through the node's core: a LockstepRun
     check = ss.validate(drive.imu.t_ns, drive.imu.gyro, sim.t_ns, sim.imu.gyro)
     rmse = check.rmse_deg_s("whole", "pitch_rate")     # deg/s, as the paper reports
 
@@ -54,8 +54,9 @@ _API = {
     "TestDrive": "susp_sim_ros.io.drive",
     "read_drive": "susp_sim_ros.io.drive",
     "write_drive": "susp_sim_ros.io.drive",
-    "run_lockstep": "susp_sim_ros.lockstep",
-    "maneuver_drive": "susp_sim_ros.lockstep",
+    "run_lockstep": "susp_sim_ros.runtime.lockstep",
+    "LockstepRun": "susp_sim_ros.runtime.lockstep",
+    "maneuver_drive": "susp_sim_ros.runtime.lockstep",
     "validate": "susp_sim_ros.analysis.validation",
     "DiscrepancyFinder": "susp_sim_ros.analysis.discrepancy",
     "inspect_drives": "susp_sim_ros.analysis.inspection",

@@ -7,7 +7,7 @@ import math
 import numpy as np
 from hypothesis import strategies as st
 
-from susp_sim_ros.sim_core import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT
+from susp_sim_ros.runtime.sim_core import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT
 
 NAN, INF = float("nan"), float("inf")
 

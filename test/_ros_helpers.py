@@ -176,9 +176,9 @@ class SimDriver:
             self.ex.spin_once(timeout_sec=0.0)
 
     def send(self, topic: str, msg) -> None:
-        before = self.node.inputs_taken
+        before = self.node.inputs.inputs_taken
         self.pub[topic].publish(msg)
-        self.spin_until(lambda: self.node.inputs_taken > before)
+        self.spin_until(lambda: self.node.inputs.inputs_taken > before)
 
     def send_value(self, topic: str, value: float) -> None:
         self.send(topic, self.Float64(data=float(value)))
@@ -197,7 +197,7 @@ class SimDriver:
     def play(self, drive, *, clock_step_ns: int | None = None) -> None:
         """Feed a TestDrive as a sim-time replay would: /clock to each message time (and every
         ``clock_step_ns`` in between when given), then the message; finally the clock to the end."""
-        from susp_sim_ros.lockstep import _events
+        from susp_sim_ros.runtime.lockstep import _events
         t_prev = None
         road = drive.road
         for t, kind, i in _events(drive):

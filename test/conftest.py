@@ -1,9 +1,16 @@
 """Shared test set-up: an isolated ROS 2 environment and session-wide models (kernels compile once)."""
 import os
 import random
+import sys
 import tempfile
+from pathlib import Path
 
 import pytest
+
+# the repository root: the truth generators (truth_generators/) and benchmarks/ are not installed
+ROOT = str(Path(__file__).resolve().parents[1])
+if ROOT not in sys.path:
+    sys.path.insert(0, ROOT)
 
 os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(1, 101)))
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")

@@ -1,6 +1,6 @@
 """Calibrate, then discover: the parameter table, noise floors per signal, unmeasured road input, and
 calibration instead of invented physics, on drives from the independent simulator
-(:mod:`susp_sim_ros.analysis.independent_sim`: another implementation of model-spec with other assumed
+(:mod:`truth_generators.independent_sim`: another implementation of model-spec with other assumed
 values; docs/independent_sim.md lists every difference)."""
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import yaml
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder
 from susp_sim_ros.analysis.discrepancy.calibration import calibration_params, vehicle_at
 from susp_sim_ros.analysis.discrepancy.candidates import PHYSICS, BY_NAME
-from susp_sim_ros.analysis.independent_sim import (TruthCar, TruthFriction, TruthHidden, TruthManeuver,
+from truth_generators.independent_sim import (TruthCar, TruthFriction, TruthHidden, TruthManeuver,
                                                    TruthSensor, make_drive, write_drive)
 from susp_sim_ros.errors import ConfigError
 from susp_sim_ros.model import Model, load_variant, load_vehicle

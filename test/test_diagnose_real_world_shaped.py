@@ -18,8 +18,8 @@ import pytest
 from _cli_helpers import cli_json
 from _foreign_corpus import CAR_MAP, car_rosbags
 from susp_sim_ros.analysis.discrepancy.candidates import BY_NAME, PHYSICS
-from susp_sim_ros.analysis.independent_roads import TruthManeuver
-from susp_sim_ros.analysis.independent_sim import TruthCar, TruthFriction, TruthHidden, TruthSensor, make_drive
+from truth_generators.independent_roads import TruthManeuver
+from truth_generators.independent_sim import TruthCar, TruthFriction, TruthHidden, TruthSensor, make_drive
 
 GYRO_NOISE_DEG_S = 0.1
 

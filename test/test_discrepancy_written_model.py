@@ -34,7 +34,7 @@ from susp_sim_ros.analysis.discrepancy.data import make_inputs_from_drive
 from susp_sim_ros.analysis.discrepancy.data import SIGNAL_OUTPUT
 from susp_sim_ros.analysis.discrepancy.engine import _TO_REPORT_UNITS
 from susp_sim_ros.analysis.discrepancy.report import write_outputs
-from susp_sim_ros.lockstep import run_lockstep
+from susp_sim_ros.runtime.lockstep import run_lockstep
 from susp_sim_ros.model import Model, load_vehicle, simulate_batch
 from susp_sim_ros.model.vehicle import hydraulic_curves
 

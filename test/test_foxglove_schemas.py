@@ -99,7 +99,7 @@ def test_fresh_offline_recording(tmp_path):
 
 def test_node_recording(tmp_path):
     from _ros_helpers import SimDriver
-    from susp_sim_ros.lockstep import maneuver_drive
+    from susp_sim_ros.runtime.lockstep import maneuver_drive
     from susp_sim_ros.model.maneuvers import bump_crossing
     drive = maneuver_drive(bump_crossing(), rate_hz=50.0)
     for s in (drive.speed, drive.steering):  # the first 1.2 s (with the latched road profile)

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from susp_sim_ros.analysis.host_stalls import Miss, Stall, attribute, format_miss_log, parse_miss_log
-from susp_sim_ros.host_probe import HostProbe
+from benchmarks.host_probe import HostProbe
 
 MS = 1_000_000
 PERIOD = 10 * MS  # the node's publish period at 100 Hz

@@ -1,4 +1,4 @@
-"""Physics of the independent truth simulator (``susp_sim_ros.analysis.independent_sim``).
+"""Physics of the independent truth simulator (``truth_generators.independent_sim``).
 
 Reference values: model-spec section 5 (an independent implementation of the same spec).
 """
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.signal import welch
 
-from susp_sim_ros.analysis.independent_roads import coherence, iso8608_psd, iso8608_road
-from susp_sim_ros.analysis.independent_sim import (NY, SOURCE, TruthCar, TruthFriction, TruthHidden,
+from truth_generators.independent_roads import coherence, iso8608_psd, iso8608_road
+from truth_generators.independent_sim import (NY, SOURCE, TruthCar, TruthFriction, TruthHidden,
                                                    TruthManeuver, TruthSensor, body_modes, hydraulic_curves,
                                                    make_drive, simulate, write_drive)
 from susp_sim_ros.io.drive import read_drive

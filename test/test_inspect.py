@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from hypothesis import given, strategies as st
 
-from susp_sim_ros.analysis import independent_sim as ind
+from truth_generators import independent_sim as ind
 from susp_sim_ros.analysis.inspection import inspect_drives, load_config, state_of
 
 BAGS = Path(__file__).resolve().parents[1] / "bags"
@@ -110,7 +110,7 @@ def test_inspection_drive_with_unknown_oil_is_read_and_simulated_as_intact(tmp_p
     """interface.md: an inspection drive's damper_oil_level is `unknown`; every command reads it, those
     that need oil assume intact and say so."""
     from susp_sim_ros.io.drive import read_drive, write_drive
-    from susp_sim_ros.lockstep import run_lockstep
+    from susp_sim_ros.runtime.lockstep import run_lockstep
     d = read_drive(BAGS / "bump_crossing_rear_empty.mcap")
     p = tmp_path / "inspection.mcap"
     write_drive(p, dataclasses.replace(d, metadata={**d.metadata, "damper_oil_level": "unknown"}), overwrite=True)

@@ -107,9 +107,11 @@ def test_small_study_end_to_end(tmp_path):
 
 
 def test_independent_truth_cars_are_scored_by_every_method():
-    """truth_generator: independent: the bump crossing comes from the independent simulator (not our
-    model); an intact car and one with FR oil-empty (cars 0 and 1 of this seed) are told apart."""
-    spec = roc.roc_spec({"roc": {"seed": 20261123, "cars": 2, "truth_generator": "independent",
+    """truth_generator plug-in truth_generators.roc:bump_crossing: the bump crossing comes from the
+    independent simulator (not our model); an intact car and one with FR oil-empty (cars 0 and 1 of this
+    seed) are told apart."""
+    spec = roc.roc_spec({"roc": {"seed": 20261123, "cars": 2,
+                                 "truth_generator": "truth_generators.roc:bump_crossing",
                                  "states": {"intact": 0.4, "one_empty": 0.35, "one_half": 0.2, "several": 0.05},
                                  "variation": ["sprung_mass", "tyre_stiffness", "axle_friction"],
                                  "speed_kmh": [5.0, 15.0], "bump_height": [0.04, 0.08],

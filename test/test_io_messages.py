@@ -95,8 +95,8 @@ def test_rclpy_serialization_is_compatible():
 
 def test_io_sim_core_and_lockstep_never_import_rclpy():
     import subprocess
-    code = ("import sys; import susp_sim_ros.io, susp_sim_ros.io.reader, susp_sim_ros.sim_core, "
-            "susp_sim_ros.lockstep, susp_sim_ros.cli.sim, susp_sim_ros.cli.recover; "
+    code = ("import sys; import susp_sim_ros.io, susp_sim_ros.io.reader, susp_sim_ros.runtime.sim_core, "
+            "susp_sim_ros.runtime.lockstep, susp_sim_ros.cli.sim, susp_sim_ros.cli.recover; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('rclpy', 'rosidl_runtime_py')]; "
             "print(bad); sys.exit(1 if bad else 0)")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

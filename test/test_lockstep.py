@@ -8,7 +8,7 @@ import pytest
 
 from susp_sim_ros.io import read_drive, read_imu, write_drive
 from susp_sim_ros.io.reader import read_recording
-from susp_sim_ros.lockstep import maneuver_drive, run_lockstep
+from susp_sim_ros.runtime.lockstep import maneuver_drive, run_lockstep
 from susp_sim_ros.model import simulate
 from susp_sim_ros.model.maneuvers import bump_crossing, sine_steer, vehicle_state
 

@@ -1,6 +1,8 @@
-"""The pure core imports no rclpy (three layers, one direction of imports)."""
+"""The pure core imports no rclpy; the layers of docs/architecture.md import one way, without cycles."""
+import ast
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -15,11 +17,13 @@ def test_core_does_not_import_rclpy(module):
     assert r.returncode == 0, f"{module} pulled in rclpy (rc {r.returncode}): {r.stderr[-500:]}"
 
 
-def test_no_import_cycle_between_modules():
-    """No module imports (directly or through others) a module that imports it back; package
-    ``__init__`` re-exports are not counted. Function-local imports count like top-level ones."""
-    import ast
-    from pathlib import Path
+#: the layers of docs/architecture.md, lowest first; top-level modules (errors, progress) are shared by all
+LAYERS = {"model": 0, "io": 1, "control": 2, "runtime": 3, "analysis": 4, "cli": 5, "ros": 5}
+
+
+def _import_graph() -> tuple[dict[str, Path], dict[str, set[str]]]:
+    """Every module of the package and the package modules it imports (top-level or function-local;
+    package ``__init__`` re-exports not counted)."""
     root = Path(__file__).resolve().parents[1] / "susp_sim_ros"
     mods = {}
     for f in root.rglob("*.py"):
@@ -32,7 +36,7 @@ def test_no_import_cycle_between_modules():
             base = base[: len(base) - node.level + 1]
         return ".".join(base + ([node.module] if node.module else []))
 
-    edges = {m: set() for m in mods}
+    edges: dict[str, set[str]] = {m: set() for m in mods}
     for m, f in mods.items():
         for n in ast.walk(ast.parse(f.read_text())):
             targets = []
@@ -43,6 +47,13 @@ def test_no_import_cycle_between_modules():
                 targets = [t] + [f"{t}.{a.name}" for a in n.names]
             edges[m] |= {t for t in targets if t in mods and t != m and not m.startswith(t + ".")
                          and mods[t].name != "__init__.py"}
+    return mods, edges
+
+
+def test_no_import_cycle_between_modules():
+    """No module imports (directly or through others) a module that imports it back; package
+    ``__init__`` re-exports are not counted. Function-local imports count like top-level ones."""
+    mods, edges = _import_graph()
     cycles, state = [], {}
 
     def visit(u, path):
@@ -58,3 +69,22 @@ def test_no_import_cycle_between_modules():
         if m not in state and mods[m].name != "__init__.py":
             visit(m, [m])
     assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles[:5])
+
+
+def _layer(module: str) -> int:
+    parts = module.split(".")
+    return LAYERS.get(parts[1], 0) if len(parts) > 2 or parts[1] in LAYERS else 0
+
+
+def test_no_upward_import_between_layers():
+    """docs/architecture.md's layers: a module imports only from its own layer or those below it
+    (model <- io <- control <- runtime <- analysis <- cli, ros)."""
+    mods, edges = _import_graph()
+    upward = sorted(f"{m} -> {t}" for m in mods for t in edges[m] if _layer(t) > _layer(m))
+    assert not upward, "upward imports: " + "; ".join(upward)
+
+
+def test_layer_table_names_every_package():
+    root = Path(__file__).resolve().parents[1] / "susp_sim_ros"
+    packages = {p.name for p in root.iterdir() if (p / "__init__.py").is_file()}
+    assert packages == set(LAYERS)

@@ -10,7 +10,7 @@ import pytest
 from _ros_helpers import SimDriver
 from susp_sim_ros.io import messages as M
 from susp_sim_ros.io.drive import Series, TestDrive
-from susp_sim_ros.lockstep import maneuver_drive, run_lockstep
+from susp_sim_ros.runtime.lockstep import maneuver_drive, run_lockstep
 from susp_sim_ros.model import make_inputs, simulate
 from susp_sim_ros.model.maneuvers import bump_crossing, sine_steer
 
@@ -102,7 +102,7 @@ def test_oil_level_change_at_run_time_takes_effect(driver):
     ok = driver.node.set_parameters([Parameter("damper_oil_level", value=[1.0, 1.0, 0.0, 0.0])])
     assert ok[0].successful
     np.testing.assert_array_equal(driver.node.core.oil, [1.0, 1.0, 0.0, 0.0])
-    from susp_sim_ros.lockstep import _events
+    from susp_sim_ros.runtime.lockstep import _events
     for t, kind, i in _events(drive):
         if t <= half:
             continue

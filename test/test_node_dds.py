@@ -56,7 +56,7 @@ def test_replay_with_clock_equals_lockstep(tmp_path, rate, loaded):
     window; the node must still take the inputs published before each /clock from DDS first (without
     that, 4 of 5 such runs applied an input one clock late)."""
     from susp_sim_ros.io import read_imu, write_drive
-    from susp_sim_ros.lockstep import maneuver_drive, run_lockstep
+    from susp_sim_ros.runtime.lockstep import maneuver_drive, run_lockstep
     from susp_sim_ros.model.maneuvers import sine_steer
     drive = maneuver_drive(sine_steer(duration=4.0, lead_time=0.5), (1, 1, 0, 0))
     src = tmp_path / "drive.mcap"
@@ -95,7 +95,7 @@ def test_replay_loops_and_latches(tmp_path):
     from rosgraph_msgs.msg import Clock
     from std_msgs.msg import Float64, Float64MultiArray
     from susp_sim_ros.io import write_drive
-    from susp_sim_ros.lockstep import maneuver_drive
+    from susp_sim_ros.runtime.lockstep import maneuver_drive
     from susp_sim_ros.model.maneuvers import bump_crossing
     ros_env()
     drive = maneuver_drive(bump_crossing(), rate_hz=20.0)
@@ -137,7 +137,7 @@ def test_replay_loops_and_latches(tmp_path):
 def test_cli_recover_and_bad_input(tmp_path, capsys):
     from susp_sim_ros.cli.main import main
     from susp_sim_ros.io import write_drive
-    from susp_sim_ros.lockstep import maneuver_drive
+    from susp_sim_ros.runtime.lockstep import maneuver_drive
     from susp_sim_ros.model.maneuvers import sine_steer
     p = tmp_path / "d.mcap"
     write_drive(p, maneuver_drive(sine_steer()))

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder
 from susp_sim_ros.analysis.discrepancy.data import as_cases
 from susp_sim_ros.io.drive import read_drive
-from susp_sim_ros.lockstep import maneuver_drive, run_lockstep
+from susp_sim_ros.runtime.lockstep import maneuver_drive, run_lockstep
 from susp_sim_ros.model import Response, simulate, simulate_batch
 from susp_sim_ros.model.layout import N_U, S_INDEX, U_INDEX
 from susp_sim_ros.model.maneuvers import bump_crossing, vehicle_state

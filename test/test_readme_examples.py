@@ -73,6 +73,7 @@ def test_package_docstring_example_runs():
     import os
 
     from susp_sim_ros.model import Response
+    from susp_sim_ros.runtime.lockstep import LockstepRun
     ns: dict = {}
     root = Path(__file__).resolve().parents[1]
     cwd = os.getcwd()
@@ -82,7 +83,8 @@ def test_package_docstring_example_runs():
     finally:
         os.chdir(cwd)
     resp, sim, pred = ns["resp"], ns["sim"], ns["pred"]
-    assert all(isinstance(r, Response) for r in (resp, sim, pred))
+    assert isinstance(resp, Response) and isinstance(pred, Response)
+    assert isinstance(sim, LockstepRun) and isinstance(sim.response, Response)
     assert resp.units["pitch_rate"] == "rad/s" and 0.01 < ns["peak"] < 1.0
     assert list(ns["table"].columns) == list(resp.labels) and ns["table"].index.name == "time_s"
     assert len(sim.t_ns) > 100 and 0.0 < ns["rmse"] < 1.0  # deg/s: the model follows the drive

@@ -87,7 +87,7 @@ class FuzzNode:
         for (tp, cause), n in self.node.core.rejections_by_topic.items():
             assert f"{tp}:{cause}={n}" in diag["rejected_by_topic"]
         self.node.publish_diagnostics()  # goes through the checking publisher
-        assert self.node.handler_errors == 0
+        assert self.node.inputs.handler_errors == 0
 
     def close(self) -> tuple[int, int]:
         try:
@@ -144,11 +144,11 @@ def _scalar_fuzz(f: FuzzNode, topic: str, handler) -> None:
 
 
 def test_speed_messages(wall):
-    _scalar_fuzz(wall, SPEED, wall.node.on_speed)
+    _scalar_fuzz(wall, SPEED, wall.node.inputs.on_speed)
 
 
 def test_steering_messages(wall):
-    _scalar_fuzz(wall, STEER, wall.node.on_steering)
+    _scalar_fuzz(wall, STEER, wall.node.inputs.on_steering)
 
 
 #: message kinds of the strategies that must always be accepted / always be rejected (the others depend
@@ -195,11 +195,11 @@ def _array_fuzz(f: FuzzNode, topic: str, handler, strategy) -> None:
 
 
 def test_road_profile_messages(wall):
-    _array_fuzz(wall, PROFILE, wall.node.on_profile, profile_msgs)
+    _array_fuzz(wall, PROFILE, wall.node.inputs.on_profile, profile_msgs)
 
 
 def test_wheel_heights_messages(wall):
-    _array_fuzz(wall, HEIGHTS, wall.node.on_wheel_heights, heights_msgs)
+    _array_fuzz(wall, HEIGHTS, wall.node.inputs.on_wheel_heights, heights_msgs)
 
 
 # ---- sim time: /clock (and inputs) with invalid, stale, shuffled, backward and far-ahead times ---------
@@ -244,11 +244,11 @@ def test_clock_messages_under_sim_time(simnode):
             m.clock.sec, m.clock.nanosec = t_or_pair
         else:
             m.clock.sec, m.clock.nanosec = divmod(int(t_or_pair), 1_000_000_000)
-        node.on_clock(m, {"source_timestamp": src})
+        node.inputs.on_clock(m, {"source_timestamp": src})
 
     # start: an input and a clock so that the core runs
     now = time.time_ns()
-    node.on_speed(Float64(data=10.0), {"source_timestamp": now - 2_000_000_000})
+    node.inputs.on_speed(Float64(data=10.0), {"source_timestamp": now - 2_000_000_000})
     clock(base[0], now - 1_000_000_000)
 
     @settings(FUZZ, max_examples=420)  # a sixth of the events are inputs (speed, steering)
@@ -262,10 +262,10 @@ def test_clock_messages_under_sim_time(simnode):
             kinds[kind] += 1
             cur = max(node.now_ns(), 1)
             if kind == "speed":
-                node.on_speed(Float64(data=val), {"source_timestamp": now + src})
+                node.inputs.on_speed(Float64(data=val), {"source_timestamp": now + src})
                 continue
             if kind == "steer":
-                node.on_steering(Float64(data=val), {"source_timestamp": now + src})
+                node.inputs.on_steering(Float64(data=val), {"source_timestamp": now + src})
                 continue
             n_clock += 1
             if kind == "invalid":
@@ -282,9 +282,10 @@ def test_clock_messages_under_sim_time(simnode):
                     t = cur
                 clock(t, now + src)
         # a final clock published after everything else releases the inputs still queued
-        clock(max(node.now_ns(), 1), time.time_ns() - node.orderer.window_ns - 1_000_000)  # older than the window
+        # older than the window
+        clock(max(node.now_ns(), 1), time.time_ns() - node.inputs.orderer.window_ns - 1_000_000)
         assert core.rejections_by_topic[(CLOCK, "clock_invalid")] - inv0 == want_invalid
-        assert len(node.orderer) == 0  # nothing stuck in the reorder queue
+        assert len(node.inputs.orderer) == 0  # nothing stuck in the reorder queue
         f.after_burst()
 
     burst()
@@ -333,7 +334,7 @@ def test_bad_inputs_through_dds_into_a_live_node():
         for _ in range(40):
             T += 10_000_000
             d.clock(T)
-            before = node.inputs_taken
+            before = node.inputs.inputs_taken
             burst = []
             for _ in range(25):
                 v = float(rng.choice(EDGE_FLOATS)) if rng.random() < 0.7 else float(rng.uniform(0, 30))
@@ -351,7 +352,7 @@ def test_bad_inputs_through_dds_into_a_live_node():
                 d.pub[topic].publish(m)
                 sent[topic] += 1
             n_burst = sum(1 for tp, _ in burst if tp != PROFILE)
-            d.spin_until(lambda want=before + n_burst: node.inputs_taken >= want)
+            d.spin_until(lambda want=before + n_burst: node.inputs.inputs_taken >= want)
             for topic, m in burst:
                 if topic == PROFILE:
                     d.send(topic, m)
@@ -367,7 +368,7 @@ def test_bad_inputs_through_dds_into_a_live_node():
         d.wait_samples(90)  # 1.01 .. 1.90 s
         t, g = d.imu_arrays()
         assert len(t) >= 90 and np.all(np.isfinite(g)) and core.healthy
-        assert node.handler_errors == 0 and core.rejections_by_topic[(CLOCK, "clock_invalid")] >= inv
+        assert node.inputs.handler_errors == 0 and core.rejections_by_topic[(CLOCK, "clock_invalid")] >= inv
         total = sum(core.rejections.values())
         assert total > 500
         lines = sum(node.rejection_log.emitted.values())

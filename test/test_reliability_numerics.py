@@ -19,10 +19,10 @@ import pytest
 import yaml
 
 from susp_sim_ros.io.drive import read_drive
-from susp_sim_ros.lockstep import run_lockstep
+from susp_sim_ros.runtime.lockstep import run_lockstep
 from susp_sim_ros.model.rigs import _rig_config, axle_rig, damper_rig, half_hysteresis_at_zero, triangle
 from susp_sim_ros.model.vehicle import check_oil
-from susp_sim_ros.sim_core import OUTPUT_ENVELOPE, SimCore
+from susp_sim_ros.runtime.sim_core import OUTPUT_ENVELOPE, SimCore
 
 ROOT = Path(__file__).resolve().parents[1]
 STEPS = (0.00025, 0.0005, 0.001, 0.002)
@@ -143,7 +143,7 @@ def test_guard_stops_the_core_on_an_injected_state(model_full):
 
 def test_guard_stops_lockstep_and_susp_sim_on_an_absurd_vehicle(tmp_path, capsys):
     from susp_sim_ros.cli.main import main
-    from susp_sim_ros.lockstep import maneuver_drive
+    from susp_sim_ros.runtime.lockstep import maneuver_drive
     from susp_sim_ros.model.maneuvers import bump_crossing
     veh = absurd_vehicle(tmp_path)
     drive = maneuver_drive(bump_crossing(), rate_hz=100.0)

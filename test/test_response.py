@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from susp_sim_ros.io import messages as M
-from susp_sim_ros.lockstep import maneuver_drive, run_lockstep
+from susp_sim_ros.runtime.lockstep import LockstepRun, maneuver_drive, run_lockstep
 from susp_sim_ros.model import Response, simulate, simulate_batch
 from susp_sim_ros.model.layout import OUTPUT_LABELS, OUTPUT_UNITS, WHEELS
 from susp_sim_ros.model.maneuvers import bump_crossing, sine_steer, vehicle_state
@@ -95,10 +95,14 @@ def test_batch_response_has_a_leading_vehicle_axis(model_full):
     assert np.max(np.abs(b["roll_rate"][1])) > np.max(np.abs(b["roll_rate"][0]))
 
 
-def test_lockstep_returns_the_same_type(model_full):
+def test_lockstep_run_holds_the_same_response_type(model_full):
+    """A lockstep run is a LockstepRun holding a Response (the one result type of every simulation);
+    the response's signals read through."""
     drive = maneuver_drive(bump_crossing(), oil=vehicle_state("rear_empty"))
     r = run_lockstep(drive, model=model_full)
-    assert isinstance(r, Response) and r.ok and r.labels == SIGNAL_NAMES
+    assert isinstance(r, LockstepRun) and isinstance(r.response, Response)
+    assert r.ok and r.labels == SIGNAL_NAMES and r.response.labels == SIGNAL_NAMES
+    np.testing.assert_array_equal(r["pitch_rate"], r.response["pitch_rate"])
     assert r.t_ns.dtype == np.int64 and len(r.t_ns) == len(r) == r.values.shape[0]
     np.testing.assert_allclose(r.t, (r.t_ns - drive.t0_ns) * 1e-9, rtol=0, atol=1e-15)
     np.testing.assert_allclose(np.diff(r.t), 0.01, atol=1e-12)  # the 100 Hz publish ticks

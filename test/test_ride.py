@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from susp_sim_ros.analysis.ride import WK_TABLE, rms, stop_contacts, wk_response, wk_sos, wk_weighted
+from susp_sim_ros.control.ride_metrics import WK_TABLE, rms, stop_contacts, wk_response, wk_sos, wk_weighted
 from susp_sim_ros.control.ride import RideSpec, parse_road, run_ride
 from susp_sim_ros.errors import SuspInputError
 from susp_sim_ros.model.iso8608 import COHERENCE_CORNER, displacement_psd, faded_road, fft_road
@@ -122,7 +122,7 @@ def test_ride_cli_prints_the_interface_keys(capsys):
 
 def test_ride_monitor_streams_the_same_metrics_as_the_offline_ones(model_full):
     """The node's running metrics (fed in pieces) equal the offline ones over the same samples."""
-    from susp_sim_ros.analysis.ride import RideMonitor, ride_metrics
+    from susp_sim_ros.control.ride_metrics import RideMonitor, ride_metrics
     from susp_sim_ros.model.vehicle import simulate, make_inputs
     vp = model_full.vehicle
     road = faded_road("D", 200.0, seed=2)

@@ -10,7 +10,7 @@ from scipy import signal as sps
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder
 from susp_sim_ros.analysis.discrepancy.data import has_road_input, load_cases
 from susp_sim_ros.analysis.discrepancy.report import write_outputs
-from susp_sim_ros.analysis.independent_sim import (TruthCar, TruthFriction, TruthHidden, TruthManeuver,
+from truth_generators.independent_sim import (TruthCar, TruthFriction, TruthHidden, TruthManeuver,
                                                    TruthSensor, make_drive)
 from susp_sim_ros.io.drive import read_drive, write_drive
 

@@ -113,13 +113,16 @@ def test_ament_python_layout_for_colcon():
 def _known_topics() -> set[str]:
     """Topics the node publishes or subscribes (sim_core's constants, the subscriptions in ros/) and those of
     a recorded drive (interface.md where present, else DRIVE_TOPICS)."""
-    from susp_sim_ros import sim_core
+    from susp_sim_ros.runtime import sim_core
     topics = {sim_core.SIM_IMU, sim_core.SIM_ODOM, sim_core.SIM_SUSPENSION, sim_core.DIAGNOSTICS}
     for module in sorted((ROOT / "susp_sim_ros" / "ros").glob("*.py")):
         for n in ast.walk(ast.parse(module.read_text())):
             if isinstance(n, ast.Call) and getattr(n.func, "attr", "") == "create_subscription":
                 if isinstance(n.args[1], ast.Constant):
                     topics.add(n.args[1].value)
+            elif isinstance(n, ast.Call) and getattr(n.func, "id", "") == "_subscribe":  # ros/inputs.py
+                if isinstance(n.args[2], ast.Constant):
+                    topics.add(n.args[2].value)
     if INTERFACE.exists():
         topics |= set(re.findall(r"^\| `(/[\w/]+)` \|", INTERFACE.read_text(), re.M))
     else:

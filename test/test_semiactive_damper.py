@@ -8,14 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from susp_sim_ros.lockstep import maneuver_drive, run_lockstep
+from susp_sim_ros.runtime.lockstep import maneuver_drive, run_lockstep
 from susp_sim_ros.io.drive import Series
 from susp_sim_ros.model import Model
 from susp_sim_ros.model.layout import S_INDEX
 from susp_sim_ros.model.maneuvers import paper_maneuver, vehicle_state
 from susp_sim_ros.model.semiactive import load_damper_family
 from susp_sim_ros.model.vehicle import Stepper, simulate
-from susp_sim_ros.sim_core import SimCore
+from susp_sim_ros.runtime.sim_core import SimCore
 
 REF = Path(__file__).parent / "data" / "passive_reference.npz"
 DT = 0.001

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from susp_sim_ros.errors import SuspInputError
 from susp_sim_ros.model import make_inputs, simulate
-from susp_sim_ros.sim_core import SimCore, sample_messages
+from susp_sim_ros.runtime.sim_core import SimCore, sample_messages
 
 T0 = 5_000_000_000
 

@@ -103,7 +103,7 @@ def test_bundled_drives_are_what_the_generator_makes():
 def test_amplitude_friction_is_clearly_present_in_the_rear_empty_bump_drive():
     """The discrepancy finder needs it: without the hidden term the full model fits the drive far
     better, and what it misses is well above the sensor noise."""
-    from susp_sim_ros.lockstep import run_lockstep
+    from susp_sim_ros.runtime.lockstep import run_lockstep
 
     def rmse_full(drive):
         r = run_lockstep(drive, variant="full")

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from susp_sim_ros.analysis import ride_recording as rr
 from susp_sim_ros.analysis import validation_study
 from susp_sim_ros.analysis import validation as va
-from susp_sim_ros.analysis.ride import (
+from susp_sim_ros.control.ride_metrics import (
     comfort_wk_rms,
     ride_metrics,
     wk_accurate_to_hz,
@@ -25,7 +25,7 @@ from susp_sim_ros.io.suspension import (
     suspension_array,
     suspension_from_recording,
 )
-from susp_sim_ros.lockstep import run_lockstep
+from susp_sim_ros.runtime.lockstep import run_lockstep
 from susp_sim_ros.model import Model
 from susp_sim_ros.model.layout import WHEELS
 from susp_sim_ros.model.params import load_vehicle

@@ -68,7 +68,7 @@ def test_validate_study_cli_json(tmp_path, capsys):
 
 def test_validate_pair_identical_is_zero_and_sim_recording_matches_study(study_result, tmp_path, capsys):
     from susp_sim_ros.io.drive import read_drive
-    from susp_sim_ros.lockstep import run_lockstep
+    from susp_sim_ros.runtime.lockstep import run_lockstep
     drive_path = BAGS / "bump_crossing_rear_empty.mcap"
     assert main(["validate", "--measured", str(drive_path), "--simulated", str(drive_path), "--json"]) == 0
     d = json.loads(capsys.readouterr().out)

@@ -59,8 +59,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..errors import CsvImportError
-from ..io.drive import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT
+from ..io.drive import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT, ImuSeries, Series, TestDrive, parse_oil, write_drive
 from ..model.params import DEFAULT_VEHICLE
+from ..model.road import RoadProfile
 
 _NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
@@ -131,6 +132,43 @@ def _column_map(path: str, header: Sequence[str], quantities: Mapping[str, Mappi
     return found
 
 
+def _check_field_count(path: str, lineno: int, header: list[str], fields: list[str]) -> None:
+    """A data row has exactly the header's number of fields."""
+    if len(fields) == len(header):
+        return
+    names = [h.strip() for h in header]
+    if len(fields) < len(header):
+        k = len(fields)
+        what = f"column {k + 1} {names[k]!r} is missing"
+    else:
+        k = len(header)
+        what = f"column {k + 1} ({fields[k].strip()!r}) is beyond the header's last column {names[-1]!r}"
+    raise CsvImportError(f"{path}:{lineno}: column {k + 1}: expected {len(header)} fields "
+                         f"({', '.join(names)}), got {len(fields)}: {what}")
+
+
+def _cell(path: str, lineno: int, fields: list[str], q: str, col: tuple[int, float, str], nonneg: bool,
+          increasing: bool, prev: tuple[float, int] | None) -> float:
+    """Quantity ``q`` of a data row in SI (column ``col`` = (index, factor to SI, name)); ``prev``: the
+    previous row's value [SI] and line, checked against when ``increasing``."""
+    k, factor, name = col
+    cell = fields[k].strip()
+    if not _NUMBER.match(cell):
+        what = "empty cell" if cell == "" else f"{cell!r} is not a decimal number"
+        raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): {what}")
+    x = float(cell) * factor
+    if not math.isfinite(x):
+        raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): {cell!r} "
+                             f"overflows to a non-finite value")
+    if nonneg and x < 0:
+        raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): must be >= 0, "
+                             f"got {cell}")
+    if increasing and prev is not None and x <= prev[0]:
+        raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): {cell} does not "
+                             f"increase (previous row, line {prev[1]}, has {prev[0] / factor:g})")
+    return x
+
+
 def parse_csv(text: str, path: str, quantities: Mapping[str, Mapping[str, float]], required: Sequence[str],
               groups: Sequence[Sequence[str]] = (), increasing: str | None = None,
               nonneg: Sequence[str] = ()) -> CsvTable:
@@ -166,36 +204,10 @@ def parse_csv(text: str, path: str, quantities: Mapping[str, Mapping[str, float]
             cmap = _column_map(path, header, quantities, required, groups, lineno)
             order = list(cmap)
             continue
-        if len(fields) != len(header):
-            names = [h.strip() for h in header]
-            if len(fields) < len(header):
-                k = len(fields)
-                what = f"column {k + 1} {names[k]!r} is missing"
-            else:
-                k = len(header)
-                what = f"column {k + 1} ({fields[k].strip()!r}) is beyond the header's last column {names[-1]!r}"
-            raise CsvImportError(f"{path}:{lineno}: column {k + 1}: expected {len(header)} fields "
-                                 f"({', '.join(names)}), got {len(fields)}: {what}")
-        row = []
-        for q in order:
-            k, factor, name = cmap[q]
-            cell = fields[k].strip()
-            if not _NUMBER.match(cell):
-                what = "empty cell" if cell == "" else f"{cell!r} is not a decimal number"
-                raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): {what}")
-            x = float(cell) * factor
-            if not math.isfinite(x):
-                raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): {cell!r} "
-                                     f"overflows to a non-finite value")
-            if q in nonneg and x < 0:
-                raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): must be >= 0, "
-                                     f"got {cell}")
-            if q == increasing and rows and x <= rows[-1][order.index(q)]:
-                raise CsvImportError(f"{path}:{lineno}: column {name!r} (column {k + 1}): {cell} does not "
-                                     f"increase (previous row, line {lines[-1]}, has "
-                                     f"{rows[-1][order.index(q)] / factor:g})")
-            row.append(x)
-        rows.append(row)
+        _check_field_count(path, lineno, header, fields)
+        prev = (rows[-1], lines[-1]) if rows else None
+        rows.append([_cell(path, lineno, fields, q, cmap[q], q in nonneg, q == increasing,
+                           None if prev is None else (prev[0][order.index(q)], prev[1])) for q in order])
         lines.append(lineno)
     if header is None:
         raise CsvImportError(f"{path}: empty file: no header row")
@@ -228,7 +240,6 @@ def read_drive_csv(path: str | os.PathLike, text: str | None = None) -> CsvTable
 
 def read_road_csv(path: str | os.PathLike, text: str | None = None):
     """Parse a road CSV into a :class:`~susp_sim_ros.model.road.RoadProfile`."""
-    from ..model.road import RoadProfile
     text = _read_text(path) if text is None else text
     t = parse_csv(text, str(path), ROAD_QUANTITIES, ROAD_REQUIRED, increasing="s")
     _check_range(path, t, "z_left", ROAD_QUANTITIES, -MAX_WHEEL_HEIGHT, MAX_WHEEL_HEIGHT, "m")
@@ -255,7 +266,6 @@ def csv_to_drive(drive_csv: str | os.PathLike, road_csv: str | os.PathLike | Non
                  source: str = "measured", notes: str = "", drive_text: str | None = None,
                  road_text: str | None = None):
     """A :class:`~susp_sim_ros.io.drive.TestDrive` from the CSV files (nothing written)."""
-    from ..io.drive import ImuSeries, Series, TestDrive, parse_oil
     parse_oil(damper_oil_level, "damper_oil_level")
     tab = read_drive_csv(drive_csv, drive_text)
     _check_range(drive_csv, tab, "speed", DRIVE_QUANTITIES, 0.0, MAX_SPEED, "m/s")
@@ -293,7 +303,6 @@ def csv_to_drive(drive_csv: str | os.PathLike, road_csv: str | os.PathLike | Non
 def import_csv(drive_csv: str | os.PathLike, out: str | os.PathLike, road_csv: str | os.PathLike | None = None,
                *, overwrite: bool = False, **metadata) -> dict:
     """Convert the CSV files to a test-drive MCAP at ``out``; returns a summary dict."""
-    from ..io.drive import write_drive
     drive = csv_to_drive(drive_csv, road_csv, **metadata)
     n = write_drive(out, drive, overwrite=overwrite)
     return {"out": str(out), "messages": n, "samples": len(drive.imu),

@@ -1,7 +1,7 @@
 """Attribution of real-time deadline misses to host stalls (pure: no threads, no ROS).
 
 A *host stall* is what a plain sleeping thread sees when the machine itself does not run it: the probe
-(:mod:`susp_sim_ros.host_probe`) sleeps to absolute deadlines one period apart and records each wake
+(:mod:`host_probe`) sleeps to absolute deadlines one period apart and records each wake
 that came late. A stall is the interval from the probe's previous wake (the last instant it was seen
 running) to the late wake, with the wake's lateness as its length: the machine stopped the probe for at
 least that long (for at most the whole interval).

@@ -54,9 +54,12 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import MeasurementImportError, TopicMapError
+from ..io.drive import ImuSeries, Series, TestDrive, parse_oil, write_drive
 from ..io.topic_map import FRAMES, UNITS, parse_frame, unit_factor
+from ..model import load_vehicle
 from ..model.paper import IMU_SIGNALS
-from .csv_import import DRIVE_QUANTITIES
+from ..model.road import RoadProfile
+from .csv_import import DRIVE_QUANTITIES, csv_to_drive, import_csv, read_road_csv
 from ..model.params import DEFAULT_VEHICLE
 
 #: Unit strings as measurement systems write them -> this package's unit names (topic_map.UNITS).
@@ -260,7 +263,6 @@ def mdf_to_drive(path: str | os.PathLike, channel_map: str | os.PathLike | dict 
                  vehicle: str = DEFAULT_VEHICLE, maneuver: str = "", damper_oil_level: str = "1,1,1,1",
                  source: str = "measured", notes: str = ""):
     """A :class:`~susp_sim_ros.io.drive.TestDrive` from an ASAM MDF4 file (nothing written)."""
-    from ..io.drive import ImuSeries, Series, TestDrive, parse_oil
     parse_oil(damper_oil_level, "damper_oil_level")
     mdf = _open_mdf(path)
     try:
@@ -327,7 +329,6 @@ def crg_to_road(path: str | os.PathLike, track_m: float, start_u: float | None =
     """``(RoadProfile, description)`` of an OpenCRG road: the grid elevation on the wheel tracks at
     ``v = +-track_m/2``, ``s = u - start_u`` (``start_u``: the road's ``u`` under the front axle when the
     drive starts; default the file's first ``u``) (module docstring)."""
-    from ..model.road import RoadProfile
     pyopencrg = _reader_for(path, "pyopencrg", "OpenCRG")
     try:
         road = pyopencrg.read(str(path), check=True)
@@ -365,8 +366,6 @@ def import_measurement(drive_path: str | os.PathLike, out: str | os.PathLike, ro
                        vehicle: str = DEFAULT_VEHICLE, road_start_u: float | None = None, **metadata) -> dict:
     """``susp import``: an MDF4 (``.mf4``/``.mdf``) or CSV drive plus an optional road (``.crg`` or
     ``.csv``) into a test-drive MCAP at ``out``; returns a summary dict."""
-    from ..io.drive import write_drive
-    from .csv_import import csv_to_drive, import_csv
     suffix = Path(drive_path).suffix.lower()
     rsuffix = Path(road).suffix.lower() if road is not None else None
     if rsuffix not in (None, ".csv", ".crg"):
@@ -382,14 +381,12 @@ def import_measurement(drive_path: str | os.PathLike, out: str | os.PathLike, ro
     elif suffix in (".mf4", ".mdf"):
         drive = mdf_to_drive(drive_path, channel_map, vehicle=vehicle, **metadata)
         if rsuffix == ".csv" and road is not None:
-            from .csv_import import read_road_csv
             drive.road = read_road_csv(road)
             drive.metadata["road_source"] = f"{Path(road).name} (CSV road layout)"
     else:
         raise MeasurementImportError(f"{drive_path}: unknown measurement format {suffix or '(no suffix)'!r} "
                                      f"(expected .mf4 / .mdf (ASAM MDF4) or .csv)")
     if rsuffix == ".crg" and road is not None:
-        from ..model import load_vehicle
         drive.road, desc = crg_to_road(road, load_vehicle(vehicle).track[0], road_start_u)
         drive.metadata["road_source"] = desc
     n = write_drive(out, drive, overwrite=overwrite)

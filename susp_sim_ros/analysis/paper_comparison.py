@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Model, simulate
-from ..model.maneuvers import paper_maneuver, vehicle_state
-from ..model.paper import MANEUVERS, PRIMARY_OUTPUT, STATES, VARIANTS
+from ..model.maneuvers import excitation_end, paper_maneuver, vehicle_state
+from ..model.paper import MANEUVERS, PRIMARY_OUTPUT, STATES, VARIANTS, maneuver_kind
 from ..model.params import DEFAULT_VEHICLE
 
 RING_OUT_THRESHOLD_DEG_S = 0.3  # model-spec 5 measures the bump ring-out against 0.3 deg/s
@@ -52,8 +52,8 @@ def run_paper_comparison(vehicle: str = DEFAULT_VEHICLE, dt: float = 0.001,
                     raise RuntimeError(f"{mname}/{state}/{var}: simulation became non-finite")
                 sig = np.degrees(res.y[:, 0])
                 traces[mname][state][var] = (res.t, sig)
-                if mname == "bump_crossing":
-                    t_leave = (float(man.road.s[-1]) + wb) / man.speed
+                if maneuver_kind(mname).ring_out:
+                    t_leave = excitation_end(man, wb)
                     above = np.nonzero(np.abs(sig) > RING_OUT_THRESHOLD_DEG_S)[0]
                     ring[mname][state][var] = float(max(res.t[above[-1]] - t_leave, 0.0)) if above.size else 0.0
                 if progress:

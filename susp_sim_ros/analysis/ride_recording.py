@@ -1,6 +1,6 @@
 """Ride and road-holding metrics of a recording (issue 15): what ``susp validate`` and the validation
 study report next to the rate errors. Pure numpy, no ROS runtime; the formulas are
-:mod:`susp_sim_ros.analysis.ride`'s (:func:`~.ride.ride_metrics`, :func:`~.ride.comfort_wk_rms`).
+:mod:`susp_sim_ros.control.ride_metrics`'s (:func:`~.ride.ride_metrics`, :func:`~.ride.comfort_wk_rms`).
 
 - Every series is first put on a uniform grid at the recording's own (median) sample rate inside the
   given time span (:func:`on_uniform_grid`: linear interpolation, never extrapolating; a uniformly
@@ -29,7 +29,7 @@ from ..errors import RecordingError
 from ..io.messages import SUSPENSION_QUANTITIES
 from ..model.layout import WHEELS
 from . import validation as va
-from .ride import comfort_wk_rms, ride_metrics, wk_accurate_to_hz
+from ..control.ride_metrics import comfort_wk_rms, ride_metrics, wk_accurate_to_hz
 
 _DEFL = SUSPENSION_QUANTITIES.index("deflection")
 _FZ = SUSPENSION_QUANTITIES.index("tyre_vertical_force")

@@ -24,9 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import ConfigError, RecordingExistsError
+from ..io.drive import ImuSeries, Series, TestDrive, write_drive
+from ..model import Model, simulate
 from ..model.amplitude_friction import FRICTION_AMPLITUDE  # noqa: F401  (registers the hidden term)
-from ..model.paper import IMU_OUTPUTS
-from ..model.params import DEFAULT_VEHICLE
+from ..model.maneuvers import MANEUVERS, STATES, paper_maneuver, vehicle_state
+from ..model.paper import IMU_OUTPUTS, MANEUVER_KINDS
+from ..model.params import DEFAULT_VEHICLE, TermSetting, config_dir, load_variant, load_vehicle
+from ..progress import progress as make_progress
 
 GENERATOR = "susp_sim_ros.analysis.synthetic"
 VERSION = "1.0"
@@ -110,8 +115,6 @@ def _section(name: str) -> dict:
     """Values of one section of ``config/synthetic.yaml``; {front, rear} pairs become tuples."""
     import yaml
 
-    from ..errors import ConfigError
-    from ..model.params import config_dir
     path = config_dir() / "synthetic.yaml"
     try:
         sec = yaml.safe_load(path.read_text())[name]
@@ -121,13 +124,12 @@ def _section(name: str) -> dict:
         raise ConfigError(f"{path}: cannot read section {name!r}: {exc}") from None
 
 
-MANEUVER_LABEL = {"bump_crossing": "bump_crossing_8kmh", "sine_steer": "sine_steer_50kmh"}
+MANEUVER_LABEL = {m: k.label for m, k in MANEUVER_KINDS.items()}
 DEFAULT_SEED = 20240501
 
 
 def synthetic_vehicle(hidden: HiddenPhysics | None = None, base: str = DEFAULT_VEHICLE):
     """The synthetic car's parameter set: the reference set with ``hidden``'s parameter differences."""
-    from ..model.params import load_vehicle
     hidden = hidden or HiddenPhysics.reference()
     vp = load_vehicle(base)
     return vp.replace(name=f"{vp.name}+synthetic", sprung_mass=vp.sprung_mass * hidden.sprung_mass,
@@ -141,7 +143,6 @@ def synthetic_variant(hidden: HiddenPhysics | None = None):
     """The paper's ``full`` friction model plus the amplitude-dependent friction term."""
     import dataclasses
 
-    from ..model.params import TermSetting, load_variant, load_vehicle
     hidden = hidden or HiddenPhysics.reference()
     full = load_variant("full")
     sigma = load_vehicle(DEFAULT_VEHICLE).dahl_stiffness
@@ -174,9 +175,6 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
     The random stream of a drive depends on ``seed``, the maneuver and the state only, so every drive
     is reproducible on its own.
     """
-    from ..io.drive import ImuSeries, Series, TestDrive
-    from ..model import Model, simulate
-    from ..model.maneuvers import MANEUVERS, STATES, paper_maneuver, vehicle_state
     hidden = hidden or HiddenPhysics.reference()
     imu = imu or ImuSpec.reference()
 
@@ -245,7 +243,6 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
 
 def bundle_names() -> list[tuple[str, str, str]]:
     """(file name, maneuver, state) of the bundled drives."""
-    from ..model.maneuvers import MANEUVERS, STATES
     return [(f"{m}_{s}.mcap", m, s) for m in MANEUVERS for s in STATES]
 
 
@@ -256,8 +253,6 @@ def generate_bundle(out_dir, *, seed: int = DEFAULT_SEED, overwrite: bool = Fals
     file. Refuses to overwrite existing files unless ``overwrite``."""
     from pathlib import Path
 
-    from ..errors import RecordingExistsError
-    from ..io.drive import write_drive
     imu = imu or ImuSpec.reference()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -266,7 +261,6 @@ def generate_bundle(out_dir, *, seed: int = DEFAULT_SEED, overwrite: bool = Fals
         for name, _, _ in names:
             if (out / name).exists():
                 raise RecordingExistsError(f"{out / name} exists already, not overwriting (use --overwrite).")
-    from ..progress import progress as make_progress
     bar = make_progress(len(names), desc="generate", unit="drive", enabled=progress)
     summaries = []
     for name, m, s in names:

@@ -26,14 +26,14 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..errors import RecordingError, SuspInputError
-from ..model.paper import IMU_SIGNALS, PRIMARY_SIGNAL
+from ..model.paper import IMU_SIGNALS, MANEUVER_KINDS, PRIMARY_SIGNAL
 
 NS = 1_000_000_000
 RATE_SIGNALS = IMU_SIGNALS[:3]  # gyro axes x, y, z (REP-103)
 SIGNAL_AXIS = {s: i for i, s in enumerate(RATE_SIGNALS)}
 # signal the paper's tables use per maneuver (model-spec 4)
 MANEUVER_SIGNAL = PRIMARY_SIGNAL  # the signal each of the paper's maneuvers is compared on
-MANEUVER_WINDOW = {"bump_crossing": "bump", "sine_steer": "steering"}
+MANEUVER_WINDOW = {m: k.window for m, k in MANEUVER_KINDS.items()}  # the analysis window of each
 
 WINDOW_LEAD_S = 0.5        # window starts this long before the first excitation
 WINDOW_RINGOUT_S = 3.0     # and ends this long after the last excitation (or at the end of the data)
@@ -208,11 +208,14 @@ def phase_lag(measured: np.ndarray, simulated: np.ndarray, dt: float, max_lag_s:
 
 def compare(t_meas_ns, y_meas, t_sim_ns, y_sim, *, window: tuple[int, int] | None = None,
             rate_hz: float | None = None, max_lag_s: float = MAX_LAG_S,
-            names: tuple[str, str] = ("measured", "simulated")) -> Metrics:
+            names: tuple[str, str] = ("measured", "simulated"),
+            exclude: Sequence[tuple[int, int]] = ()) -> Metrics:
     """Metrics of one signal: align, resample both onto the common grid, compare.
 
     ``rate_hz`` defaults to the lower of the two recordings' median sample rates (never inventing
-    detail one recording lacks). ``window`` (ns) cuts the comparison further.
+    detail one recording lacks). ``window`` (ns) cuts the comparison further. Grid points inside an
+    ``exclude`` span (ns, e.g. a gap of the measured IMU, io/integrity.py) are left out, never
+    interpolated across; the phase lag is then not computed (NaN).
     """
     t_m, y_m = check_series(t_meas_ns, y_meas, names[0])
     t_s, y_s = check_series(t_sim_ns, y_sim, names[1])
@@ -229,10 +232,17 @@ def compare(t_meas_ns, y_meas, t_sim_ns, y_sim, *, window: tuple[int, int] | Non
                              f"fewer than 2 samples at {rate:g} Hz")
     a = resample(t_m, y_m, grid)
     b = resample(t_s, y_s, grid)
+    keep = np.ones(grid.size, bool)
+    for lo, hi in exclude:
+        keep &= ~((grid > lo) & (grid < hi))
+    if keep.sum() < 2:
+        raise NoOverlapError(f"{names[0]}: fewer than 2 samples left outside its excluded spans (gaps)")
+    lag = phase_lag(a, b, 1.0 / rate, max_lag_s) if keep.all() else math.nan
+    a, b = a[keep], b[keep]
     e = b - a
-    return Metrics(n=int(grid.size), rmse=rmse(b, a), max_error=float(np.max(np.abs(e))),
+    return Metrics(n=int(a.size), rmse=rmse(b, a), max_error=float(np.max(np.abs(e))),
                    mean_error=float(np.mean(e)), correlation=correlation(a, b),
-                   phase_lag_s=phase_lag(a, b, 1.0 / rate, max_lag_s),
+                   phase_lag_s=lag,
                    start_s=float(grid[0] / NS), end_s=float(grid[-1] / NS))
 
 
@@ -354,7 +364,8 @@ class ValidationResult:
 
 def validate(meas_t_ns, meas_gyro, sim_t_ns, sim_gyro, *, windows: Mapping[str, Window] | None = None,
              signals: Sequence[str] = RATE_SIGNALS, rate_hz: float | None = None,
-             names: tuple[str, str] = ("measured", "simulated")) -> ValidationResult:
+             names: tuple[str, str] = ("measured", "simulated"),
+             exclude: Sequence[tuple[int, int]] = ()) -> ValidationResult:
     """Compare gyro rates (rad/s, columns x, y, z) of a measured and a simulated recording.
 
     Every window in ``windows`` (default: the overlap only, as ``whole``) and every signal in
@@ -371,7 +382,7 @@ def validate(meas_t_ns, meas_gyro, sim_t_ns, sim_gyro, *, windows: Mapping[str, 
     for name, w in wins.items():
         try:
             ms = {sig: compare(tm, gm[:, SIGNAL_AXIS[sig]], ts, gs[:, SIGNAL_AXIS[sig]], window=w.span,
-                               rate_hz=rate_hz, names=names) for sig in signals}
+                               rate_hz=rate_hz, names=names, exclude=exclude) for sig in signals}
         except NoOverlapError as exc:
             res.skipped[name] = str(exc)
             continue

@@ -1,7 +1,7 @@
 """The paper-style validation study over a folder of recorded test drives.
 
 For every drive (``*.mcap``) in a folder: simulate it with all four friction variants of the paper's
-Table 5 in lockstep (:func:`susp_sim_ros.lockstep.run_lockstep`, the very code path that equals the
+Table 5 in lockstep (:func:`susp_sim_ros.runtime.lockstep.run_lockstep`, the very code path that equals the
 node replaying the drive), validate each simulation against the measured IMU
 (:mod:`.validation`), and write
 
@@ -28,18 +28,21 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import RecordingError, SuspInputError
+from ..io.drive import TestDrive, read_drive
+from ..io.messages import SUSPENSION_COLUMNS
+from ..model import Model
 from ..model.maneuvers import vehicle_state
-from ..model.paper import MANEUVERS, STATES, VARIANT_LABEL, VARIANTS
+from ..model.paper import MANEUVERS, STATES, VARIANT_LABEL, VARIANTS, classify_maneuver as _classify
+from ..progress import progress as make_progress
+from ..runtime.lockstep import run_lockstep
 from . import validation as va
 from ..model.params import DEFAULT_VEHICLE
-
-if TYPE_CHECKING:
-    from ..io.drive import TestDrive
+from . import ride_recording as rr
+from .synthetic import SOURCE
 
 PAPER_RATIO = 65.0  # paper: rear dampers oil-empty, bump crossing, RMSE dahl_only / full
 # measured with the generator (bags/README.md, "How much each ingredient costs"); valid for its version
@@ -51,18 +54,12 @@ COLORS = {"full": "tab:blue", "no_horizontal": "tab:orange", "no_velocity": "tab
 
 
 def _synthetic_source() -> str:
-    from .synthetic import SOURCE
     return SOURCE
 
 
 def classify_maneuver(text: str) -> str | None:
     """``bump_crossing``/``sine_steer`` from the free-text metadata ``maneuver``; ``None`` otherwise."""
-    t = (text or "").strip().lower()
-    if t.startswith("bump"):
-        return "bump_crossing"
-    if t.startswith("sine"):
-        return "sine_steer"
-    return None
+    return _classify(text)
 
 
 def classify_state(oil: Sequence[float] | np.ndarray) -> str:
@@ -114,8 +111,6 @@ def _find_drives(folder: Path) -> list[Path]:
 
 def simulate_and_validate(path: str | Path, drive, variants: Sequence[str], models: dict, progress=None) -> DriveResult:
     """Lockstep-simulate one drive with every variant and validate each against its measured IMU."""
-    from ..lockstep import run_lockstep
-
     if drive.imu is None or len(drive.imu) < 2:
         raise RecordingError(f"{path}: no measured IMU samples on /imu/data: nothing to validate against")
     meta = drive.metadata
@@ -154,8 +149,6 @@ def simulate_and_validate(path: str | Path, drive, variants: Sequence[str], mode
 def _add_ride(res: DriveResult, drive, sim, variant: str, vp) -> None:
     """Ride metrics of one variant's lockstep simulation (its outputs are what /sim/suspension carries)
     and, once per drive, the measured Wk comfort, over the time both IMUs cover."""
-    from ..io.messages import SUSPENSION_COLUMNS
-    from . import ride_recording as rr
     span = va.overlap((int(drive.imu.t_ns[0]), int(drive.imu.t_ns[-1])), (int(sim.imu.t_ns[0]), int(sim.imu.t_ns[-1])))
     vargs = rr.vehicle_ride_args(vp)
     susp = sim.outputs[:, SUSPENSION_COLUMNS].reshape(len(sim.t_ns), 4, -1)
@@ -167,7 +160,6 @@ def _add_ride(res: DriveResult, drive, sim, variant: str, vp) -> None:
 
 
 def _model(models: dict, vehicle: str, variant: str):
-    from ..model import Model
     key = (vehicle, variant)
     if key not in models:
         models[key] = Model(vehicle, variant)
@@ -249,8 +241,8 @@ def findings(tab: dict, variants: Sequence[str] = VARIANTS) -> dict:
     return out
 
 
-def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: dict, elapsed_s: float,
-                 variants: Sequence[str] = VARIANTS) -> None:
+def _report_header(drives: Sequence[DriveResult], elapsed_s: float, variants: Sequence[str]) -> list[str]:
+    """The report's title, what was run, and whether the drives are synthetic."""
     lines = ["# Validation study: friction variants against recorded test drives", "",
              f"{len(drives)} drives, {len(variants)} friction variants each, simulated in lockstep "
              f"(step 1 ms, output 100 Hz) and compared with the measured IMU; {elapsed_s:.1f} s in all.",
@@ -262,6 +254,12 @@ def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict
         lines += ["> **The drives are synthetic**, not measurements (`source: " + ", ".join(sources) + "`). "
                   "Hidden physics of the generator: " + synthetic[0].drive.metadata.get("hidden_physics", "?"),
                   ""]
+    return lines
+
+
+def _report_tables(tab: dict, found: dict, variants: Sequence[str]) -> list[str]:
+    """One RMSE table per maneuver: state x variant, with the ratios."""
+    lines: list[str] = []
     for m in tab:
         sig = va.MANEUVER_SIGNAL.get(m, "pitch_rate").replace("_", " ")
         lines += [f"## {m}: {sig} RMSE [deg/s]", "",
@@ -273,6 +271,13 @@ def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict
             lines.append(f"| {s} | " + " | ".join(_fmt(row.get(v)) for v in variants)
                          + f" | {_fmt(f.get('dahl_only_over_full'))} | {_fmt(f['spread_max_over_min'])} |")
         lines.append("")
+    return lines
+
+
+def _report_findings(drives: Sequence[DriveResult], tab: dict, found: dict) -> list[str]:
+    """The findings against the paper, in words."""
+    lines: list[str] = []
+    synthetic = [d for d in drives if d.source.startswith("synthetic:")]
     lines += ["## Findings against the paper", ""]
     bi = found.get("bump_crossing", {}).get("intact")
     br = found.get("bump_crossing", {}).get("rear_empty")
@@ -312,6 +317,12 @@ def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict
                      if synthetic else
                      "sensor noise and bias, parameter errors and physics no variant has (e.g. the "
                      "amplitude dependence of friction the paper names as its outlook)."), ""]
+    return lines
+
+
+def _report_windows_and_agreement(drives: Sequence[DriveResult]) -> list[str]:
+    """The analysis window of each drive and the agreement of its table signal."""
+    lines: list[str] = []
     lines += ["## Analysis windows", ""]
     for d in drives:
         w = d.results[next(iter(d.results))].windows[d.window]
@@ -329,6 +340,12 @@ def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict
                     vals.append(_fmt(x * 1e3 if k == "phase_lag_s" else x))
             cells.append(" / ".join(vals))
         lines.append(f"| `{Path(d.path).name}` | {d.signal} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _report_ride(drives: Sequence[DriveResult]) -> list[str]:
+    """Ride and road holding per drive."""
+    lines: list[str] = []
     lines += ["", "## Ride and road holding per drive", "",
               ("ISO 2631-1 Wk-weighted RMS vertical acceleration at the centre of gravity (measured: the drive's "
                "IMU; it has no suspension travel or tyre loads), and from each simulation's suspension outputs the "
@@ -343,11 +360,26 @@ def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict
             lines.append(f"| `{Path(d.path).name}` | {v} | {_fmt(meas)} / {_fmt(r['comfort_wk_rms_m_s2'])} | {dtl} "
                          f"| {1e3 * max(r['suspension_travel_rms_m'].values()):.1f} "
                          f"| {sum(r['stop_contacts'].values())} |")
+    return lines
+
+
+def _report_plots(drives: Sequence[DriveResult]) -> list[str]:
+    """The overlay plots."""
+    lines: list[str] = []
     lines += ["", "## Plots (measured vs each variant)", ""]
     for d in drives:
         if d.plot:
             lines += [f"### {d.maneuver or Path(d.path).stem}, {d.state}", "",
                       f"![{Path(d.plot).name}]({Path(d.plot).name})", ""]
+    return lines
+
+
+def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: dict, elapsed_s: float,
+                 variants: Sequence[str] = VARIANTS) -> None:
+    """The study's Markdown report at ``path``: tables, findings, windows, agreement, ride, plots."""
+    lines = (_report_header(drives, elapsed_s, variants) + _report_tables(tab, found, variants)
+             + _report_findings(drives, tab, found) + _report_windows_and_agreement(drives)
+             + _report_ride(drives) + _report_plots(drives))
     path.write_text("\n".join(lines) + "\n")
 
 
@@ -358,8 +390,6 @@ def run_validation_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS,
     ``topic_map`` (see :mod:`susp_sim_ros.io.topic_map`) is applied to every drive.
 
     Returns the JSON-ready dict (``tables``, ``elapsed_s``, ``findings``, ``drives``, ...)."""
-    from ..io.drive import read_drive
-
     t_start = time.perf_counter()
     folder, out = Path(folder), Path(out_dir)
     paths = _find_drives(folder)
@@ -367,7 +397,6 @@ def run_validation_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS,
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise SuspInputError(f"--out {out}: cannot create the directory: {exc.strerror or exc}") from None
-    from ..progress import progress as make_progress
     bar = make_progress(total=len(paths) * len(variants), desc="study", unit="run", enabled=progress)
     models: dict = {}
     results: list[DriveResult] = []

@@ -17,7 +17,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..analysis.discrepancy import DiscrepancyFinder
+from ..analysis.discrepancy.calibration import outside_statement
+from ..analysis.discrepancy.data import load_cases
+from ..analysis.discrepancy.report import verdict, write_outputs
 from ..errors import RecordingError, SuspInputError
+from ..io.drive import check_drive, read_drive
+from ..io.integrity import append_to_report
+from ..io.topic_map import add_topic_map_argument
+from ..model import load_vehicle
 from ..model.params import DEFAULT_VEHICLE
 
 
@@ -33,7 +41,6 @@ def add_arguments(p) -> None:
     p.add_argument("--no-heldout", action="store_true", help="skip leave-one-drive-out (faster)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--dry-run", action="store_true", help="read and check the drives only; no fitting")
-    from ..io.topic_map import add_topic_map_argument
     add_topic_map_argument(p)
 
 
@@ -42,7 +49,6 @@ MIN_IMU_SAMPLES = 10  # the finder needs this many measured samples per drive
 
 def check_drives(paths, topic_map=None) -> list[dict]:
     """Read and check every drive (RecordingError/SuspInputError naming the file); one summary each."""
-    from ..io.drive import check_drive, read_drive
     out = []
     for d in paths:
         if not Path(d).exists():  # a file, or a rosbag2 directory
@@ -60,9 +66,6 @@ def check_drives(paths, topic_map=None) -> list[dict]:
 
 
 def run(args) -> dict:
-    from ..analysis.discrepancy import DiscrepancyFinder
-    from ..analysis.discrepancy.calibration import outside_statement
-    from ..analysis.discrepancy.report import verdict, write_outputs
     topic_map = getattr(args, "topic_map", None)
     checked = check_drives(args.drives, topic_map)
     if args.dry_run:
@@ -74,14 +77,13 @@ def run(args) -> dict:
     f = DiscrepancyFinder(vehicle=args.config, variant=args.variant, candidates=cands,
                           heldout=not args.no_heldout, progress=not args.no_progress)
     if topic_map is not None:  # read through the map; the finder gets the prepared cases
-        from ..analysis.discrepancy.data import load_cases
-        from ..model import load_vehicle
         f.fit(load_cases(args.drives, wheelbase=load_vehicle(args.config).wheelbase, topic_map=topic_map))
     else:
         f.fit(args.drives)
     base = Path(args.variant).stem
     name = args.name or f"diagnosed_{base}"
     paths = write_outputs(f, args.out, name, plots=not args.no_plots)
+    append_to_report(paths["report"])  # the input findings (io/integrity.py), one line each
     rep = f.report()
     if getattr(args, "json", False):
         return rep

@@ -8,7 +8,10 @@ input (unreadable drive, missing topic, a vehicle file without the class ranges)
 """
 from __future__ import annotations
 
+from ..analysis.inspection import inspect_drives, load_config
+from ..analysis.inspection.report import write_inspection_report
 from ..errors import SuspInputError
+from ..io.integrity import append_to_report
 from ..io.topic_map import add_topic_map_argument
 
 
@@ -23,13 +26,12 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> dict:
-    from ..analysis.inspection import inspect_drives, load_config
-    from ..analysis.inspection.report import write_inspection_report
     cfg = load_config()
     res = inspect_drives(args.drives, config=args.config, variant=args.variant, cfg=cfg, topic_map=args.topic_map)
     out = res.to_json()
     if args.out:
         out["written"] = write_inspection_report(res, args.out, cfg, args.drives)
+        append_to_report(out["written"]["report"])  # the input findings (io/integrity.py), one line each
     lines = [f"damper inspection of {len(args.drives)} drive(s), {res.elapsed_s_:.1f} s:"]
     for w, e in res.wheels_.items():
         if e["oil_level"] is None:

@@ -10,9 +10,14 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
 import sys
+from types import ModuleType
+
+import numpy as np
 
 from ..errors import SuspInputError
+from ..io import integrity
 
 SUBCOMMANDS = {
     "sim": "offline run: a paper maneuver or a recorded test drive (lockstep); writes a simulated MCAP",
@@ -28,6 +33,8 @@ SUBCOMMANDS = {
     "import-csv": "convert a CSV measurement into a recorded test drive MCAP",
     "import": "convert a measurement (ASAM MDF4 or CSV, road OpenCRG or CSV) into a recorded test drive MCAP",
 }
+#: subcommands that check every recording they read (io/integrity.py) and report ``input_findings``
+INTEGRITY_COMMANDS = ("sim", "validate", "diagnose", "inspect", "replay")
 #: subcommands whose module name is not the command name (``import`` is a Python keyword)
 MODULE_NAMES = {"import": "import_measurement"}
 
@@ -36,17 +43,18 @@ def _module(name: str):
     return importlib.import_module(f"susp_sim_ros.cli.{MODULE_NAMES.get(name, name.replace('-', '_'))}")
 
 
-def build_parser(available: dict[str, object]) -> argparse.ArgumentParser:
+def build_parser(available: dict[str, ModuleType]) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="susp", description=__doc__.split("\n")[0])
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, mod in available.items():
-        p = sub.add_parser(name, help=SUBCOMMANDS[name], description=SUBCOMMANDS[name])
+        # argparse %-formats help strings (not descriptions): a literal "95 %" must be written "95 %%"
+        p = sub.add_parser(name, help=SUBCOMMANDS[name].replace("%", "%%"), description=SUBCOMMANDS[name])
         p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
         mod.add_arguments(p)
     return parser
 
 
-def _available() -> dict[str, object]:
+def _available() -> dict[str, ModuleType]:
     out = {}
     for name in SUBCOMMANDS:
         try:
@@ -68,8 +76,11 @@ def _print_human(result: dict) -> None:
 def main(argv: list[str] | None = None) -> int:
     available = _available()
     args = build_parser(available).parse_args(argv)
+    integrity.start_collection()
     try:
         result = available[args.command].run(args)
+        if args.command in INTEGRITY_COMMANDS and isinstance(result, dict):
+            result["input_findings"] = integrity.collected()  # interface.md: input integrity
     except SuspInputError as exc:
         print(f"susp {args.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -77,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"susp {args.command}: interrupted", file=sys.stderr)
         return 1
     except Exception as exc:  # an unexpected failure: say what, keep the traceback for --debug users
-        if "--debug" in sys.argv or __import__("os").environ.get("SUSP_DEBUG"):
+        if "--debug" in sys.argv or os.environ.get("SUSP_DEBUG"):
             raise
         print(f"susp {args.command}: failed: {type(exc).__name__}: {exc} (set SUSP_DEBUG=1 for a traceback)",
               file=sys.stderr)
@@ -91,14 +102,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _jsonable(x):
-    try:
-        import numpy as np
-        if isinstance(x, np.generic):
-            return x.item()
-        if isinstance(x, np.ndarray):
-            return x.tolist()
-    except ImportError:
-        pass
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
     return str(x)
 
 

@@ -4,7 +4,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..analysis.paper_comparison import STATES, VARIANTS, run_paper_comparison, write_paper_comparison_report
+from ..model import Model
 from ..model.params import DEFAULT_VEHICLE
+from ..model.rigs import axle_rig, damper_rig, plot_loops
+from ..progress import progress
 
 
 def add_arguments(p) -> None:
@@ -16,8 +19,6 @@ def add_arguments(p) -> None:
 def _rig_plots(vehicle: str, out: Path) -> list[str]:
     """The paper's rig procedures on the model: axle loops (with and without 1 kN lateral force) and
     damper loops (intact and oil-empty), one PNG each."""
-    from ..model import Model
-    from ..model.rigs import axle_rig, damper_rig, plot_loops
     model = Model(vehicle, "full")
     paths = []
     for axle in ("front", "rear"):
@@ -35,7 +36,6 @@ def _rig_plots(vehicle: str, out: Path) -> list[str]:
 
 
 def run(args) -> dict:
-    from ..progress import progress
     with progress(total=2 * len(STATES) * len(VARIANTS), desc="paper study", unit="run") as bar:
         study = run_paper_comparison(args.config, args.step, progress=lambda _: bar.update())
     result = write_paper_comparison_report(study, Path(args.out))

@@ -22,6 +22,7 @@ expects them; the recording's other topics are not played then.
 """
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import importlib.util
 import math
@@ -30,8 +31,11 @@ import sys
 import time
 
 from ..errors import RecordingError, SuspInputError
-from ..io.drive import TOPIC_TYPES, check_topic
+from ..io import integrity
+from ..io.drive import SPEED, STEERING, TOPIC_TYPES, check_topic, drive_from_recording, read_drive, recording_from_drive
 from ..io.reader import read_recording
+from ..io.topic_map import add_topic_map_argument
+from ..progress import progress as make_progress
 
 OUTPUT_PREFIXES = ("/sim/", "/diagnostics", "/clock", "/rosout", "/parameter_events")
 
@@ -50,7 +54,6 @@ def add_arguments(p) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--dry-run", action="store_true",
                    help="read and check the recording, print what would be played, publish nothing")
-    from ..io.topic_map import add_topic_map_argument
     add_topic_map_argument(p)  # then the mapped inputs are played on the interface's topics, converted
 
 
@@ -87,6 +90,20 @@ def _timeline(msgs, t0: int, t1: int, clock_ns: int):
         yield t_clock, None
 
 
+def _check_integrity(rec, path) -> None:
+    """The input integrity check (io/integrity.py) of a recording that holds a test drive; replay plays the
+    recording as it is, so each finding is reported with action ``kept``. Not a drive: nothing to check."""
+    if not (rec.by_topic(SPEED) and rec.by_topic(STEERING)):
+        return
+    try:
+        drive = drive_from_recording(rec)
+    except RecordingError:
+        return  # the topics are checked (and named) below as the replay needs them
+    res = integrity.check_drive_integrity(drive, str(path))
+    integrity.report([dataclasses.replace(f, action="kept", detail=f"{f.detail} (replayed as recorded)")
+                      for f in res.findings])
+
+
 def plan(args):
     """Read and check the recording: ``(recording, topics to play, messages in log-time order)``."""
     if not (math.isfinite(args.rate) and args.rate > 0):
@@ -95,10 +112,10 @@ def plan(args):
         raise SuspInputError(f"--clock-period: expected a period > 0 s, got {args.clock_period}")
     if getattr(args, "topic_map", None) is not None:
         # read the drive through the map and play its inputs on the interface's own topics (SI, REP-103)
-        from ..io.drive import read_drive, recording_from_drive
         rec = recording_from_drive(read_drive(args.recording, topic_map=args.topic_map), args.recording)
     else:
         rec = read_recording(args.recording)
+        _check_integrity(rec, args.recording)
     topics = rec.topics()
     skipped: list[str] = []
     if args.topics:
@@ -163,24 +180,70 @@ def _delivered(publishers, timeout_s: float) -> bool:
                for p in publishers)
 
 
+def _dry_run(args, rec, play, msgs) -> dict:
+    """What a replay would play (``--dry-run``): messages per topic, duration, the file's state."""
+    t0, t1 = msgs[0].log_time_ns, msgs[-1].log_time_ns
+    counts = {t: sum(1 for m in msgs if m.topic == t) for t in sorted(play)}
+    return {"recording": str(args.recording), "dry_run": True, "messages": len(msgs),
+            "topics": sorted(play), "skipped_topics": args.skipped_topics, "counts": counts,
+            "duration_s": (t1 - t0) * 1e-9,
+            "truncated": rec.truncated, "finalised": rec.finalised,
+            "summary": f"would replay {len(msgs)} messages on {len(play)} topics from {args.recording} "
+                       f"({(t1 - t0) * 1e-9:.2f} s of recording"
+                       + (f"; file truncated: {rec.error}" if rec.truncated else "") + ")"}
+
+
+def _play_once(args, msgs, pubs, clock_pub, clock_type, clock_ns: int, progress, handshake) -> int:
+    """Play the recording once at ``args.rate``, one ``/clock`` per instant (if ``clock_pub``); returns the
+    number of messages published (``clock_type``: rosgraph_msgs' Clock, imported with rclpy by the
+    caller). ``handshake`` (publishers, deadline) on the first play: the clock
+    starts once every subscriber has acknowledged the first instant."""
+    t0, t1 = msgs[0].log_time_ns, msgs[-1].log_time_ns
+    played = 0
+    start = time.monotonic()
+    last_shown = t0
+    t_sent = None
+    for t, m in _timeline(msgs, t0, t1, clock_ns):
+        if handshake is not None and t_sent is not None and t != t_sent:
+            # the first instant is out: the clock starts once every subscriber has it
+            everything, deadline = handshake
+            handshake = None
+            if not _delivered(everything, max(deadline - time.monotonic(), HANDSHAKE_MIN_S)):
+                print(f"susp replay: warning: the first messages of {args.recording} were not "
+                      "acknowledged by every subscriber; a slow subscriber may miss the start",
+                      file=sys.stderr)
+            start = time.monotonic() - (t_sent - t0) * 1e-9 / args.rate
+        wait = start + (t - t0) * 1e-9 / args.rate - time.monotonic()
+        if wait > 0:
+            time.sleep(wait)
+        if clock_pub is not None and t != t_sent:  # one /clock per instant
+            t_sent = t
+            c = clock_type()
+            c.clock.sec, c.clock.nanosec = divmod(t, 1_000_000_000)
+            clock_pub.publish(c)
+        if m is not None:
+            pubs[m.topic].publish(m.data)
+            played += 1
+        if progress is not None and t - last_shown >= 100_000_000:
+            progress.update(round((t - last_shown) * 1e-9, 2))
+            last_shown = t
+    if progress is not None:
+        progress.update(round((t1 - last_shown) * 1e-9, 2))
+    return played
+
+
 def run(args) -> dict:
     rec, play, msgs = plan(args)
     topics = rec.topics()
     t0, t1 = msgs[0].log_time_ns, msgs[-1].log_time_ns
     if args.dry_run:
-        counts = {t: sum(1 for m in msgs if m.topic == t) for t in sorted(play)}
-        return {"recording": str(args.recording), "dry_run": True, "messages": len(msgs),
-                "topics": sorted(play), "skipped_topics": args.skipped_topics, "counts": counts,
-                "duration_s": (t1 - t0) * 1e-9,
-                "truncated": rec.truncated, "finalised": rec.finalised,
-                "summary": f"would replay {len(msgs)} messages on {len(play)} topics from {args.recording} "
-                           f"({(t1 - t0) * 1e-9:.2f} s of recording"
-                           + (f"; file truncated: {rec.error}" if rec.truncated else "") + ")"}
+        return _dry_run(args, rec, play, msgs)
 
     import rclpy
     from rclpy.executors import ExternalShutdownException
     from rosgraph_msgs.msg import Clock
 
+    # function-level: ros.qos imports rclpy; `susp --help` and `--dry-run` must not (optional ROS dependency)
     from ..ros.qos import INPUT_QOS, LATCHED_QOS  # the profiles the node subscribes with
 
     rclpy.init(args=["--ros-args"])
@@ -200,7 +263,6 @@ def run(args) -> dict:
         time.sleep(0.2)  # matched: give the subscribers' side of discovery a moment
     progress = None
     if not args.no_progress:
-        from ..progress import progress as make_progress
         progress = make_progress(total=round((t1 - t0) * 1e-9, 2), unit="s", desc="replay",
                                  bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
     played = loops = 0
@@ -209,35 +271,10 @@ def run(args) -> dict:
     interrupted = False
     try:
         while True:
-            start = time.monotonic()
-            last_shown = t0
-            t_sent = None
-            for t, m in _timeline(msgs, t0, t1, clock_ns):
-                if handshake and t_sent is not None and t != t_sent:
-                    # the first instant is out: the clock starts once every subscriber has it
-                    handshake = False
-                    if not _delivered(everything, max(deadline - time.monotonic(), HANDSHAKE_MIN_S)):
-                        print(f"susp replay: warning: the first messages of {args.recording} were not "
-                              "acknowledged by every subscriber; a slow subscriber may miss the start",
-                              file=sys.stderr)
-                    start = time.monotonic() - (t_sent - t0) * 1e-9 / args.rate
-                wait = start + (t - t0) * 1e-9 / args.rate - time.monotonic()
-                if wait > 0:
-                    time.sleep(wait)
-                if clock_pub is not None and t != t_sent:  # one /clock per instant
-                    t_sent = t
-                    c = Clock()
-                    c.clock.sec, c.clock.nanosec = divmod(t, 1_000_000_000)
-                    clock_pub.publish(c)
-                if m is not None:
-                    pubs[m.topic].publish(m.data)
-                    played += 1
-                if progress is not None and t - last_shown >= 100_000_000:
-                    progress.update(round((t - last_shown) * 1e-9, 2))
-                    last_shown = t
+            played += _play_once(args, msgs, pubs, clock_pub, Clock, clock_ns, progress,
+                                 (everything, deadline) if handshake else None)
+            handshake = False
             loops += 1
-            if progress is not None:
-                progress.update(round((t1 - last_shown) * 1e-9, 2))
             if not args.loop or (args.loops and loops >= args.loops):
                 break
             if progress is not None:

@@ -3,7 +3,8 @@ the workshop's wheel-plate bench (EUSAMA % and phase-shift angle per wheel)."""
 from __future__ import annotations
 
 from ..errors import SuspInputError
-from ..model import Model
+from ..model import Model, rigs
+from ..model.linear import plate_resonance_hz
 from ..model.rigs import WHEELS, axle_rig, damper_rig, plot_loops
 from ..model.params import DEFAULT_VEHICLE
 
@@ -66,8 +67,6 @@ def run(args) -> dict:
 
 
 def _run_eusama(args) -> dict:
-    from ..model import rigs
-    from ..model.linear import plate_resonance_hz
     oil = _oil_levels(args.oil, 4)
     if args.fx or args.fy:
         raise SuspInputError("--fx/--fy apply to the axle rig only")

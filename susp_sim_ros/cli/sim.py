@@ -14,18 +14,21 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..control.controllers import CONTROLLERS
+from ..control.ride import RideSpec, parse_road, run_ride
 from ..errors import SuspInputError
 from ..io.drive import parse_oil, read_drive
 from ..io.topic_map import add_topic_map_argument
-from ..lockstep import maneuver_drive, run_lockstep
+from ..runtime.lockstep import maneuver_drive, run_lockstep
 from ..model import Model
 from ..model.maneuvers import STATES, paper_maneuver, vehicle_state
-from ..sim_core import DivergenceError
+from ..model.paper import DEFAULT_MANEUVER, MANEUVER_CHOICES
+from ..runtime.sim_core import DivergenceError
 from ..model.params import DEFAULT_VEHICLE
 
 
 def add_arguments(p) -> None:
-    p.add_argument("--maneuver", choices=["bump", "sine", "bump_crossing", "sine_steer"], default=None,
+    p.add_argument("--maneuver", choices=MANEUVER_CHOICES, default=None,
                    help="paper maneuver (default bump when no --drive is given)")
     p.add_argument("--drive", metavar="X.MCAP", help="recorded test drive to run in lockstep (MCAP file, rosbag2 "
                    "directory or .db3 file)")
@@ -56,7 +59,6 @@ def run(args) -> dict:
         raise SuspInputError("give either --maneuver or --drive, not both")
     if getattr(args, "road", None):
         return run_ride_cli(args)
-    from ..control.controllers import CONTROLLERS
     if args.controller not in CONTROLLERS:
         raise SuspInputError(f"--controller: expected one of {', '.join(CONTROLLERS)}, got {args.controller!r}")
     model = Model(args.config, args.variant)
@@ -72,7 +74,7 @@ def run(args) -> dict:
         drive = read_drive(args.drive, topic_map=args.topic_map)
         name = drive.metadata.get("maneuver", "") or str(args.drive)
     else:
-        man = paper_maneuver(args.maneuver or "bump", model.vehicle.wheelbase)
+        man = paper_maneuver(args.maneuver or DEFAULT_MANEUVER, model.vehicle.wheelbase)
         oil = oil if oil is not None else vehicle_state("intact")
         drive = maneuver_drive(man, oil, rate_hz=1.0 / args.step, vehicle=model.vehicle.name)
         name = man.name
@@ -84,7 +86,7 @@ def run(args) -> dict:
                               f"{model.vehicle.name}, step {args.step} s"
                               + (f"; {args.out} holds the samples before" if args.out else "") + ")")
     deg = np.degrees
-    peak = lambda label: float(np.max(np.abs(res[label]))) if len(res.t_ns) else 0.0
+    peak = lambda label: float(np.max(np.abs(res[label]))) if len(res) else 0.0
     out = {
         "maneuver": name, "state": state, "variant": model.variant.name,
         "vehicle": model.vehicle.name, "duration_s": drive.duration_s, "ok": bool(res.healthy),
@@ -93,7 +95,7 @@ def run(args) -> dict:
         "peak_yaw_rate_deg_s": float(deg(peak("YAW_RATE"))),
         "peak_lateral_acceleration_m_s2": peak("AY_SF"),
         "damper_oil_level": [float(x) for x in res.metadata["damper_oil_level"].split(",")],
-        "samples": int(len(res.t_ns)), "rejected_inputs": res.rejections, "out": res.out_path,
+        "samples": len(res), "rejected_inputs": res.rejections, "out": res.out_path,
     }
     if args.drive:
         out["drive"] = str(args.drive)
@@ -106,8 +108,6 @@ def run(args) -> dict:
 
 def run_ride_cli(args) -> dict:
     """``susp sim --road iso8608:C --speed 80 ...``: the ride metrics of one controller."""
-    from ..control.controllers import CONTROLLERS
-    from ..control.ride import RideSpec, parse_road, run_ride
     if args.drive or args.maneuver:
         raise SuspInputError("--road drives its own maneuver: give no --drive or --maneuver with it")
     if args.controller not in CONTROLLERS:

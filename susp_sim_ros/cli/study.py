@@ -11,6 +11,7 @@ resumes without redoing them (``--fresh`` starts over). Progress bar on stderr (
 """
 from __future__ import annotations
 
+from ..analysis.sweep import drives_study, load_study, make_executor, run_study
 from ..errors import SuspInputError
 
 
@@ -37,7 +38,6 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> dict:
-    from ..analysis.sweep import drives_study, load_study, make_executor, run_study
     if bool(args.study) == bool(args.drives):
         raise SuspInputError("give a study YAML or --drives DIR (one of them)")
     if args.drives:

@@ -23,9 +23,18 @@ from __future__ import annotations
 
 import time
 
+from ..analysis import ride_recording as rr
 from ..analysis import validation as va
-from ..errors import RecordingError, SuspInputError
+from ..analysis.ride_recording import summary_line
+from ..analysis.validation_study import run_validation_study, validation_summary_text
+from ..errors import ConfigError, RecordingError, SuspInputError
+from ..io.drive import IMU, SIM_IMU, imu_from_recording, read_drive
+from ..io.integrity import require_live_imu
+from ..io.reader import read_recording
+from ..io.suspension import SIM_SUSPENSION, suspension_from_recording
+from ..io.topic_map import add_topic_map_argument
 from ..model.paper import VARIANTS
+from ..model.params import load_vehicle
 
 
 def add_arguments(p) -> None:
@@ -42,7 +51,6 @@ def add_arguments(p) -> None:
                    help="comma-separated friction variants of the study")
     p.add_argument("--no-plots", action="store_true", help="study without PNG plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
-    from ..io.topic_map import add_topic_map_argument
     add_topic_map_argument(p)  # applies to --measured and to the drives of --study
 
 
@@ -59,7 +67,6 @@ def run(args) -> dict:
 
 
 def _study(args) -> dict:
-    from ..analysis.validation_study import run_validation_study, validation_summary_text
     variants = tuple(v.strip() for v in args.variants.split(",") if v.strip())
     if not variants:
         raise SuspInputError("--variants: give at least one friction variant")
@@ -70,8 +77,6 @@ def _study(args) -> dict:
 
 
 def _simulated_imu(path: str, topic: str, with_recording: bool = False):
-    from ..io.drive import IMU, SIM_IMU, imu_from_recording
-    from ..io.reader import read_recording
     rec = read_recording(path)
     if topic != "auto":
         return (topic, imu_from_recording(rec, topic)) + ((rec,) if with_recording else ())
@@ -84,7 +89,6 @@ def _simulated_imu(path: str, topic: str, with_recording: bool = False):
 
 
 def _pair(args) -> dict:
-    from ..io.drive import read_drive
     t_start = time.perf_counter()
     drive = read_drive(args.measured, topic_map=args.topic_map)
     imu_topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
@@ -95,9 +99,15 @@ def _pair(args) -> dict:
     if len(sim) < 2:
         raise RecordingError(f"{args.simulated}: fewer than 2 IMU samples on {topic}")
     windows = va.analysis_windows(drive, _wheelbase_of(drive))
+    # input integrity (io/integrity.py): a dead gyro axis gives no metric, an IMU gap is left out
+    dead = set(drive.extra.get("unusable_signals", ()))
+    signals = [s for s in va.RATE_SIGNALS if s not in dead]
+    if not signals:
+        require_live_imu(drive, args.measured, "validate")
     try:
-        res = va.validate(drive.imu.t_ns, drive.imu.gyro, sim.t_ns, sim.gyro, windows=windows,
-                          rate_hz=args.rate, names=(f"{args.measured} {imu_topic}", f"{args.simulated} {topic}"))
+        res = va.validate(drive.imu.t_ns, drive.imu.gyro, sim.t_ns, sim.gyro, windows=windows, signals=signals,
+                          rate_hz=args.rate, names=(f"{args.measured} {imu_topic}", f"{args.simulated} {topic}"),
+                          exclude=drive.extra.get("excluded_spans", {}).get(imu_topic, ()))
     except RecordingError as exc:
         raise RecordingError(f"{args.measured} vs {args.simulated}: {exc}") from None
     if not res.metrics:
@@ -121,7 +131,6 @@ def _pair(args) -> dict:
                          f"correlation {corr}, lag {lag}")
     for w, why in res.skipped.items():
         lines.append(f"  {w} window skipped: {why}")
-    from ..analysis.ride_recording import summary_line
     lines.append("  " + summary_line(out["ride"]))
     out["summary"] = "\n".join(lines)
     return out
@@ -130,8 +139,6 @@ def _pair(args) -> dict:
 def _wheelbase_of(drive) -> float:
     """Wheelbase [m] of the drive's vehicle (its ``vehicle`` metadata, as the validation study reads it);
     the reference vehicle's where the drive names none or one without a parameter set here."""
-    from ..errors import ConfigError
-    from ..model.params import load_vehicle
     name = drive.metadata.get("vehicle") or ""
     try:
         return load_vehicle(name).wheelbase if name else load_vehicle().wheelbase
@@ -144,10 +151,6 @@ def _ride(args, drive, sim, sim_rec) -> dict:
     recording's ride metrics and the measured drive's Wk comfort (see the module docstring)."""
     import logging
 
-    from ..analysis import ride_recording as rr
-    from ..errors import ConfigError
-    from ..io.suspension import SIM_SUSPENSION, suspension_from_recording
-    from ..model.params import load_vehicle
     vehicle = sim_rec.metadata.get("test_drive", {}).get("vehicle", "")
     try:
         vargs = rr.vehicle_ride_args(load_vehicle(vehicle)) if vehicle else None

@@ -1,6 +1,6 @@
 """Ride runs: the car driven straight at constant speed over a seeded ISO 8608 random road with a damper
 controller in the loop (in-process, the node's :class:`~susp_sim_ros.model.vehicle.Stepper`), and its
-ride and road-holding metrics (:mod:`susp_sim_ros.analysis.ride`).
+ride and road-holding metrics (:mod:`susp_sim_ros.control.ride_metrics`).
 
 The controller samples the outputs every ``controllers.sample_time`` and its command acts from the next
 sample on (one sample of computation delay), then through the valve lag. ``passive`` sends no command:
@@ -20,7 +20,7 @@ from ..model.iso8608 import CLASSES, faded_road
 from ..model.layout import OUTPUT_LABELS
 from ..model.semiactive import number, semiactive_config
 from ..model.vehicle import INTACT, Model, Stepper
-from ..analysis.ride import ride_metrics
+from ..control.ride_metrics import ride_metrics
 from .controllers import load_controller_params, make_controller, measurement_from_outputs
 
 _INDEX = {k: i for i, k in enumerate(OUTPUT_LABELS)}

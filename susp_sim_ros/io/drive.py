@@ -8,143 +8,25 @@ from __future__ import annotations
 
 import logging
 import os
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from ..errors import RecordingError, SuspInputError, UnknownMessageTypeError
 from ..model.road import RoadProfile
+from . import integrity as _integrity
+# what a drive is lives in drive_data (integrity imports it too); re-exported here: the drive API
+from .drive_data import (DAMPER_COMMAND, IMU, MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT,  # noqa: F401
+                         OIL_UNKNOWN, ROAD_PROFILE, SIM_IMU, SPEED, STEERING, WHEEL_HEIGHTS, ImuSeries, Series,
+                         TestDrive, oil_unknown, parse_oil)
 from . import messages as M
-from .reader import Recording, read_recording
-from .recorder import McapRecorder
+from .reader import RawMessage, Recording, read_recording
+from .recorder import McapRecorder, qos_yaml
 from .topic_map import MappedImu, TopicMap, get_field, load_topic_map
 from ..model.params import DEFAULT_VEHICLE
 
 log = logging.getLogger(__name__)
 
-SPEED = "/vehicle/speed"
-STEERING = "/vehicle/steering_wheel_angle"
-ROAD_PROFILE = "/road/profile"
-WHEEL_HEIGHTS = "/road/wheel_heights"
-DAMPER_COMMAND = "/vehicle/damper_command"  # semi-active valve command [FL, FR, RL, RR] in [0, 1] (optional)
-IMU = "/imu/data"
-SIM_IMU = "/sim/imu/data"
-
-#: Input values beyond which a message is absurd; the node rejects them (SimCore), the offline tools
-#: refuse drives containing them.
-MAX_SPEED = 100.0               # m/s
-MAX_STEERING = 4.0 * np.pi      # rad, steering-wheel angle
-MAX_WHEEL_HEIGHT = 1.0          # m, road height under a wheel / road profile elevation
-
-
-@dataclass
-class Series:
-    """Samples ``values`` (1-D, or (n, k)) at times ``t_ns`` (int64 nanoseconds)."""
-
-    t_ns: np.ndarray
-    values: np.ndarray
-
-    def __post_init__(self):
-        self.t_ns = np.asarray(self.t_ns, dtype=np.int64)
-        self.values = np.asarray(self.values, dtype=float)
-        if self.values.shape[:1] != self.t_ns.shape:
-            raise SuspInputError(f"Series: {self.t_ns.size} times but values of shape {self.values.shape}")
-
-    def __len__(self) -> int:
-        return int(self.t_ns.size)
-
-
-@dataclass
-class ImuSeries:
-    """IMU samples: ``gyro`` (n, 3) roll/pitch/yaw rate [rad/s], ``accel`` (n, 3) specific force [m/s^2]."""
-
-    t_ns: np.ndarray
-    gyro: np.ndarray
-    accel: np.ndarray
-
-    def __post_init__(self):
-        self.t_ns = np.asarray(self.t_ns, dtype=np.int64)
-        self.gyro = np.asarray(self.gyro, dtype=float).reshape(-1, 3)
-        self.accel = np.asarray(self.accel, dtype=float).reshape(-1, 3)
-        if not (self.gyro.shape[0] == self.accel.shape[0] == self.t_ns.size):
-            raise SuspInputError(f"ImuSeries: {self.t_ns.size} times, gyro {self.gyro.shape}, "
-                                 f"accel {self.accel.shape}")
-
-    def __len__(self) -> int:
-        return int(self.t_ns.size)
-
-    @property
-    def t_s(self) -> np.ndarray:
-        return self.t_ns.astype(float) * 1e-9
-
-
-OIL_UNKNOWN = "unknown"  # interface.md: an inspection drive's damper state is what is to be found
-
-
-def oil_unknown(text: str | None) -> bool:
-    """Whether a ``damper_oil_level`` value says the state is not known (an inspection drive)."""
-    return text is not None and str(text).strip().lower() == OIL_UNKNOWN
-
-
-def parse_oil(text: str | None, what: str = "test_drive metadata damper_oil_level") -> tuple[float, ...]:
-    """``"1,1,0,0"`` -> (1.0, 1.0, 0.0, 0.0); missing -> intact. ``"unknown"`` is not a value: check
-    :func:`oil_unknown` first (:meth:`TestDrive.oil_levels` assumes intact for it)."""
-    if text is None or str(text).strip() == "":
-        return (1.0, 1.0, 1.0, 1.0)
-    try:
-        vals = tuple(float(x) for x in str(text).replace(" ", "").split(","))
-    except ValueError:
-        vals = ()
-    if len(vals) != 4 or not all(np.isfinite(v) and 0.0 <= v <= 1.0 for v in vals):
-        raise RecordingError(f"{what}: expected four comma-separated fractions FL,FR,RL,RR in [0, 1], "
-                             f"got {text!r}")
-    return vals
-
-
-@dataclass
-class TestDrive:
-    """A recorded (or synthetic) test drive: the inputs of the model and what was measured."""
-
-    __test__ = False  # not a pytest test class
-
-    metadata: dict[str, str]
-    speed: Series
-    steering: Series
-    road: RoadProfile | None = None
-    wheel_heights: Series | None = None
-    imu: ImuSeries | None = None
-    extra: dict[str, Any] = field(default_factory=dict)
-    damper_command: Series | None = None  # (n, 4) valve commands; None: passive dampers
-
-    @property
-    def oil_known(self) -> bool:
-        """False for an inspection drive (``damper_oil_level: unknown``)."""
-        return not oil_unknown(self.metadata.get("damper_oil_level"))
-
-    def oil_levels(self) -> tuple[float, float, float, float]:
-        """The recorded oil levels; intact when unknown (:attr:`oil_known` tells, callers say so)."""
-        if not self.oil_known:
-            return (1.0, 1.0, 1.0, 1.0)
-        return parse_oil(self.metadata.get("damper_oil_level"))  # type: ignore[return-value]
-
-    @property
-    def t0_ns(self) -> int:
-        starts = [s.t_ns[0] for s in (self.speed, self.steering) if len(s)]
-        return int(min(starts)) if starts else 0
-
-    @property
-    def t_end_ns(self) -> int:
-        ends = [s.t_ns[-1] for s in (self.speed, self.steering, self.wheel_heights) if s is not None and len(s)]
-        return int(max(ends)) if ends else self.t0_ns
-
-    @property
-    def duration_s(self) -> float:
-        return (self.t_end_ns - self.t0_ns) * 1e-9
-
-
-# ---- reading -------------------------------------------------------------------------------------
-#: Message type each topic must have when present (a recording with another type there is rejected).
 TOPIC_TYPES = {SPEED: M.FLOAT64, STEERING: M.FLOAT64, ROAD_PROFILE: M.FLOAT64_ARRAY,
                WHEEL_HEIGHTS: M.FLOAT64_ARRAY, IMU: M.IMU, SIM_IMU: M.IMU, DAMPER_COMMAND: M.FLOAT64_ARRAY}
 
@@ -265,6 +147,35 @@ def _warn_unreadable_channels(rec: Recording, needed: set[str]) -> None:
                         ch.topic, name or "(no schema)", ch.message_encoding)
 
 
+def _road_profile(rec: Recording, rp) -> RoadProfile | None:
+    """The road profile of ``rec`` (the first message on the mapped topic ``rp``, scaled), or None."""
+    check_topic(rec, rp.topic, rp.msgtype)
+    prof = rec.decode_topic(rp.topic)
+    if not prof:
+        return None
+    msg = prof[0][1]
+    if rp.field:
+        try:
+            msg = get_field(msg, rp.field)
+        except (AttributeError, TypeError, IndexError, KeyError) as exc:
+            raise _field_error(rec, rp, exc) from None
+    road = road_from_msg(msg, f"{rec.path}: topic {rp.topic}")
+    if rp.factor != 1.0:
+        road = RoadProfile(road.s, road.zl * rp.factor, road.zr * rp.factor)
+    return road
+
+
+def _per_wheel_series(rec: Recording, topic: str, extract, msgtype: str | None = None) -> Series | None:
+    """A series of four values [FL, FR, RL, RR] per message on ``topic`` (``extract(msg)`` gives them),
+    or None when the topic has no message."""
+    items = _fields(rec, topic, extract, msgtype)
+    if not items:
+        return None
+    if any(len(v) != 4 for _, v in items):
+        raise RecordingError(f"{rec.path}: topic {topic}: expected 4 values [FL, FR, RL, RR] per message")
+    return Series(np.array([t for t, _ in items], dtype=np.int64), np.array([v for _, v in items], dtype=float))
+
+
 def drive_from_recording(rec: Recording, *, imu_topic: str = IMU,
                          topic_map: TopicMap | str | os.PathLike | None = None) -> TestDrive:
     """The test drive in ``rec``; ``topic_map`` (module :mod:`~susp_sim_ros.io.topic_map`; None = the
@@ -287,37 +198,11 @@ def drive_from_recording(rec: Recording, *, imu_topic: str = IMU,
                                  f"{', '.join(sorted(rec.topics())) or 'none'}{why})")
     speed = _scalar_series(rec, tm.speed)
     steering = _scalar_series(rec, tm.steering_wheel_angle)
-    road = None
-    rp = tm.road_profile
-    check_topic(rec, rp.topic, rp.msgtype)
-    prof = rec.decode_topic(rp.topic)
-    if prof:
-        msg = prof[0][1]
-        if rp.field:
-            try:
-                msg = get_field(msg, rp.field)
-            except (AttributeError, TypeError, IndexError, KeyError) as exc:
-                raise _field_error(rec, rp, exc) from None
-        road = road_from_msg(msg, f"{path}: topic {rp.topic}")
-        if rp.factor != 1.0:
-            road = RoadProfile(road.s, road.zl * rp.factor, road.zr * rp.factor)
-    wh = None
-    whm = tm.wheel_heights
-    items = _fields(rec, whm.topic, lambda m: [float(x) * whm.factor if whm.factor != 1.0 else float(x)
-                                               for x in get_field(m, whm.field)], whm.msgtype)
-    if items:
-        vals = [v for _, v in items]
-        if any(len(v) != 4 for v in vals):
-            raise RecordingError(f"{path}: topic {whm.topic}: expected 4 values [FL, FR, RL, RR] "
-                                 "per message")
-        wh = Series(np.array([t for t, _ in items], dtype=np.int64), np.array(vals, dtype=float))
-    cmd = None
-    items = _fields(rec, DAMPER_COMMAND, lambda m: [float(x) for x in m.data])
-    if items:
-        if any(len(v) != 4 for _, v in items):
-            raise RecordingError(f"{path}: topic {DAMPER_COMMAND}: expected 4 values [FL, FR, RL, RR] "
-                                 "per message")
-        cmd = Series(np.array([t for t, _ in items], dtype=np.int64), np.array([v for _, v in items], float))
+    rp, whm = tm.road_profile, tm.wheel_heights
+    road = _road_profile(rec, rp)
+    wh = _per_wheel_series(rec, whm.topic, lambda m: [float(x) * whm.factor if whm.factor != 1.0 else float(x)
+                                                      for x in get_field(m, whm.field)], whm.msgtype)
+    cmd = _per_wheel_series(rec, DAMPER_COMMAND, lambda m: [float(x) for x in m.data])
     imu = _imu_series(rec, imu_topic, tm.imu) if rec.by_topic(imu_topic) else None
     metadata = dict(rec.metadata.get("test_drive", {}))
     if tm.damper_oil_level is not None and rec.by_topic(tm.damper_oil_level.topic):
@@ -385,8 +270,16 @@ def read_drive(path: str | os.PathLike, *, imu_topic: str = IMU,
     """Read a recorded test drive (an MCAP file, a rosbag2 directory or a ``.db3`` file, see
     :func:`~susp_sim_ros.io.reader.read_recording`); a truncated file gives its readable prefix (with a
     warning). ``topic_map`` (a YAML path, a :class:`~susp_sim_ros.io.topic_map.TopicMap`, or None for the
-    interface's own topics) maps other topic names, fields, units and IMU frames onto the model's inputs."""
-    return drive_from_recording(read_recording(path), imu_topic=imu_topic, topic_map=topic_map)
+    interface's own topics) maps other topic names, fields, units and IMU frames onto the model's inputs.
+
+    Every drive read here passes the input integrity check (:mod:`~susp_sim_ros.io.integrity`, issue 28):
+    defects it can work around are worked around and reported (one stderr line each, ``drive.extra
+    ["input_findings"]``); one that leaves nothing sound is an
+    :class:`~susp_sim_ros.io.integrity.IntegrityError` (exit 2)."""
+    drive = drive_from_recording(read_recording(path), imu_topic=imu_topic, topic_map=topic_map)
+    res = _integrity.check_drive_integrity(drive, str(path))
+    _integrity.report(res.findings)
+    return res.drive
 
 
 # ---- writing -------------------------------------------------------------------------------------
@@ -426,8 +319,6 @@ def recording_from_drive(drive: TestDrive, path: str | os.PathLike, *, imu_topic
 
     from mcap.records import Channel, Schema
 
-    from .reader import RawMessage
-    from .recorder import qos_yaml
     rec = Recording(Path(path), profile="ros2", finalised=True, truncated=bool(drive.extra.get("truncated")))
     rec.metadata["test_drive"] = {str(k): str(v) for k, v in drive.metadata.items()}
     ids: dict[str, int] = {}

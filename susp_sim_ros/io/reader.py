@@ -28,7 +28,8 @@ from mcap.records import Channel, Chunk, Footer, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from ..errors import NotRos2RecordingError, RecordingError
-from .messages import decode
+from .messages import MSG_DEFS, decode, full_definition
+from .recorder import qos_yaml
 
 log = logging.getLogger(__name__)
 
@@ -81,7 +82,6 @@ class Recording:
             return None
         if sc.encoding == "ros2msg" and sc.data:
             return sc.data.decode(errors="replace")
-        from .messages import MSG_DEFS
         if sc.name in MSG_DEFS:
             return None
         return _jazzy_definition(sc.name) or None
@@ -291,7 +291,6 @@ def _jazzy_definition(msgtype: str) -> str:
 def _msgdef_text(conn) -> tuple[str, str]:
     """(schema encoding, definition text) of a rosbags connection: the stored one, else this package's
     embedded definitions, else rosbags' ROS 2 Jazzy type store; ("", "") when the type is unknown."""
-    from .messages import MSG_DEFS, full_definition
     fmt = getattr(getattr(conn.msgdef, "format", None), "name", "NONE")
     if fmt in ("MSG", "IDL") and conn.msgdef.data:
         return ("ros2msg" if fmt == "MSG" else "ros2idl"), conn.msgdef.data
@@ -305,7 +304,6 @@ def _read_rosbags(path: Path, name: Path) -> Recording:
     """A rosbag2 directory or ``.db3`` file through ``rosbags`` (sqlite3 storage, compressed bags)."""
     from rosbags.interfaces import ConnectionExtRosbag2
     from rosbags.rosbag2 import Reader
-    from .recorder import qos_yaml
     rec = Recording(name)
     rec.profile = "ros2"
     rec.finalised = True

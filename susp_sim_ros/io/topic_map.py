@@ -46,6 +46,7 @@ from collections.abc import Collection, Mapping
 import numpy as np
 
 from ..errors import TopicMapError
+from ..model.params import config_dir
 
 #: SI factor of each unit, per kind of quantity (value_SI = raw * scale * factor).
 G_STANDARD = 9.80665  # m/s^2 per g, standard gravity (CGPM 1901)
@@ -356,7 +357,6 @@ def load_topic_map(path: str | os.PathLike | TopicMap | None) -> TopicMap:
     import yaml
     p = Path(path)
     if not p.is_file() and p.suffix == "" and len(p.parts) == 1:
-        from ..model.params import config_dir
         cand = config_dir() / "topic_maps" / f"{p.name}.yaml"
         if cand.is_file():
             p = cand

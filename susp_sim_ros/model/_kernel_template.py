@@ -672,3 +672,31 @@ def rig_run(p, s, i, d, dd, fx, fy, fz, mask, with_spring, out):
         out[k] = f
         if k + 1 < d.shape[0]:
             terms_update(p, s, i, c, d[k + 1] - d[k], mask)
+
+
+#: scratch rows of :func:`body_accelerations` holding the vertical accelerations ``q''`` (heave, roll,
+#: pitch [m/s^2, rad/s^2], then the four wheels [m/s^2]), the coordinates of ``model/linear.py``
+VERTICAL_ACCELERATION_ROWS = np.array([_W_ZDD, _W_PHIDD, _W_THDD, _W_ZWDD, _W_ZWDD + 1, _W_ZWDD + 2, _W_ZWDD + 3])
+
+
+def accelerations(P, S):
+    """The pure right-hand side of a block of vehicles (parameters ``P`` (n_p, nl), states ``S`` (n_s,
+    nl), one vehicle per column) standing on a flat road, without physics terms: the stages
+    :func:`corner_kinematics`, :func:`suspension_forces` and :func:`body_accelerations` as the step runs
+    them. Returns ``q''`` (7, nl) in the rows :data:`VERTICAL_ACCELERATION_ROWS` describe. The public way
+    to evaluate the model's forces and accelerations outside a step (``model/linear.py`` linearises it);
+    it reads and writes nothing of its arguments."""
+    S = np.ascontiguousarray(S, dtype=np.float64).copy()
+    nl = S.shape[1]
+    DV = np.zeros((N_DERIVED, nl))
+    C = np.zeros((4, N_CTX, nl))
+    W = np.zeros((N_SCRATCH, nl))
+    Y = np.zeros((N_Y, nl))
+    for v in range(nl):
+        derive(P[:, v], DV[:, v])
+        for i in range(4):
+            fill_context_const(P[:, v], i, C[:, :, v], 0.0)
+    corner_kinematics(P, DV, S, W, nl)
+    suspension_forces(P, DV, S, C, W, Y, nl, False)
+    body_accelerations(P, DV, S, W, nl)
+    return W[VERTICAL_ACCELERATION_ROWS, :].copy()

@@ -2,8 +2,9 @@
 
 Seven degrees of freedom ``q = [z, phi, theta, zw_FL, zw_FR, zw_RL, zw_RR]`` around static equilibrium
 (model-spec 2): ``M q'' + C q' + K q = 0``. The matrices are not derived by hand: they are the model's
-own right-hand side (the kernel's stages :func:`corner_kinematics`, :func:`suspension_forces` and
-:func:`body_accelerations` of ``_kernel_template.py``, without physics terms, so without friction)
+own right-hand side (the kernel's public :func:`accelerations` of ``_kernel_template.py``: its stages
+``corner_kinematics``, ``suspension_forces`` and ``body_accelerations``, without physics terms, so
+without friction)
 linearised by central differences about the static equilibrium on a flat road at standstill:
 ``K = -M d(q'')/dq`` holds the wheel-rate springs, anti-roll bars, tyres and the destabilising gravity
 terms of the roll and pitch equations; ``C = -M d(q'')/dq'`` the hydraulic dampers' slopes at zero
@@ -17,15 +18,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _kernel_template as rhs
-from .layout import N_CTX, N_P_FIXED, N_S_FIXED, N_Y, P_INDEX, S_INDEX
+from .layout import N_P_FIXED, N_S_FIXED, P_INDEX, S_INDEX
 from .params import FrictionVariant, VehicleParams
+from .vehicle import Model
 
 #: state slots of q and of q' (layout.S_INDEX)
 _Q = np.array([S_INDEX["Z"], S_INDEX["PHI"], S_INDEX["THETA"], *range(S_INDEX["ZW"], S_INDEX["ZW"] + 4)])
 _QD = np.array([S_INDEX["ZD"], S_INDEX["PHID"], S_INDEX["THETAD"],
                 *range(S_INDEX["ZWD"], S_INDEX["ZWD"] + 4)])
-#: scratch rows of :func:`body_accelerations` holding q''
-_QDD = np.array([rhs._W_ZDD, rhs._W_PHIDD, rhs._W_THDD, *range(rhs._W_ZWDD, rhs._W_ZWDD + 4)])
 #: central-difference step [m, rad, m/s, rad/s]: the model is linear far beyond it (stops, lift-off and
 #: the damper grid's first cell are millimetres away), and far above rounding
 _H = 1e-6
@@ -57,7 +57,6 @@ class LinearModel:
 
 def _parameters(vp: VehicleParams) -> np.ndarray:
     """The fixed parameter vector of ``vp`` (intact oil, passive damper), as a block of one vehicle."""
-    from .vehicle import Model  # the model's own parameter vector; vehicle imports the kernel loader
     P = Model(vp, FrictionVariant("linearised", False, False, False)).params()
     return np.ascontiguousarray(P[:N_P_FIXED].reshape(-1, 1))
 
@@ -67,17 +66,7 @@ def _accelerations(P: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     S = np.zeros((N_S_FIXED, 1))
     S[_Q, 0] = q
     S[_QD, 0] = qd
-    DV = np.zeros((rhs.N_DERIVED, 1))
-    C = np.zeros((4, N_CTX, 1))
-    W = np.zeros((rhs.N_SCRATCH, 1))
-    Y = np.zeros((N_Y, 1))
-    rhs.derive(P[:, 0], DV[:, 0])
-    for i in range(4):
-        rhs.fill_context_const(P[:, 0], i, C[:, :, 0], 0.0)
-    rhs.corner_kinematics(P, DV, S, W, 1)
-    rhs.suspension_forces(P, DV, S, C, W, Y, 1, False)
-    rhs.body_accelerations(P, DV, S, W, 1)
-    return W[_QDD, 0].copy()
+    return rhs.accelerations(P, S)[:, 0]
 
 
 def linearise(vp: VehicleParams, P: np.ndarray | None = None) -> LinearModel:

@@ -15,7 +15,7 @@ from ..errors import ConfigError
 from .params import config_dir, load_vehicle
 from .road import RoadProfile, cosine_bump
 from .vehicle import make_inputs
-from .paper import MANEUVERS, STATES  # noqa: F401  (re-exported: the paper's maneuvers and states)
+from .paper import MANEUVERS, STATES, maneuver_kind  # noqa: F401  (MANEUVERS, STATES re-exported)
 
 
 
@@ -117,8 +117,23 @@ def sine_steer(*, speed=None, amplitude=None, frequency=None, periods=None, lead
 def paper_maneuver(name: str, wheelbase: float | None = None) -> Maneuver:
     """``bump_crossing`` (``bump``) or ``sine_steer`` (``sine``) with the values of
     ``config/maneuvers.yaml``; ``wheelbase`` [m] as for :func:`bump_crossing`."""
-    if name in ("bump", "bump_crossing"):
-        return bump_crossing(wheelbase=wheelbase)
-    if name in ("sine", "sine_steer"):
-        return sine_steer()
-    raise ConfigError(f"unknown maneuver {name!r}: expected bump_crossing (bump) or sine_steer (sine)")
+    return build_maneuver(name, wheelbase)
+
+
+def build_maneuver(name: str, wheelbase: float | None = None, **overrides) -> Maneuver:
+    """The maneuver of a registry name or alias (``model/paper.py`` ``MANEUVER_KINDS``), built by its
+    ``factory`` with ``overrides`` (the factory's keywords; ``None`` keeps the config value) and, when the
+    kind uses it, ``wheelbase``."""
+    kind = maneuver_kind(name)
+    factory = globals()[kind.factory]
+    if kind.uses_wheelbase:
+        overrides["wheelbase"] = wheelbase
+    return factory(**overrides)
+
+
+def excitation_end(man: Maneuver, wheelbase: float) -> float:
+    """When the excitation of a paper maneuver is over [s]: the rear axle has left the road profile (a
+    kind that ``needs_road_profile``) or the last steer has ended."""
+    if maneuver_kind(man.name).needs_road_profile:
+        return (float(man.road.s[-1]) + wheelbase) / man.speed
+    return man.steer_start + man.steer_periods / man.steer_frequency

@@ -10,7 +10,89 @@ velocity scaling, and with plain Dahl friction.
 """
 from __future__ import annotations
 
-MANEUVERS = ("bump_crossing", "sine_steer")
+from dataclasses import dataclass
+
+from ..errors import ConfigError
+
+
+@dataclass(frozen=True)
+class ManeuverKind:
+    """One of the paper's maneuvers: everything the code needs to know about it, in one entry.
+
+    ``factory`` names the function of :mod:`susp_sim_ros.model.maneuvers` that builds it (with the values
+    of ``config/maneuvers.yaml``, section ``name``); ``sweep_arguments`` maps each study parameter of this
+    maneuver to that function's keyword; ``uses_wheelbase``: the factory takes the vehicle's wheelbase
+    (the drive lasts until the rear axle has passed the excitation)."""
+
+    name: str
+    aliases: tuple[str, ...]
+    factory: str
+    #: the kernel output label the maneuver is compared on (``model/layout.py`` ``OUTPUT_LABELS``)
+    primary_output: str
+    #: which body motion it excites ("pitch" or "roll")
+    excites: str
+    #: what excites it: the road profile (a bump) or the steering wheel
+    needs_road_profile: bool
+    uses_wheelbase: bool
+    #: the analysis window of the validation (``analysis/validation.py``): "bump" or "steering"
+    window: str
+    #: the ``maneuver`` metadata of the synthetic drives (``bags/*.mcap``)
+    label: str
+    #: the paper measures the ring-out after the excitation (model-spec 5)
+    ring_out: bool
+    sweep_arguments: tuple[tuple[str, str], ...]
+
+    @property
+    def primary_signal(self) -> str:
+        """The signal name of the JSON outputs (``primary_output`` in lower case)."""
+        return self.primary_output.lower()
+
+    @property
+    def steers(self) -> bool:
+        """The drive turns the steering wheel (a lateral wheel force)."""
+        return not self.needs_road_profile
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return (self.name, *self.aliases)
+
+
+#: the paper's maneuvers, in the paper's order (Table 5): the one registry (docs/architecture.md "Registries")
+MANEUVER_KINDS: dict[str, ManeuverKind] = {k.name: k for k in (
+    ManeuverKind("bump_crossing", ("bump",), "bump_crossing", "PITCH_RATE", "pitch", needs_road_profile=True,
+                 uses_wheelbase=True, window="bump", label="bump_crossing_8kmh", ring_out=True,
+                 sweep_arguments=(("speed", "speed"), ("bump_height", "height"), ("bump_length", "length"))),
+    ManeuverKind("sine_steer", ("sine",), "sine_steer", "ROLL_RATE", "roll", needs_road_profile=False,
+                 uses_wheelbase=False, window="steering", label="sine_steer_50kmh", ring_out=False,
+                 sweep_arguments=(("speed", "speed"), ("steer_amplitude", "amplitude"),
+                                  ("steer_frequency", "frequency"))),
+)}
+MANEUVERS = tuple(MANEUVER_KINDS)
+DEFAULT_MANEUVER = MANEUVERS[0]
+#: every name a maneuver is known by: the aliases first, then the full names
+MANEUVER_CHOICES = tuple(a for k in MANEUVER_KINDS.values() for a in k.aliases) + MANEUVERS
+#: the study parameters that set a maneuver's geometry, in registry order
+MANEUVER_PARAMETERS = tuple(dict.fromkeys(p for k in MANEUVER_KINDS.values() for p, _ in k.sweep_arguments))
+
+
+def maneuver_kind(name: str) -> ManeuverKind:
+    """The registry entry of a maneuver name or alias; :class:`ConfigError` naming the known ones."""
+    for kind in MANEUVER_KINDS.values():
+        if name in kind.names:
+            return kind
+    known = " or ".join(f"{k.name} ({', '.join(k.aliases)})" for k in MANEUVER_KINDS.values())
+    raise ConfigError(f"unknown maneuver {name!r}: expected {known}")
+
+
+def classify_maneuver(text: str | None) -> str | None:
+    """The maneuver a free-text name starts with (any of its names, case-insensitive), or ``None``."""
+    t = (text or "").strip().lower()
+    for kind in MANEUVER_KINDS.values():
+        if any(t.startswith(n) for n in kind.names):
+            return kind.name
+    return None
+
+
 STATES = ("intact", "front_empty", "rear_empty")
 VARIANTS = ("full", "no_horizontal", "no_velocity", "dahl_only")
 #: the paper's name of each variant (Table 5: models 1 to 4)
@@ -22,5 +104,5 @@ IMU_SIGNALS = ("roll_rate", "pitch_rate", "yaw_rate", "accel_x", "accel_y", "acc
 #: the kernel output label of each IMU signal (``model/layout.py`` ``OUTPUT_LABELS``), in the same order
 IMU_OUTPUTS = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE", "AX_SF", "AY_SF", "AZ_SF")
 #: the kernel output label each maneuver is compared on (lower case: the signal name of the JSON outputs)
-PRIMARY_OUTPUT = {"bump_crossing": "PITCH_RATE", "sine_steer": "ROLL_RATE"}
-PRIMARY_SIGNAL = {m: label.lower() for m, label in PRIMARY_OUTPUT.items()}
+PRIMARY_OUTPUT = {m: k.primary_output for m, k in MANEUVER_KINDS.items()}
+PRIMARY_SIGNAL = {m: k.primary_signal for m, k in MANEUVER_KINDS.items()}

@@ -2,7 +2,7 @@
 
 One result type for :func:`~susp_sim_ros.model.simulate` (one vehicle over an input series),
 :func:`~susp_sim_ros.model.simulate_batch` (many vehicles, a leading vehicle axis) and
-:func:`~susp_sim_ros.lockstep.run_lockstep` (a recorded drive through the node's core), with one label
+:func:`~susp_sim_ros.runtime.lockstep.run_lockstep` (a recorded drive through the node's core), with one label
 spelling: the snake_case signal names of the interface (``roll_rate``, ``pitch_rate``, ``yaw_rate``,
 ``accel_x`` .. ``accel_z`` as on ``/imu/data``; the ``/sim/suspension`` quantities per wheel, e.g.
 ``damper_force_rl``). Units are SI (REP-103 axes), one per signal, taken from the kernel's output layout
@@ -93,10 +93,10 @@ class Response:
     ``steps_requested`` integration steps ran (an int, or (B,) for a batch: fewer when the health check
     stopped a run; the rest of its rows are zero); ``state`` the state vector(s) after the last step.
 
-    A lockstep run also fills ``t_ns`` (ROS times of the samples [ns]), ``metadata`` (the recording's
-    ``test_drive`` record), ``healthy``/``diverged`` (the divergence guard), ``rejections`` (inputs the
-    core refused, by topic), ``out_path`` (the simulated MCAP) and ``imu`` (the ``/sim/imu/data`` samples
-    as an :class:`~susp_sim_ros.io.drive.ImuSeries`).
+    ``t_ns``: the ROS times of the samples [ns] when the run follows a recorded drive's clock (a lockstep
+    run, a finder's prediction of a drive), else None. What only a run through the node's core has (the
+    recording's metadata, the divergence guard, refused inputs, the output file, the IMU samples) is in
+    :class:`~susp_sim_ros.runtime.lockstep.LockstepRun`, which holds a Response.
     """
 
     t: np.ndarray
@@ -106,12 +106,6 @@ class Response:
     steps_requested: int = 0
     state: np.ndarray | None = field(default=None, repr=False)
     t_ns: np.ndarray | None = field(default=None, repr=False)
-    metadata: dict[str, str] = field(default_factory=dict)
-    healthy: bool = True
-    diverged: str = ""
-    rejections: dict[str, int] = field(default_factory=dict)
-    out_path: str | None = None
-    imu: Any = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         self.labels = tuple(signal_name(x) for x in self.labels)
@@ -133,10 +127,10 @@ class Response:
 
     @property
     def ok(self) -> bool:
-        """Every vehicle ran all requested steps and the run stayed healthy."""
+        """Every vehicle ran all requested steps (True when the run does not count steps)."""
         if self.steps_done is None:
-            return self.healthy
-        return bool(self.healthy and np.all(np.asarray(self.steps_done) == self.steps_requested))
+            return True
+        return bool(np.all(np.asarray(self.steps_done) == self.steps_requested))
 
     # -- signals -------------------------------------------------------------------------------------
     def __getitem__(self, label: str) -> np.ndarray:

@@ -18,8 +18,9 @@ import numpy as np
 import yaml
 
 from ..errors import ConfigError
+from .layout import N_U, U_INDEX
 from .params import config_dir
-from .vehicle import Model, check_oil
+from .vehicle import Model, check_oil, simulate_batch
 
 AXLE_CORNER = {"front": 0, "rear": 2}  # the left wheel of the axle
 
@@ -211,8 +212,6 @@ def eusama_bench(model: Model, oil=(1.0, 1.0, 1.0, 1.0), wheels=WHEELS,
     time, one wheel after the other). EUSAMA % = minimum total contact force over the sweep / static
     wheel load x 100; phase angle as in :func:`_per_cycle`; resonance = the cycle of largest dynamic
     contact-force amplitude. ``P``: a parameter vector to use instead of ``model.params(oil)``."""
-    from .vehicle import simulate_batch
-    from .layout import N_U, U_INDEX
     oil = check_oil(oil, "--oil")
     pm = eusama_plate_motion() if plate is None else plate
     dt = float(pm.t[1] - pm.t[0])

@@ -24,6 +24,7 @@ from .layout import (DAMPER_GRID, N_GRID, N_U, OUTPUT_LABELS, P_GRID, P_H_EMPTY,
 from .params import CORNER_AXLE, FrictionVariant, VehicleParams, load_variant, load_vehicle
 from .response import Response, selected_labels
 from .road import RoadProfile
+from .semiactive import load_damper_family
 from .terms import AXLE_FRICTION, BUILTIN_TERMS, DAMPER_FRICTION, PhysicsTerm
 from .params import DEFAULT_VEHICLE
 
@@ -57,10 +58,14 @@ def hydraulic_curves(vp: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
             hydraulic_from_measured(vp, vp.damper_velocity, vp.damper_measured_empty, vp.damper_friction_empty))
 
 
-def hydraulic_from_measured(vp: VehicleParams, velocity, measured, levels) -> np.ndarray:
-    """Hydraulic curves per axle on :data:`DAMPER_GRID`, shape (2, N_GRID), from measured curves (front,
-    rear) at ``velocity`` [m/s] that contain the damper friction of ``levels`` [N] (front, rear)."""
-    g = DAMPER_GRID
+def hydraulic_from_measured(vp: VehicleParams, velocity, measured, levels,
+                            grid: np.ndarray | None = None) -> np.ndarray:
+    """Hydraulic curves per axle, shape (2, len(grid)), from measured curves (front, rear) at ``velocity``
+    [m/s] that contain the damper friction of ``levels`` [N] (front, rear), at the damper velocities
+    ``grid`` [m/s] (default :data:`DAMPER_GRID`, the kernel's). The one construction of the hydraulic
+    curve: the measured curve (linear between its points, extrapolated linearly) minus the full model's
+    damper friction level x s_v(|v|), never against the velocity, zero within the reference speed."""
+    g = DAMPER_GRID if grid is None else np.asarray(grid, float)
     sign = np.sign(g)
     fric_shape = velocity_scaling(vp, np.abs(g))
     rows = []
@@ -102,7 +107,6 @@ class Model:
     def dampers(self):
         """The semi-active damper family (loaded on first use)."""
         if self._dampers is None:
-            from .semiactive import load_damper_family
             self._dampers = load_damper_family()
         return self._dampers
 

@@ -1,4 +1,4 @@
-"""The ROS 2 shell around :class:`~susp_sim_ros.sim_core.SimCore` (with ``susp replay`` the only code
+"""The ROS 2 shell around :class:`~susp_sim_ros.runtime.sim_core.SimCore` (with ``susp replay`` the only code
 importing rclpy).
 
 - :mod:`.node`: ``SuspSimNode`` and the ``susp_sim_node`` entry point ``main``;

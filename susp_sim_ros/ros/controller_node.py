@@ -28,9 +28,9 @@ from ..errors import SuspInputError
 from ..io.messages import SUSPENSION_QUANTITIES
 from ..model.params import load_vehicle
 from ..model.semiactive import load_damper_family
-from ..sim_core import DAMPER_COMMAND, SIM_IMU, SIM_SUSPENSION
+from ..runtime.sim_core import DAMPER_COMMAND, SIM_IMU, SIM_SUSPENSION
 from .qos import OUTPUT_QOS as QOS  # the same profile as the simulation's outputs (reliable, depth 50)
-from .run import run_node
+from .run import run_node, usage
 from ..model.params import DEFAULT_VEHICLE
 
 NODE_NAME = "susp_damper_controller"
@@ -39,18 +39,27 @@ _Q = len(SUSPENSION_QUANTITIES)
 _DEFL, _DEFL_VEL = SUSPENSION_QUANTITIES.index("deflection"), SUSPENSION_QUANTITIES.index("deflection_velocity")
 
 
+HELP_SUMMARY = ("Semi-active damper controller: reads /sim/imu and /sim/suspension, publishes "
+                "/vehicle/damper_command (FL, FR, RL, RR in [0, 1]).")
+#: name -> (default, description) of the parameters, for ``--help`` and the descriptors
+PARAMETERS: dict[str, tuple[object, str]] = {
+    "controller": ("skyhook", "damper controller: " + ", ".join(CONTROLLERS)),
+    "sample_time_s": (0.01, "period of the /sim samples [s] (the simulation's publish period)"),
+    "vehicle": (DEFAULT_VEHICLE, "vehicle parameter set (corner geometry)"),
+}
+
+
 class DamperControllerNode(Node):
     def __init__(self, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         # read at start only, so read-only; rclpy checks the range, the strict lower bound is checked here
         period = [FloatingPointRange(from_value=0.0, to_value=MAX_SAMPLE_TIME_S, step=0.0)]
-        self.declare_parameter("controller", "skyhook", ParameterDescriptor(
+        self.declare_parameter("controller", PARAMETERS["controller"][0], ParameterDescriptor(
             description="damper controller", read_only=True, additional_constraints=", ".join(CONTROLLERS)))
-        self.declare_parameter("sample_time_s", 0.01, ParameterDescriptor(
-            description="period of the /sim samples [s] (the simulation's publish period)", read_only=True,
-            floating_point_range=period))
-        self.declare_parameter("vehicle", DEFAULT_VEHICLE, ParameterDescriptor(
-            description="vehicle parameter set (corner geometry)", read_only=True))
+        self.declare_parameter("sample_time_s", PARAMETERS["sample_time_s"][0], ParameterDescriptor(
+            description=PARAMETERS["sample_time_s"][1], read_only=True, floating_point_range=period))
+        self.declare_parameter("vehicle", PARAMETERS["vehicle"][0], ParameterDescriptor(
+            description=PARAMETERS["vehicle"][1], read_only=True))
         name = str(self.get_parameter("controller").value)
         dt = float(self.get_parameter("sample_time_s").value)
         if not (np.isfinite(dt) and 0 < dt <= MAX_SAMPLE_TIME_S):
@@ -89,7 +98,7 @@ class DamperControllerNode(Node):
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``susp_damper_controller [--ros-args ...]``. Exit 0 on SIGINT/SIGTERM, 2 on a
     bad parameter."""
-    return run_node(DamperControllerNode, NODE_NAME, args)
+    return run_node(DamperControllerNode, NODE_NAME, args, help_text=usage(NODE_NAME, HELP_SUMMARY, PARAMETERS))
 
 
 if __name__ == "__main__":

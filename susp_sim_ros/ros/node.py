@@ -1,4 +1,4 @@
-"""``susp_sim_node``: the ROS 2 node, a thin adapter around :class:`~susp_sim_ros.sim_core.SimCore`.
+"""``susp_sim_node``: the ROS 2 node, a thin adapter around :class:`~susp_sim_ros.runtime.sim_core.SimCore`.
 
 Subscribes to the test-drive input topics (interface.md), publishes ``/sim/imu/data``, ``/sim/odom``,
 ``/sim/suspension`` and ``/diagnostics``, optionally records everything to an MCAP file (:mod:`.recording`).
@@ -32,27 +32,28 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 
 from ..io import messages as M
-from ..lockstep import simulated_metadata
+from ..runtime.lockstep import simulated_metadata
 from ..model.vehicle import Model, check_oil
-from ..ride_diagnostics import SemiActiveDiagnostics
-from ..sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, SimCore
+from .ride_diagnostics import SemiActiveDiagnostics
+from ..runtime.sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, Sample, SimCore
 from .conversion import diagnostic_array, fill
-from .inputs import InputCallbacks
-from .parameters import RuntimeChange, RuntimeParameters, declare_parameters, warm_up
+from .inputs import InputHandler
+from .parameters import DEFAULTS, RuntimeChange, RuntimeParameters, declare_parameters, warm_up
 from .qos import OUTPUT_QOS
 from .recording import RecordingQueue, open_recording
-from .run import run_node
-from .status import NODE_NAME, CoreSnapshot, log_stale_changes, node_status
+from .run import run_node, usage
+from .status import NODE_NAME, CoreSnapshot, log_shared_inputs, log_stale_changes, node_status
 from .timing import TickThread, TimingStats, raise_priority
 
 REJECTION_LOG_INTERVAL_S = 10.0
 ERROR_DIAGNOSTIC_GRACE_S = 0.5  # after a divergence, spin this long before exiting so the ERROR is heard [s]
 
 
-class SuspSimNode(InputCallbacks, Node):
+class SuspSimNode(Node):
     """The simulation node (see the module docstring). ``start_thread=False`` leaves wall-time stepping
-    to the caller (:meth:`tick`), for deterministic in-process tests. The ``on_*`` methods are the
-    subscription callbacks ``(message, message info or None)``; tests may call them directly."""
+    to the caller (:meth:`tick`), for deterministic in-process tests. ``inputs`` (:class:`.inputs.InputHandler`)
+    holds the input subscriptions; its ``on_*`` methods are their callbacks ``(message, message info or
+    None)``, which tests may call directly."""
 
     def __init__(self, *, start_thread: bool = True, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
@@ -67,7 +68,7 @@ class SuspSimNode(InputCallbacks, Node):
                             max_time_jump_s=float(p["max_time_jump_s"]))
         self.lock = threading.RLock()
         self.failure = ""  # the last divergence (set when the divergence guard stopped the simulation)
-        self.divergences = self.handler_errors = self.tick_errors = 0
+        self.divergences = self.tick_errors = 0
         self._failure_key: tuple | None = None
         self.rejection_log = RateLimitedLog(lambda text: self.get_logger().warning(text),
                                             REJECTION_LOG_INTERVAL_S)
@@ -85,10 +86,15 @@ class SuspSimNode(InputCallbacks, Node):
         self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
         self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
         self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
-        self._subscribe_inputs(float(p["sim_reorder_window_s"]))
         self.semiactive = SemiActiveDiagnostics(model, self.core.period_ns)
+        self.inputs = InputHandler(self, self.core, self.lock, sim_time=self.sim_time,
+                                   reorder_window_s=float(p["sim_reorder_window_s"]), tick=self.tick,
+                                   step_to=self._step_to, record=self._record, check_failure=self._check_failure,
+                                   command_applied=self.semiactive.command_applied,
+                                   refuse_shared=bool(p["refuse_shared_inputs"]))
         self.parameters = RuntimeParameters(self, lambda: (self.vehicle, self.variant), self._apply_change)
         self._stale: set[str] = set()
+        self.shared_inputs: list[str] = []  # input topics more than one publisher feeds (last diagnostics)
         self._wall0 = time.monotonic()
         self.published = 0
         self._ticker: TickThread | None = None
@@ -111,9 +117,7 @@ class SuspSimNode(InputCallbacks, Node):
     # -- time -----------------------------------------------------------------------------------------
     def now_ns(self) -> int:
         """ROS time [ns]: the last /clock value processed in sim time, else the wall clock."""
-        if self.sim_time:
-            return self._sim_now
-        return self.get_clock().now().nanoseconds
+        return self.inputs.now_ns()
 
     def _start_core(self, t_ns: int) -> None:
         self.core.start(t_ns)
@@ -134,7 +138,14 @@ class SuspSimNode(InputCallbacks, Node):
             self.recorder.write(topic, msgtype, t_ns, data, latched=latched)
 
     # -- stepping and publishing ----------------------------------------------------------------------
-    def _publish_samples(self, samples) -> None:
+    def _step_to(self, t_ns: int) -> None:
+        """Start the core at ``t_ns``, or step it there and publish the samples passed."""
+        if not self.core.started:
+            self._start_core(t_ns)
+        else:
+            self._publish_samples(self.core.advance_to(t_ns, allow_restart=self.sim_time))
+
+    def _publish_samples(self, samples: list[Sample]) -> None:
         if samples:
             self.semiactive.published(samples)
         for s in samples:
@@ -156,10 +167,7 @@ class SuspSimNode(InputCallbacks, Node):
         """Step to ``t_ns`` (default: now) and publish the samples passed; returns how many."""
         with self.lock:
             n0 = self.published
-            if self._wall_inputs:  # wall time: inputs take effect at their arrival instants
-                pending, self._wall_inputs = self._wall_inputs, []
-                for t_in, payload in pending:
-                    self._apply_input(*payload, t=t_in)
+            self.inputs.apply_arrived()  # wall time: inputs take effect at their arrival instants
             t = self.now_ns() if t_ns is None else int(t_ns)
             if not self.core.started:
                 if t > 0:
@@ -202,6 +210,8 @@ class SuspSimNode(InputCallbacks, Node):
         with self.lock:
             snap = CoreSnapshot.of(self.core, t)
         self._stale = log_stale_changes(self.get_logger(), self._stale, snap.stale, self.core.timeout_ns)
+        self.shared_inputs = log_shared_inputs(self.get_logger(), self.shared_inputs, self.inputs.check_publishers(),
+                                               self.inputs.publishers, self.inputs.refuse_shared)
         return node_status(self, snap, time.monotonic() - self._wall0)
 
     def publish_diagnostics(self) -> None:
@@ -235,7 +245,10 @@ def main(args: list[str] | None = None) -> int:
     parameter, 1 when the divergence guard stopped the simulation (``on_divergence: exit``)."""
     return run_node(SuspSimNode, NODE_NAME, args, realtime=True,
                     stop_when=lambda node: bool(node.failure) and node.on_divergence == "exit",
-                    finish=_exit_code)
+                    finish=_exit_code,
+                    help_text=usage(NODE_NAME, "The five-mass vehicle with suspension friction in real time (or sim "
+                                    "time from /clock): inputs /vehicle/*, /road/profile; outputs /sim/*, "
+                                    "/diagnostics.", DEFAULTS))
 
 
 def _exit_code(node: SuspSimNode, spin_for) -> int:

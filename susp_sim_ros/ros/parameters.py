@@ -4,7 +4,7 @@ validation of run-time changes.
 Only :data:`RUNTIME` may change while the node runs; every other parameter is declared read-only, so
 rclpy refuses a change before any callback runs. The ranges rclpy can check (scalars, closed intervals)
 are in the descriptors and checked by rclpy at start and on every change; the strict bounds (a step or a
-rate of 0) are checked by :class:`~susp_sim_ros.sim_core.SimCore` and :func:`check_start_values`, the
+rate of 0) are checked by :class:`~susp_sim_ros.runtime.sim_core.SimCore` and :func:`check_start_values`, the
 per-element range of ``damper_oil_level`` (in its descriptor for ``ros2 param describe``) by
 :func:`~susp_sim_ros.model.vehicle.check_oil` (rclpy checks ranges of scalar parameters only).
 
@@ -45,6 +45,8 @@ DEFAULTS: dict[str, tuple[Any, str]] = {
                               "falls back to normal scheduling when not permitted)"),
     "max_time_jump_s": (10.0, "a jump of ROS time forward by more than this is not stepped through; the "
                               "simulation continues from the new time [s]"),
+    "refuse_shared_inputs": (False, "refuse the messages of an input topic while more than one publisher feeds "
+                                    "it (e.g. another process on the same ROS domain); a warning either way"),
     "on_divergence": ("exit", "when the divergence guard stops the simulation: exit (code 1, after an ERROR "
                               "diagnostic and finalising the recording) or hold (stay up reporting ERROR)"),
 }

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from typing import TypeVar
 
 import rclpy
+from rclpy.utilities import remove_ros_args
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
@@ -25,19 +26,38 @@ N = TypeVar("N", bound=Node)
 SPIN_TIMEOUT_S = 0.1  # the loop checks ``rclpy.ok()`` and ``stop_when`` at least this often [s]
 
 
+def wants_help(args: list[str]) -> bool:
+    """``-h`` or ``--help`` among the arguments outside ``--ros-args ... [--]``."""
+    return any(a in ("-h", "--help") for a in remove_ros_args(args)[1:])
+
+
+def usage(name: str, summary: str, parameters: dict[str, tuple[object, str]]) -> str:
+    """The ``--help`` text of a node: what it is, how to set its parameters, each with default and meaning."""
+    width = max(len(k) for k in parameters)
+    rows = "\n".join(f"  {k:<{width}}  {d}  (default: {v!r})" for k, (v, d) in parameters.items())
+    return (f"usage: {name} [--ros-args -p NAME:=VALUE ...]\n\n{summary}\n\nparameters:\n{rows}\n\n"
+            "Topics, types and units: README.md, 'The node'. Exit codes: 0 on SIGINT/SIGTERM, 2 on a bad parameter.")
+
+
 def run_node(make_node: Callable[[], N], name: str, args: list[str] | None = None, *, realtime: bool = False,
              stop_when: Callable[[N], bool] = lambda node: False,
-             finish: Callable[[N, Callable[[float], None]], int] = lambda node, spin_for: 0) -> int:
+             finish: Callable[[N, Callable[[float], None]], int] = lambda node, spin_for: 0,
+             help_text: str = "") -> int:
     """Run the node ``make_node()`` (``name`` in error messages) with the command line ``args`` (default
     ``sys.argv``) until SIGINT/SIGTERM or ``stop_when(node)``; then return ``finish(node, spin_for)``
     (``spin_for(seconds)`` keeps the node spinning a little longer, e.g. so a last message reaches its
     subscribers). Returns 0 on SIGINT/SIGTERM, 2 when the node refuses a parameter (message on stderr).
 
     ``realtime``: a shorter interpreter switch interval (:data:`.timing.SWITCH_INTERVAL_S`) and the
-    start-up objects frozen out of the garbage collector's way (shorter pauses in real time)."""
+    start-up objects frozen out of the garbage collector's way (shorter pauses in real time).
+    ``help_text``: printed (exit 0, no node started) for ``-h``/``--help`` outside ``--ros-args``."""
+    argv = list(args if args is not None else sys.argv)
+    if wants_help(argv):
+        print(help_text or f"usage: {name} [--ros-args -p NAME:=VALUE ...]")
+        return 0
     if realtime:
         sys.setswitchinterval(SWITCH_INTERVAL_S)
-    rclpy.init(args=args if args is not None else sys.argv)
+    rclpy.init(args=argv)
     node = None
     try:
         node = make_node()

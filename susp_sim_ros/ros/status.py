@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ..sim_core import SimCore
+from ..runtime.sim_core import SimCore
 
 NODE_NAME = "susp_sim_node"
 
@@ -43,14 +43,19 @@ def node_status(node: Any, snap: CoreSnapshot, wall_s: float) -> list[dict]:
     rtf = snap.sim_s / wall_s if wall_s > 0 and snap.started else 0.0
     tm = node.timing.summary()
     rec = node.recorder
-    inputs = {"level": 1 if stale else 0, "name": f"{NODE_NAME}: inputs",
-              "message": ("stale: " + ", ".join(stale)) if stale else
-                         ("waiting for inputs" if not snap.started else "fresh"),
-              "values": {"stale": ",".join(stale), "rejected_total": sum(rej.values()),
-                         "queued_sim_events": len(node.orderer),
+    shared = node.shared_inputs
+    message = ("stale: " + ", ".join(stale)) if stale else ("waiting for inputs" if not snap.started else "fresh")
+    if shared:
+        message += "; more than one publisher: " + ", ".join(shared) + (
+            " (refused)" if node.inputs.refuse_shared else "")
+    inputs = {"level": 1 if stale or shared else 0, "name": f"{NODE_NAME}: inputs", "message": message,
+              "values": {"stale": ",".join(stale), "shared_inputs": ",".join(shared),
+                         "publishers": ",".join(f"{t}={n}" for t, n in sorted(node.inputs.publishers.items())),
+                         "rejected_total": sum(rej.values()),
+                         "queued_sim_events": len(node.inputs.orderer),
                          **{f"rejected_{k}": v for k, v in rej.items()}, "rejected_by_topic": snap.by_topic,
                          "last_rejection": snap.last_rejection, "accel_clamped": snap.accel_clamped,
-                         "time_jumps": snap.time_jumps, "handler_errors": node.handler_errors}}
+                         "time_jumps": snap.time_jumps, "handler_errors": node.inputs.handler_errors}}
     timing = {"level": 1 if tm["deadline_misses"] else 0, "name": f"{NODE_NAME}: timing",
               "message": f"real-time factor {rtf:.3f}, {tm['deadline_misses']} deadline misses",
               "values": {"real_time_factor": f"{rtf:.6f}", "sim_time_s": f"{snap.sim_s:.6f}",
@@ -84,3 +89,17 @@ def log_stale_changes(logger: Any, before: set[str], stale: list[str], timeout_n
     for topic in before - set(stale):
         logger.info(f"input {topic} is fresh again")
     return set(stale)
+
+
+def log_shared_inputs(logger: Any, before: list[str], shared: list[str], counts: dict[str, int],
+                      refused: bool) -> list[str]:
+    """Warn about the input topics that more than one publisher now feeds (info when one is alone again)
+    since ``before``; returns the shared topics now."""
+    for topic in sorted(set(shared) - set(before)):
+        logger.warning(f"input {topic} has {counts.get(topic, 0)} publishers: the node follows all of them "
+                       + ("and refuses their messages (refuse_shared_inputs)" if refused else
+                          "(set refuse_shared_inputs:=true to refuse them; keep discovery local with "
+                          "ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST or use your own ROS_DOMAIN_ID)"))
+    for topic in sorted(set(before) - set(shared)):
+        logger.info(f"input {topic} has one publisher again")
+    return shared

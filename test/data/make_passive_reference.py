@@ -6,7 +6,7 @@ import sys
 from susp_sim_ros.model import Model
 from susp_sim_ros.model.maneuvers import paper_maneuver, vehicle_state
 from susp_sim_ros.model.vehicle import simulate
-from susp_sim_ros.lockstep import maneuver_drive, run_lockstep
+from susp_sim_ros.runtime.lockstep import maneuver_drive, run_lockstep
 COLS = ["ROLL_RATE","PITCH_RATE","YAW_RATE","AX_SF","AY_SF","AZ_SF","DEFL_FL","DEFL_FR","DEFL_RL","DEFL_RR",
         "F_DAMPER_FL","F_DAMPER_FR","F_DAMPER_RL","F_DAMPER_RR","F_FRICTION_FL","F_FRICTION_RR","F_Z_FL","F_Z_RR"]
 m = Model("passat_b8_like", "full")

@@ -42,8 +42,9 @@ from typing import Any
 import numpy as np
 
 from ...model import Model
+from ...model.layout import P_INDEX
 from ...model.params import AXLES, FrictionVariant, VehicleParams
-from .candidates import CALIBRATION, CandParam, Candidate
+from .candidates import CALIBRATION, CandParam, Candidate, neutral_base
 
 INFORMED_SHRINK = 0.5   # posterior sd / prior sd at most this: informed
 INFORMED_EIGEN = 3.0    # data information above 3x the prior's along a direction: informed combination
@@ -194,8 +195,6 @@ def calibration_candidate(model: Model, params: Sequence[CalParam]) -> Candidate
     """The calibration as one candidate of the fitting machinery: its ``apply`` rebuilds each drive's
     parameter row from the vehicle at the calibrated values (the model's own path from a vehicle to the
     kernel's parameter vector), keeping the row's oil levels and the extended model's terms."""
-    from ...model.layout import P_INDEX
-    from .candidates import neutral_base
     vp0 = model.vehicle
     cache: dict[bytes, Model] = {}
 

@@ -18,10 +18,12 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...errors import RecordingError, SuspInputError
-from ...io.drive import TestDrive
+from ...io.drive import TestDrive, read_drive
+from ...io.integrity import require_live_imu
 from ...model.layout import N_U, U_INDEX
 from ...model.paper import IMU_OUTPUTS, IMU_SIGNALS
 from ...model.road import RoadProfile
+from ...runtime.sim_core import accel_between
 from .. import validation as va
 from ..validation_study import classify_maneuver, classify_state
 
@@ -99,10 +101,9 @@ def _linear(t_msg_ns: np.ndarray, values: np.ndarray, t0_ns: int, n_steps: int, 
 
 def speed_accelerations(t_ns, v) -> np.ndarray:
     """Longitudinal acceleration [m/s^2] in effect after each speed message, by the node's rule
-    (:func:`~susp_sim_ros.sim_core.accel_between`, as :meth:`~susp_sim_ros.sim_core.SimCore.set_speed`):
+    (:func:`~susp_sim_ros.runtime.sim_core.accel_between`, as :meth:`~susp_sim_ros.runtime.sim_core.SimCore.set_speed`):
     a message at the same time as the previous one (or earlier) changes the speed but keeps the
     acceleration; 0 before the second message."""
-    from ...sim_core import accel_between
     t = np.asarray(t_ns, np.int64)
     v = np.asarray(v, float)
     acc = np.zeros(len(v))
@@ -219,7 +220,6 @@ def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.0
                topic_map=None) -> list[DriveCase]:
     """Read and prepare drives (through ``topic_map``, see :mod:`susp_sim_ros.io.topic_map`, if given);
     :class:`SuspInputError` naming the file on unreadable input."""
-    from ...io.drive import read_drive
     if not paths:
         raise SuspInputError("give at least one recorded test drive (MCAP)")
     cases: list[DriveCase] = []
@@ -228,7 +228,9 @@ def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.0
         p = Path(p)
         if not p.exists():  # a file, or a rosbag2 directory
             raise SuspInputError(f"{p}: no such file")
-        case = prepare_case(p, read_drive(p, topic_map=topic_map), wheelbase=wheelbase, dt=dt)
+        drive = read_drive(p, topic_map=topic_map)
+        require_live_imu(drive, p, "the discrepancy finder and the inspection")  # io/integrity.py
+        case = prepare_case(p, drive, wheelbase=wheelbase, dt=dt)
         if case.name in names:
             case.name = f"{case.name}_{len(names)}"
         names.add(case.name)

@@ -37,9 +37,11 @@ import numpy as np
 from ...errors import SuspInputError
 from ...model import Model, load_variant, load_vehicle
 from ...model.layout import U_INDEX
+from ...model.paper import MANEUVER_KINDS
 from ...model.response import Response
 from ...model.params import TermSetting
 from ...model.terms import get_term
+from ...progress import progress
 from .calibration import (STEP_OF_SD, CalParam, calibration_candidate, calibration_entries, calibration_params,
                           consider_covariance, consider_params, identifiability,
                           vehicle_at)
@@ -49,6 +51,7 @@ from .data import SIGNAL_UNIT, as_cases
 from .engine import Evaluator, Structure
 from .fit import FitResult, debias, fit_structure, prior_rows, raw_residuals, screen
 from .locate import base_outputs, locate, noise_floor
+from .report import interface_json
 from .road_estimate import GYRO_VERTICAL, estimate_road, road_usability
 from .unmeasured import detect_unmeasured_road
 
@@ -118,7 +121,8 @@ class DiscrepancyFinder:
     def _testable(self, cases: Sequence[DriveCase], base_variant) -> tuple[list[str], list[dict], list[str]]:
         """Candidates to test; the not-identifiable ones with the maneuver that would reveal them; the
         ones already in the base model."""
-        lateral = any(c.maneuver == "sine_steer" for c in cases) or _steers(cases)
+        lateral = any(c.maneuver in MANEUVER_KINDS and MANEUVER_KINDS[c.maneuver].steers for c in cases) \
+            or _steers(cases)
         bump = any(c.road is not None and len(c.road) >= 2 for c in cases) or \
             any(np.any(c.U[:, 3:7] != 0) for c in cases)
         in_base, out, skip = [], [], []
@@ -152,7 +156,6 @@ class DiscrepancyFinder:
         drives = as_cases(drives, wheelbase=vp.wheelbase)
         bar = None
         if self.progress:
-            from ...progress import progress
             bar = progress(desc="diagnose: vehicle runs", unit="run", leave=False)
         try:
             self._fit(drives, bar)
@@ -173,22 +176,7 @@ class DiscrepancyFinder:
         ev = Evaluator(model, cases, progress=bar)
         self.cases_, self.evaluator_ = cases, ev
         allidx = tuple(range(len(cases)))
-        # 1. base run, quiet lead-ins, noise floors per signal
-        sims = ev.simulate(Structure([]), np.zeros((1, 0)), to_end=True)[0]
-        for r, c in enumerate(cases):
-            mark_quiet(c, sims[r][:, :3])
-        self.noise_ = noise_floor(cases, list(sims))
-        # 2. which signals each drive excites; unmeasured road input
-        self.estimated_roads_: dict = {}
-        self.unmeasured_ = self._choose_signals(ev, sims)
-        sigmas = [self._case_sigma(c) for c in cases]
-        ev.set_noise(sigmas)
-        self.noise_floor_ = self.noise_["noise_floor_deg_s"]
-        base_res = [ev.case_residual(r, sims[r], 0.0, False) for r in allidx]
-        self.base_residuals_ = base_res
-        outs = [base_outputs(model, c, ev.Pn[r]) for r, c in enumerate(cases)]
-        self.base_outputs_ = outs
-        self.windows_ = locate(cases, base_res, sigmas, outs)
+        self._base_run(ev, model, cases)
         testable, skipped, in_base = self._testable(cases, self.base_variant_)
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
         base_fit = fit_structure(ev, Structure([]))
@@ -211,46 +199,13 @@ class DiscrepancyFinder:
             opts = screen(ev, cur, remaining, pairs=True, heldout=ranking is None)
             if ranking is None:
                 ranking = [o for o in opts if len(o.add) == 1]
-                # masked: a typical parameter change moves the residual by less than a tenth of the noise
-                for o in ranking:
-                    if o.excitation_rms < 0.1:
-                        c = BY_NAME[o.add[0]]
-                        skipped.append({"name": c.name, "reveal_with": c.reveal_with,
-                                        "why": f"masked in these drives: a typical change moves the signals by "
-                                               f"{o.excitation_rms:.3f} x their noise RMS, under a tenth"})
-                        testable.remove(c.name)
+                _skip_masked(ranking, testable, skipped)
                 remaining = [c for c in testable if c not in cur.structure.names]
                 opts = [o for o in opts if all(a in remaining for a in o.add)]
                 if not opts:
                     break
             excess = max(cur.rss - n, 1e-12)
-            best, best_fit, ok, checks = None, None, False, {}
-            for size in (1, 2):  # singles first; a pair only when no single term alone passes
-                trials = []
-                for o in [o for o in opts if len(o.add) == size][:TRIALS]:
-                    st = cur.structure.with_(*o.add)
-                    trials.append((o, fit_structure(ev, st, _warm(st, cur, o), allidx, max_nfev=TRIAL_NFEV)))
-                # every trial in BIC order until one passes: the best-BIC term failing its held-out test
-                # must not hide a runner-up that passes
-                for o, f in sorted(trials, key=lambda t: t[1].bic):
-                    if best_fit is None or f.bic < best_fit.bic:
-                        best, best_fit = o, f
-                    ok = (cur.bic - f.bic) >= MIN_DELTA_BIC and cur.rss - f.rss >= MIN_EXPLAINED * excess
-                    if ok:
-                        checks = self._heldout_check(ev, cur, f)
-                        ok = checks["passed"]
-                    if ok:
-                        recal = recalibrations.get(step)
-                        if recal is None:
-                            recal = recalibrations[step] = self._recalibrate(ev, cur)
-                        checks["recalibration_rss"] = recal.rss
-                        ok = f.rss < recal.rss
-                    if ok:
-                        best, best_fit = o, f
-                        break
-                if ok:
-                    break
-            assert best is not None and best_fit is not None  # opts is not empty: a trial was fitted
+            best, best_fit, ok, checks = self._first_passing(ev, cur, opts, recalibrations, step)
             gain = cur.rss - best_fit.rss
             per_before = self._per_drive_rmse(ev, cur)
             per_after = self._per_drive_rmse(ev, best_fit)
@@ -285,6 +240,63 @@ class DiscrepancyFinder:
         self.jackknife_se_ = _jackknife_se(self.heldout_, len(cur.x))
         self._set_calibration(cur)
         return self
+
+    def _base_run(self, ev: Evaluator, model, cases: list[DriveCase]) -> None:
+        """Stages 1-2: the base model's run, quiet lead-ins and noise floors per signal; which signals
+        each drive excites (and unmeasured road input); the base residuals and the windows above noise."""
+        allidx = tuple(range(len(cases)))
+        sims = ev.simulate(Structure([]), np.zeros((1, 0)), to_end=True)[0]
+        for r, c in enumerate(cases):
+            mark_quiet(c, sims[r][:, :3])
+        self.noise_ = noise_floor(cases, list(sims))
+        self.estimated_roads_: dict = {}
+        self.unmeasured_ = self._choose_signals(ev, sims)
+        sigmas = [self._case_sigma(c) for c in cases]
+        ev.set_noise(sigmas)
+        self.noise_floor_ = self.noise_["noise_floor_deg_s"]
+        base_res = [ev.case_residual(r, sims[r], 0.0, False) for r in allidx]
+        self.base_residuals_ = base_res
+        outs = [base_outputs(model, c, ev.Pn[r]) for r, c in enumerate(cases)]
+        self.base_outputs_ = outs
+        self.windows_ = locate(cases, base_res, sigmas, outs)
+
+    def _recalibration(self, ev: Evaluator, cur: FitResult, cache: dict[int, FitResult], step: int) -> FitResult:
+        """Every ranged value refitted within its prior at this step (once per step)."""
+        if step not in cache:
+            cache[step] = self._recalibrate(ev, cur)
+        return cache[step]
+
+    def _first_passing(self, ev: Evaluator, cur: FitResult, opts: list, recalibrations: dict[int, FitResult],
+                       step: int):
+        """Fit the best-screened candidates (singles first; a pair only when no single term alone
+        passes) and return ``(option, fit, passed, checks)`` of the first that passes every test: BIC,
+        share of the excess, held-out, and better than recalibrating the known physics alone
+        (:meth:`_recalibration` of this ``step``); else the best-BIC trial with ``passed`` False."""
+        allidx = tuple(range(len(ev.cases)))
+        excess = max(cur.rss - cur.n, 1e-12)
+        best, best_fit, ok, checks = None, None, False, {}
+        for size in (1, 2):
+            trials = []
+            for o in [o for o in opts if len(o.add) == size][:TRIALS]:
+                st = cur.structure.with_(*o.add)
+                trials.append((o, fit_structure(ev, st, _warm(st, cur, o), allidx, max_nfev=TRIAL_NFEV)))
+            # every trial in BIC order until one passes: the best-BIC term failing its held-out test
+            # must not hide a runner-up that passes
+            for o, f in sorted(trials, key=lambda t: t[1].bic):
+                if best_fit is None or f.bic < best_fit.bic:
+                    best, best_fit = o, f
+                ok = (cur.bic - f.bic) >= MIN_DELTA_BIC and cur.rss - f.rss >= MIN_EXPLAINED * excess
+                if ok:
+                    checks = self._heldout_check(ev, cur, f)
+                    ok = checks["passed"]
+                if ok:
+                    recal = self._recalibration(ev, cur, recalibrations, step)
+                    checks["recalibration_rss"] = recal.rss
+                    ok = f.rss < recal.rss
+                if ok:
+                    return o, f, True, checks
+        assert best is not None and best_fit is not None  # opts is not empty: a trial was fitted
+        return best, best_fit, False, checks
 
     def _backward(self, ev: Evaluator, cur: FitResult, path: list, accepted: list) -> FitResult:
         """Backward elimination after the forward steps: an accepted physics term that a later one made
@@ -750,7 +762,6 @@ class DiscrepancyFinder:
 
     def report(self) -> dict:
         """The interface JSON (``susp diagnose --json``)."""
-        from .report import interface_json
         self._check_fitted()
         return interface_json(self)
 
@@ -869,8 +880,20 @@ def _whitened(ev: Evaluator, st: Structure, x: np.ndarray, r: int) -> float:
     return float(np.sum(e * e))
 
 
+def _skip_masked(ranking: list, testable: list[str], skipped: list[dict]) -> None:
+    """Candidates a typical parameter change moves by less than a tenth of the noise are masked in
+    these drives: moved from ``testable`` to ``skipped`` with the reason."""
+    for o in ranking:
+        if o.excitation_rms < 0.1:
+            c = BY_NAME[o.add[0]]
+            skipped.append({"name": c.name, "reveal_with": c.reveal_with,
+                            "why": f"masked in these drives: a typical change moves the signals by "
+                                   f"{o.excitation_rms:.3f} x their noise RMS, under a tenth"})
+            testable.remove(c.name)
+
+
 def _signals_response(c: DriveCase, y: np.ndarray) -> Response:
     """IMU signals ``y`` (n_grid, n_sig; rates [deg/s], specific forces [m/s^2]) of drive ``c`` at its
     comparison times as a :class:`Response` in SI units."""
     to_si = np.array([math.radians(1.0) if SIGNAL_UNIT[a] == "deg/s" else 1.0 for a in c.axes])
-    return Response(c.t_grid_s, y * to_si, c.signals, t_ns=c.grid_ns, metadata=dict(c.metadata))
+    return Response(c.t_grid_s, y * to_si, c.signals, t_ns=c.grid_ns)

@@ -2,12 +2,17 @@
 from __future__ import annotations
 
 import math
+import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 
+from ...io.drive import write_drive
+from ...model.layout import DAMPER_GRID
+from ...model.params import PARAMETER_TABLE, load_vehicle
+from ...model.vehicle import hydraulic_curves, hydraulic_from_measured, velocity_scaling
 from .calibration import outside_statement
 from .candidates import BY_NAME, LIBRARY, MEASUREMENT, PHYSICS, axle_map
 from .data import SIGNAL_UNIT, SIGNALS
@@ -244,7 +249,6 @@ def model_files(f, name: str) -> tuple[dict, dict | None]:
     vp = getattr(f, "calibrated_vehicle_", f.model_.vehicle)
     src = Path(vp.source_file) if vp.source_file else None
     veh_changes: dict[tuple[str, str], Any] = {}
-    from ...model.params import PARAMETER_TABLE
     for fld, sec, key, shape, _ in PARAMETER_TABLE:  # the calibration's informed values
         if fld in getattr(f, "calibrated_fields_", ()):
             val = getattr(vp, fld)
@@ -294,14 +298,10 @@ def _keep_hydraulic_curves(data: dict, vp, name: str) -> None:
     grid, so the derived curve is the base one at every grid point (the model interpolates the table
     linearly, the friction is not linear in v), up to rounding.
     """
-    from ...model.layout import DAMPER_GRID
-    from ...model.params import load_vehicle
-    from ...model.vehicle import hydraulic_curves
-
     new = _with_written_friction(data, vp)
     vel = np.union1d(np.asarray(vp.damper_velocity, float), DAMPER_GRID)
     h_old = _hydraulic_at(vp, vel)
-    fric_new = _friction_at(new, vel)
+    fric_new = velocity_scaling(new, np.abs(vel))  # s_v(|v|) of the fitted friction, as the model subtracts it
     tables = {}
     for key, h, levels in (("measured_intact", h_old[0], new.damper_friction_intact),
                            ("measured_empty", h_old[1], new.damper_friction_empty)):
@@ -316,7 +316,6 @@ def _keep_hydraulic_curves(data: dict, vp, name: str) -> None:
         d[key]["source"] = (f"written by susp diagnose ({name}): hydraulic curve of {vp.name} (unchanged, as "
                             f"fitted) plus the fitted damper friction level x s_v(|v|)")
     # the written tables must give back the base hydraulic curves on the grid (the fitted model)
-    import tempfile
     with tempfile.TemporaryDirectory() as tmp:
         p = Path(tmp) / "vehicle.yaml"
         p.write_text(yaml.safe_dump(data, sort_keys=False))
@@ -327,28 +326,12 @@ def _keep_hydraulic_curves(data: dict, vp, name: str) -> None:
                                f"hydraulic curves (max diff {np.max(np.abs(a - b)):.3g} N)")
 
 
-def _friction_at(vp, v: np.ndarray) -> np.ndarray:
-    """The full model's damper-friction shape s_v(|v|) (as the model subtracts it), zero inside the
-    1 mm/s reference."""
-    from ...model.vehicle import velocity_scaling
-    return velocity_scaling(vp, np.abs(v))
-
-
 def _hydraulic_at(vp, v: np.ndarray) -> np.ndarray:
-    """Hydraulic curves (intact, empty) x (front, rear) at velocities ``v``, exactly as
-    :func:`susp_sim_ros.model.vehicle.hydraulic_curves` derives them on its grid."""
-    from ...model.vehicle import _extrap_interp
-    sign = np.sign(v)
-    shape = _friction_at(vp, v)
-    out = np.zeros((2, 2, len(v)))
-    for k, (measured, levels) in enumerate(((vp.damper_measured_intact, vp.damper_friction_intact),
-                                            (vp.damper_measured_empty, vp.damper_friction_empty))):
-        for a in range(2):
-            h = _extrap_interp(v, vp.damper_velocity, measured[a]) - sign * levels[a] * shape
-            h = sign * np.maximum(sign * h, 0.0)
-            h[np.abs(v) <= vp.sv_reference] = 0.0
-            out[k, a] = h
-    return out
+    """Hydraulic curves (intact, empty) x (front, rear) at velocities ``v``, by the model's own
+    construction (:func:`susp_sim_ros.model.vehicle.hydraulic_from_measured`)."""
+    return np.stack([hydraulic_from_measured(vp, vp.damper_velocity, measured, levels, grid=v)
+                     for measured, levels in ((vp.damper_measured_intact, vp.damper_friction_intact),
+                                              (vp.damper_measured_empty, vp.damper_friction_empty))])
 
 
 def _with_written_friction(data: dict, vp):
@@ -414,7 +397,6 @@ def write_estimated_roads(f, out: Path, name: str) -> list[str]:
     (``susp validate``, ``susp diagnose``). Drives read from files only (the recording is copied, not
     rebuilt)."""
     import dataclasses
-    from ...io.drive import write_drive
     written = []
     for c in f.cases_:
         road = getattr(f, "estimated_roads_", {}).get(c.name)
@@ -478,9 +460,11 @@ def plot_overlays(f, out: Path, name: str) -> list[str]:
     return paths
 
 
-def markdown(f, rep: dict, paths: dict, name: str) -> str:
+def _md_header(f, rep: dict, paths: dict, name: str) -> list[str]:
+    """The title, the verdict and its reason, the noise floors."""
+    L: list[str] = []
     v, why = verdict(f)
-    L = [f"# Discrepancy diagnosis `{name}`", "",
+    L += [f"# Discrepancy diagnosis `{name}`", "",
          f"Base model: vehicle `{f.model_.vehicle.name}`, variant `{getattr(f.base_variant_, 'name', f.variant)}`; "
          f"{len(f.cases_)} drives. Rates in deg/s.", "",
          f"**Verdict: {v}** - {why}.", "",
@@ -488,6 +472,12 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
          f"(quiet lead-in cross-check {f.noise_['quiet_lead_in_pooled_deg_s'] or float('nan'):.4f} deg/s). "
          "Per signal: " + ", ".join(f"{k} {v:.4g} {f.noise_['units'][k]}" for k, v in f.noise_["noise_floors"].items())
          + ".", ""]
+    return L
+
+
+def _md_calibration(f, rep: dict, paths: dict, name: str) -> list[str]:
+    """The calibration table, values outside their priors, identifiability."""
+    L: list[str] = []
     L += ["## Calibration of the base model", "",
           "Re-estimated within the documented priors (maximum a posteriori over all drives); not missing "
           "physics. Not informed = the drives do not determine it: it stays at its prior.", "",
@@ -513,6 +503,12 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
     if ident and ident.get("combinations"):
         L += ["", "Informed only as combinations (weights of one informed direction):"]
         L += ["- " + ", ".join(f"{k} {w:+.2f}" for k, w in c["weights"].items()) for c in ident["combinations"]]
+    return L
+
+
+def _md_unmeasured(f, rep: dict, paths: dict, name: str) -> list[str]:
+    """Unmeasured inputs and the road estimated from the body motion."""
+    L: list[str] = []
     for u in getattr(f, "unmeasured_", []):
         L += ["", f"**Unmeasured input:** {u['statement']}."]
         re_ = u.get("road_estimate")
@@ -529,6 +525,12 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
                 L.append(f"Cross-check, estimated from {', '.join(cc['estimated_from'])} only: " + ", ".join(
                     f"{s} {cc['rmse_flat_road'][s]:.3g} -> {v:.3g}" for s, v in cc["rmse_estimated_road"].items())
                          + " (a signal the estimate never saw).")
+    return L
+
+
+def _md_findings(f, rep: dict, paths: dict, name: str) -> list[str]:
+    """The named terms and what could not be identified."""
+    L: list[str] = []
     L += ["", "## Findings (missing physics)", ""]
     for t in rep["terms"]:
         L.append(f"- **{t['name']}** ({t['where']}): {t['evidence'].get('statement', '')}.")
@@ -541,6 +543,12 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
     L += [f"- {s['name']}: {s['why']}; reveal with {s['reveal_with']}" for s in f.skipped_] or ["- none"]
     if f.in_base_:
         L += ["", f"Already in the base model (not tested): {', '.join(f.in_base_)}."]
+    return L
+
+
+def _md_heldout(f, rep: dict, paths: dict, name: str) -> list[str]:
+    """Held-out RMSE per signal and per drive."""
+    L: list[str] = []
     L += ["", "## Held-out (leave-one-drive-out) RMSE per signal", "",
           "Before: the base model as given; after: calibration and found terms refitted without the drive.", "",
           "| signal | unit | noise floor | before | after |", "|---|---|---|---|---|"]
@@ -551,6 +559,12 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
     for fo in (f.heldout_ or {}).get("folds", []):
         L.append(f"| {fo['drive']} | {fo['rmse_before_deg_s']:.4f} | {fo['rmse_after_deg_s']:.4f} |")
     L.append(f"| **pooled** | **{rep['heldout_rmse_before_deg_s']:.4f}** | **{rep['heldout_rmse_after_deg_s']:.4f}** |")
+    return L
+
+
+def _md_selection(f, rep: dict, paths: dict, name: str) -> list[str]:
+    """The selection path, the ranking of single candidates, the residual windows."""
+    L: list[str] = []
     L += ["", "## Selection on the calibrated model (forward, then backward)", "",
           "| step | added | RMS in-sample [x noise] | delta BIC | explained of excess | held-out gain | "
           "selected in refits | accepted |", "|---|---|---|---|---|---|---|---|"]
@@ -577,6 +591,12 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
         L.append(f"| {w['drive']} | {w['signal']} | {w['start_s']:.2f} | {w['end_s']:.2f} | "
                  f"{w['rms']:.3g} {w['unit']} | "
                  f"{w['ratio_to_noise']:.1f} | {w['dominant_frequency_hz']:.1f} | {w.get('axle', '-')} |")
+    return L
+
+
+def _md_files(f, rep: dict, paths: dict, name: str) -> list[str]:
+    """The files written, how to run the fitted model, the plots."""
+    L: list[str] = []
     L += ["", "## Files", ""] + [f"- {k}: `{v}`" for k, v in paths.items() if isinstance(v, str)]
     if "variant" in paths:
         run = f"susp_sim_node --ros-args -p friction_variant:={Path(paths['variant']).resolve()}"
@@ -586,6 +606,15 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
               f"```\n{run}\n```"]
     for p in paths.get("plots", []):
         L.append(f"![{Path(p).stem}]({Path(p).name})")
+    return L
+
+
+def markdown(f, rep: dict, paths: dict, name: str) -> str:
+    """The diagnosis as Markdown (``report.md``), section by section."""
+    L: list[str] = []
+    for section in (_md_header, _md_calibration, _md_unmeasured, _md_findings, _md_heldout, _md_selection,
+                    _md_files):
+        L += section(f, rep, paths, name)
     return "\n".join(L) + "\n"
 
 

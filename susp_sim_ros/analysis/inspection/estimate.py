@@ -32,14 +32,14 @@ import yaml
 
 from ...errors import ConfigError, SuspInputError
 from ...model import Model
-from ...model.layout import P_INDEX
+from ...model.layout import P_INDEX, U_INDEX
 from ...model.params import CORNER_NAMES, config_dir, load_vehicle
 from ...model.road import RoadProfile
 from ..discrepancy.calibration import calibration_candidate, calibration_params
 from ..discrepancy.candidates import CALIBRATION, CandParam, Candidate
 from ..discrepancy.data import SIGNALS, DriveCase, load_cases, mark_quiet, select_signals
 from ..discrepancy.engine import Evaluator, Structure
-from ..discrepancy.fit import FitResult, fd_jacobian, fit_structure, n_effective
+from ..discrepancy.fit import FitResult, debias, fd_jacobian, fit_structure, n_effective
 from ..discrepancy.locate import noise_sigma
 from ...model.params import DEFAULT_VEHICLE
 
@@ -192,7 +192,6 @@ def _information(ev: Evaluator, st: Structure, x: np.ndarray) -> np.ndarray:
     """Posterior covariance of ``st``'s parameters from the linearisation at ``x`` (data at their
     effective sample size, as :meth:`FitResult.covariance`, plus the priors)."""
     idx = tuple(range(len(ev.cases)))
-    from ..discrepancy.fit import debias
     r, J = fd_jacobian(ev, st, x, idx)
     if st.bias:
         J = debias(ev, J, idx)
@@ -205,7 +204,6 @@ def _information(ev: Evaluator, st: Structure, x: np.ndarray) -> np.ndarray:
 
 def _tracks_differ(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
     """Whether any drive's road differs between the left and right tracks by more than ``tol_m``."""
-    from ...model.layout import U_INDEX
     for c in cases:
         road = c.road
         if isinstance(road, RoadProfile) and len(road) >= 2 and np.max(
@@ -219,7 +217,6 @@ def _tracks_differ(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
 
 def _road_excites(cases: Sequence[DriveCase], tol_m: float = 1e-3) -> bool:
     """Whether any drive's road (profile or wheel heights) leaves the flat by more than ``tol_m``."""
-    from ...model.layout import U_INDEX
     for c in cases:
         road = c.road
         if isinstance(road, RoadProfile) and len(road) >= 2 and np.max(
@@ -356,7 +353,6 @@ def oil_consider_covariance(ev: Evaluator, fit: FitResult, cal, consider) -> np.
     sensitivity ``S = -H^-1 (w J_a^T J_c)`` of the weighted least-squares estimate to them (Schmidt's
     consider covariance), from one forward-difference Jacobian at the fitted values. ``fit``'s structure
     is [calibration of ``cal``, oil levels, sensor bias]."""
-    from ..discrepancy.fit import debias
     k_cal, n_c = len(cal), len(consider)
     ext = Structure([calibration_candidate(ev.model, list(cal) + list(consider))] + list(fit.structure.cands[1:]))
     x = np.concatenate([fit.x[:k_cal], [p.prior for p in consider], fit.x[k_cal:]])
@@ -387,7 +383,6 @@ def one_step_estimate(ev: Evaluator, cal, cfg: dict) -> tuple[np.ndarray, np.nda
     (noise-only, without the model-form term). Near intact it is the full fit's first iterate; far from
     it (an empty damper) the step overshoots or stops short, but in the same direction, so it ranks cars
     as the full estimate does (test_inspection_roc checks both)."""
-    from ..discrepancy.fit import debias
     est = cfg["estimator"]
     groups = [(w, (i,)) for i, w in enumerate(CORNER_NAMES)]
     st = Structure([calibration_candidate(ev.model, cal), oil_candidate(groups, est["oil_prior_sd"]), "sensor_bias"])

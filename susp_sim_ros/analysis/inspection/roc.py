@@ -30,15 +30,23 @@ sensitivity at 95 % specificity per method, for one damper oil-empty (the ``roc`
 from __future__ import annotations
 
 import csv
+import importlib
 import math
+import sys
 from pathlib import Path
 from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from ...errors import ConfigError
+from ...io.drive import ImuSeries, Series, TestDrive
+from ...model import Model, simulate
+from ...model.maneuvers import bump_crossing
 from ...model.paper import IMU_OUTPUTS
-from ...model.params import DEFAULT_VEHICLE
+from ...model.params import DEFAULT_VEHICLE, load_variant, load_vehicle
+from ...model.rigs import eusama_bench, eusama_plate_motion
+from ..discrepancy.data import prepare_case
+from .estimate import evaluator_for, load_config, nuisance_params, one_step_estimate
 
 STATES = ("intact", "one_empty", "one_half", "several")
 METHODS = ("eusama", "phase_shift", "decay_ratio", "model_based")
@@ -52,7 +60,7 @@ ROC_KEYS = {"seed", "cars", "states", "variation", "speed_kmh", "bump_height", "
 # ---- the study description ------------------------------------------------------------------------------
 def roc_spec(data: dict, source: str, name: str):
     """A validated ``kind: roc`` study (:class:`~susp_sim_ros.analysis.sweep.spec.StudySpec`)."""
-    from ...model.params import load_variant, load_vehicle
+    # function-level: breaks the cycle inspection.roc <-> sweep (sweep/kinds.py imports roc_spec)
     from ..sweep.spec import Chunk, StudySpec, _load
     roc = data.get("roc")
     if not isinstance(roc, dict):
@@ -99,9 +107,8 @@ def roc_spec(data: dict, source: str, name: str):
     if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
         raise ConfigError(f"{source}: chunk_size: expected a positive integer, got {chunk!r}")
     several = roc.get("several_oil", [0.0, 0.5])
-    generator = roc.get("truth_generator", "model")
-    if generator not in ("model", "independent"):
-        raise ConfigError(f"{source}: roc.truth_generator: expected 'model' or 'independent', got {generator!r}")
+    generator = str(roc.get("truth_generator", "model"))
+    truth_generator(generator, f"{source}: roc.truth_generator")
     norm = {"name": name, "kind": "roc", "description": str(data.get("description", "")), "vehicle": vehicle,
             "chunk_size": chunk, "results": "csv",
             "roc": {"seed": int(num("seed")), "cars": cars, "states": shares, "variation": list(variation),
@@ -163,9 +170,6 @@ def bump_drive(model, draw: Mapping, roc: Mapping, dt: float = 0.001):
     """The car's bump crossing as a recorded drive (in memory): inputs at 100 Hz, road profile, and a
     ``imu_rate_hz`` IMU with white gyro and accelerometer noise; plus the index of the first IMU sample
     after the rear axle has left the bump."""
-    from ...io.drive import ImuSeries, Series, TestDrive
-    from ...model import simulate
-    from ...model.maneuvers import bump_crossing
     vp = model.vehicle
     man = bump_crossing(speed=draw["speed_kmh"] / 3.6, height=draw["bump_height"], wheelbase=vp.wheelbase)
     res = simulate(model, man.to_inputs(dt), dt=dt, road=man.road, oil=draw["oil"],
@@ -189,36 +193,37 @@ def bump_drive(model, draw: Mapping, roc: Mapping, dt: float = 0.001):
     return drive, int(np.searchsorted(t, t_after)), np.degrees(gyro[:, 1])
 
 
-#: vehicle-file fields -> the independent simulator's car (TruthCar) and friction (TruthFriction) fields
-_TRUTH_CAR = {"sprung_mass": "sprung_mass", "unsprung_mass": "unsprung_mass", "cg_height": "cg_height",
-              "roll_inertia": "roll_inertia", "pitch_inertia": "pitch_inertia", "tyre_stiffness": "tyre_stiffness",
-              "wheel_rate": "wheel_rate", "arb_rate": "arb_rate"}
-_TRUTH_FRICTION = {"axle_friction": "axle_level", "damper_friction_intact": "damper_intact",
-                   "damper_friction_empty": "damper_empty"}
-
-
-def bump_drive_independent(draw: Mapping, roc: Mapping):
-    """The car's bump crossing from the independent simulator (:mod:`..independent_sim`: not our model),
-    the car's drawn values replacing its defaults; same outputs as :func:`bump_drive`."""
-    from .. import independent_sim as ind
-    car_kw = {_TRUTH_CAR[f]: v for f, v in draw["values"].items() if f in _TRUTH_CAR}
-    fr_kw = {_TRUTH_FRICTION[f]: v for f, v in draw["values"].items() if f in _TRUTH_FRICTION}
-    car = ind.TruthCar(**car_kw)
-    man = ind.TruthManeuver.bump(speed_kmh=draw["speed_kmh"], height_m=draw["bump_height"], wheelbase_m=car.wheelbase)
-    sensor = ind.TruthSensor(imu_rate_hz=roc["imu_rate_hz"], gyro_noise_deg_s=(draw["gyro_noise_deg_s"],) * 3,
-                             accel_noise_m_s2=(roc["accel_noise_m_s2"],) * 3, exact_rms=False)
-    drive = ind.make_drive(car, ind.TruthFriction(**fr_kw), None, man, sensor, draw["oil"], seed=draw["noise_seed"])
-    t = (drive.imu.t_ns - drive.imu.t_ns[0]) * 1e-9
-    t_after = man.lead_in_s + (man.bump_length_m + car.wheelbase) / man.speed_mps
-    return drive, int(np.searchsorted(t, t_after)), np.degrees(drive.imu.gyro[:, 1])
+def truth_generator(spec: str, source: str = "roc.truth_generator"):
+    """The bump-crossing generator a study names: ``"model"`` (None: the reference model,
+    :func:`bump_drive`) or a plug-in ``"package.module:function"`` taking ``(draw, roc)`` and returning
+    what :func:`bump_drive` returns. The product ships no truth generator; the repository's
+    ``truth_generators`` package (``truth_generators.roc:bump_crossing``) is found from the current
+    directory when it is not installed, so run such a study from the repository root."""
+    if spec == "model":
+        return None
+    module, sep, func = spec.partition(":")
+    if not sep or not module or not func.isidentifier():
+        raise ConfigError(f"{source}: expected 'model' or a plug-in 'package.module:function', got {spec!r}")
+    try:
+        mod = importlib.import_module(module)
+    except ModuleNotFoundError as exc:
+        if str(Path.cwd()) in sys.path or (exc.name or "").split(".")[0] != module.split(".")[0]:
+            raise ConfigError(f"{source}: cannot import {module!r} ({exc})") from exc
+        sys.path.append(str(Path.cwd()))
+        try:
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError as exc2:
+            raise ConfigError(f"{source}: cannot import {module!r} ({exc2}; run from the repository root)") from exc2
+    fn = getattr(mod, func, None)
+    if not callable(fn):
+        raise ConfigError(f"{source}: {module!r} has no function {func!r}")
+    return fn
 
 
 _cache: dict = {}
 
 
 def _estimator(vehicle: str, variant: str, cfg: dict):
-    from ...model import Model
-    from .estimate import nuisance_params
     key = ("est", vehicle, variant)
     if key not in _cache:
         m = Model(vehicle, variant)
@@ -229,12 +234,8 @@ def _estimator(vehicle: str, variant: str, cfg: dict):
 
 def car_statistics(data: Mapping, i: int) -> dict:
     """Every method's statistic for car ``i`` (one row of ``cars.csv``)."""
-    from ...model import Model
-    from ...model.params import load_variant, load_vehicle
-    from ...model.rigs import eusama_bench, eusama_plate_motion
-    from ..discrepancy.data import prepare_case
+    # function-level: breaks the cycle inspection.roc <-> sweep (sweep/kinds.py imports roc_spec)
     from ..sweep.tasks import decay_ratio
-    from .estimate import evaluator_for, load_config, one_step_estimate
     roc = data["roc"]
     key = ("setup", data["vehicle"], roc["truth_variant"])
     if key not in _cache:
@@ -254,8 +255,9 @@ def car_statistics(data: Mapping, i: int) -> dict:
     bench = eusama_bench(car, draw["oil"], plate=plate)
     row["eusama_min_percent"] = min(r.eusama_percent for r in bench.values())
     row["phase_min_deg"] = min(r.phase_min_deg for r in bench.values())
-    if roc.get("truth_generator", "model") == "independent":
-        drive, k_after, pitch_meas = bump_drive_independent(draw, roc)
+    plugin = truth_generator(roc.get("truth_generator", "model"))
+    if plugin is not None:
+        drive, k_after, pitch_meas = plugin(draw, roc)
     else:
         drive, k_after, pitch_meas = bump_drive(car, draw, roc)
     row["decay_ratio"] = decay_ratio(pitch_meas, k_after)

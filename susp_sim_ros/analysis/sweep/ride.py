@@ -29,9 +29,14 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...control.controllers import CONTROLLERS
+from ...control.ride import RideSpec, run_ride
+from ...errors import ConfigError, SuspInputError
+from ...model import Model
+from ...model.iso8608 import CLASSES
+from .runs import _cache, _lock
 from .spec import Chunk, StudySpec
-from ...model.params import DEFAULT_VEHICLE
+from ...model.params import DEFAULT_VEHICLE, load_variant
 
 RIDE_KEYS = ("controller", "oil", "road_class", "variant")
 WHEELS = ("FL", "FR", "RL", "RR")
@@ -42,9 +47,6 @@ COLUMNS = ["run_id", "controller", "oil", "road_class", "variant", "comfort_wk_r
 
 
 def ride_study(data: Mapping, source: str, name: str) -> StudySpec:
-    from ...control.controllers import CONTROLLERS
-    from ...model.iso8608 import CLASSES
-    from ...model.params import load_variant
     allowed = {"name", "description", "kind", "speed_kmh", "duration_s", "seed", "parameters", "step_s"}
     unknown = set(data) - allowed
     if unknown:
@@ -103,10 +105,6 @@ def ride_study(data: Mapping, source: str, name: str) -> StudySpec:
 
 def ride_task(data: Mapping, run_id: int, run: Mapping) -> dict:
     """One ride run -> its table row (an error in the row instead of raising)."""
-    from ...control.ride import RideSpec, run_ride
-    from ...errors import SuspInputError
-    from ...model import Model
-    from .runs import _cache, _lock
     row: dict[str, Any] = {"run_id": run_id, **run, "error": ""}
     try:
         with _lock:

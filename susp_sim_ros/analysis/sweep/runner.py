@@ -20,7 +20,11 @@ from collections.abc import Callable, Iterator, Sequence
 import numpy as np
 
 from ...errors import SuspInputError
+from ...progress import progress as make_progress
+from ..inspection.roc import finish_roc, roc_task
 from . import tasks
+from .plot import plot_drives, plot_sweep
+from .ride import finish_ride, ride_summary, ride_task
 from .spec import StudySpec
 from .store import ResultStore, _parse
 
@@ -165,7 +169,6 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
         todo_tasks = [((c.id,), (spec.data, c.id, spec.runs[c.id])) for c in todo]
         fn = _ride_task
     elif spec.kind == "roc":  # damper-inspection detection study (issue 14): one task per chunk of cars
-        from ..inspection.roc import roc_task
         todo_tasks = [((c.id,), (spec.data, list(c.runs))) for c in todo]
         fn = roc_task
     else:
@@ -175,7 +178,6 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     t_compute, cpu_compute = time.perf_counter(), time.process_time()
     done_tasks = executor.map(fn, todo_tasks)        # on a cluster: submitted, on their way while we go on
     store.begin_session()
-    from ...progress import progress as make_progress
     done_runs = sum(len(spec.chunks[c].runs) for c in resumed)
     unit = {"drives": "drive", "roc": "car"}.get(spec.kind, "run")
     bar = make_progress(total=spec.n_runs, initial=done_runs, desc=spec.name, unit=unit, enabled=progress,
@@ -206,10 +208,8 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
     if spec.kind == "sweep":
         result.update(_finish_sweep(spec, store, plot))
     elif spec.kind == "ride":
-        from .ride import finish_ride
         result.update(finish_ride(spec, store, plot))
     elif spec.kind == "roc":
-        from ..inspection.roc import finish_roc
         result.update(finish_roc(spec, store, plot))
     else:
         result.update(_finish_drives(spec, store, plot))
@@ -240,7 +240,6 @@ def plan_tasks(chunks: Sequence, threads: int, max_chunks: int = MAX_CHUNKS_PER_
 
 def _ride_task(data, run_id: int, run) -> list[dict]:
     """:func:`.ride.ride_task` as a task of one chunk."""
-    from .ride import ride_task
     return [ride_task(data, run_id, run)]
 
 
@@ -261,7 +260,6 @@ def _finish_sweep(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
         table = store.write_table(header, rows, "results", spec.data["results"])
     plots = []
     if plot and spec.data.get("plot"):
-        from .plot import plot_sweep
         rows = rows if rows is not None else list(csv.reader(lines))
         cols = {h: [_parse(r[i]) for r in rows] for i, h in enumerate(header)}
         plots.append(str(plot_sweep(spec, cols, store.out / f"{spec.name}.png")))
@@ -294,7 +292,6 @@ def _finish_drives(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
               for m, by_s in tables.items()}
     plots = []
     if plot and any(not r.get("error") for r in rows):
-        from .plot import plot_drives
         plots.append(str(plot_drives(rows, variants, store.out / f"{spec.name}_rmse.png")))
     failed = [{"file": r["file"], "error": r["error"]} for r in rows if r.get("error")]
     return {"table": str(table), "columns": header, "plots": plots, "tables": tables, "unit": "deg/s",
@@ -329,7 +326,6 @@ def summary_text(r: dict) -> str:
     for c, (lo, hi) in r.get("metric_ranges", {}).items():
         lines.append(f"  {c}: {lo:.4g} .. {hi:.4g}")
     if r["kind"] == "ride":
-        from .ride import ride_summary
         lines += ride_summary(r)
     for sev, by_m in r.get("roc_by_severity", {}).items():
         lines.append(f"  ROC {sev} vs intact: " + ", ".join(

@@ -12,11 +12,14 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from ...model import Model
 from ...model.layout import P_INDEX
-from ...model.params import DEFAULT_VEHICLE
+from ...model.maneuvers import build_maneuver
+from ...model.paper import MANEUVER_PARAMETERS, maneuver_kind
+from ...model.params import DEFAULT_VEHICLE, load_vehicle
 
 #: the maneuver geometry a run may set (per run, in ``parameters``)
-MANEUVER_KEYS = ("speed", "bump_height", "bump_length", "steer_amplitude", "steer_frequency")
+MANEUVER_KEYS = MANEUVER_PARAMETERS
 
 _cache: dict = {}
 _lock = threading.RLock()
@@ -32,7 +35,6 @@ def vehicle_key(data: Mapping, run: Mapping) -> str:
 
 # ---- run parameters -> model, parameter vector, maneuver ------------------------------------------------
 def vehicle_params(data: Mapping, run: Mapping):
-    from ...model.params import load_vehicle
     key = ("vp", vehicle_key(data, run))
     with _lock:
         if key not in _cache:
@@ -48,7 +50,6 @@ def vehicle_params(data: Mapping, run: Mapping):
 
 def model_of(data: Mapping, run: Mapping):
     """``(Model, base parameter vector)`` of a run's vehicle and friction variant (cached)."""
-    from ...model import Model
     key = ("model", vehicle_key(data, run), run.get("variant", "full"))
     vp = vehicle_params(data, run)
     with _lock:
@@ -75,18 +76,13 @@ def params_of(data: Mapping, run: Mapping, base: np.ndarray | None = None) -> np
 
 def maneuver_of(data: Mapping, run: Mapping, wheelbase: float):
     """The run's maneuver (cached: building one reads config/maneuvers.yaml)."""
-    from ...model.maneuvers import bump_crossing, sine_steer
     geo = tuple(run.get(k) for k in MANEUVER_KEYS)
     key = ("maneuver", data["maneuver"], geo, wheelbase)
     with _lock:
         if key not in _cache:
-            if data["maneuver"] == "bump_crossing":
-                man = bump_crossing(speed=run.get("speed"), height=run.get("bump_height"),
-                                    length=run.get("bump_length"), wheelbase=wheelbase)
-            else:
-                man = sine_steer(speed=run.get("speed"), amplitude=run.get("steer_amplitude"),
-                                 frequency=run.get("steer_frequency"))
-            _cache[key] = man
+            kind = maneuver_kind(data["maneuver"])
+            _cache[key] = build_maneuver(kind.name, wheelbase,
+                                         **{arg: run.get(k) for k, arg in kind.sweep_arguments})
         return _cache[key]
 
 

@@ -26,12 +26,21 @@ from collections.abc import Mapping
 import numpy as np
 
 from ...errors import ConfigError, SuspInputError
-from ...model.paper import MANEUVERS, PRIMARY_OUTPUT, VARIANTS
+from ...model.layout import OUTPUT_LABELS
+from ...model.paper import DEFAULT_MANEUVER, MANEUVER_KINDS, MANEUVERS, PRIMARY_OUTPUT, VARIANTS
 from .runs import MANEUVER_KEYS, maneuver_of, vehicle_key, vehicle_params
-from ...model.params import DEFAULT_VEHICLE
+from ...model.params import DEFAULT_VEHICLE, VehicleParams, load_variant, load_vehicle
 
 ENGINE_VERSION = 2          # bump when a change alters results, so old stores are not resumed into
 OIL_KEYS = ("oil_front", "oil_rear", "oil_FL", "oil_FR", "oil_RL", "oil_RR")
+
+
+def _owner(parameter: str) -> str | None:
+    """The maneuver a geometry parameter belongs to (registry ``sweep_arguments``); None when shared."""
+    owners = [k.name for k in MANEUVER_KINDS.values() if parameter in dict(k.sweep_arguments)]
+    return owners[0] if len(owners) == 1 else None
+
+
 # parameter -> (kind, maneuver it belongs to or None, what it is)
 PARAMETERS: dict[str, tuple[str, str | None, str]] = {
     "vehicle": ("name", None, "vehicle parameter set name or YAML path"),
@@ -39,10 +48,10 @@ PARAMETERS: dict[str, tuple[str, str | None, str]] = {
     "variant": ("name", None, "friction variant name or YAML path"),
     **{k: ("fraction", None, f"damper oil level {k[4:]} (1 intact, 0 oil-empty)") for k in OIL_KEYS},
     "speed": ("positive", None, "vehicle speed [m/s]"),
-    "bump_height": ("number", "bump_crossing", "bump height [m]"),
-    "bump_length": ("positive", "bump_crossing", "bump length [m]"),
-    "steer_amplitude": ("number", "sine_steer", "steering-wheel amplitude [rad]"),
-    "steer_frequency": ("positive", "sine_steer", "steering frequency [Hz]"),
+    "bump_height": ("number", _owner("bump_height"), "bump height [m]"),
+    "bump_length": ("positive", _owner("bump_length"), "bump length [m]"),
+    "steer_amplitude": ("number", _owner("steer_amplitude"), "steering-wheel amplitude [rad]"),
+    "steer_frequency": ("positive", _owner("steer_frequency"), "steering frequency [Hz]"),
 }
 # geometry keys a reference run may not change (it must drive the same maneuver)
 METRICS = ("peak_rate", "decay_ratio", "damping_ratio", "ring_out", "rms_after", "rmse_ref")
@@ -94,7 +103,7 @@ class StudySpec:
         return len(self.runs)
 
     def metric_columns(self) -> list[str]:
-        return [metric_column(m, self.data.get("maneuver", "bump_crossing")) for m in self.data["outputs"]]
+        return [metric_column(m, self.data.get("maneuver", DEFAULT_MANEUVER)) for m in self.data["outputs"]]
 
 
 def metric_column(m, maneuver: str) -> str:
@@ -151,7 +160,6 @@ def _check_value(source: str, key: str, v: Any, maneuver: str, classes: Mapping)
 
 
 def _vehicle_classes(source: str, spec: Any) -> dict:
-    from ...model.params import VehicleParams, load_vehicle
     if spec is None:
         return {}
     if not isinstance(spec, dict):
@@ -190,7 +198,6 @@ def _load(source, where, loader, name):
 
 
 def _outputs(source: str, spec: Any, has_reference: bool) -> list[str | dict[str, str]]:
-    from ...model.layout import OUTPUT_LABELS
     spec = list(METRICS[:-1]) + (["rmse_ref"] if has_reference else []) if spec is None else spec
     if not isinstance(spec, list) or not spec:
         raise ConfigError(f"{source}: outputs: expected a non-empty list of metrics ({', '.join(METRICS)}, "
@@ -217,11 +224,8 @@ def _outputs(source: str, spec: Any, has_reference: bool) -> list[str | dict[str
     return out
 
 
-def _sweep(data: dict, source: str, name: str) -> StudySpec:
-    from ...model.params import load_variant, load_vehicle
-    maneuver = data.get("maneuver", "bump_crossing")
-    if maneuver not in MANEUVERS:
-        raise ConfigError(f"{source}: maneuver: expected one of {', '.join(MANEUVERS)}, got {maneuver!r}")
+def _step_and_decimation(data: dict, source: str) -> tuple[float, int]:
+    """The integration step [s] and the output decimation (steps per output sample) of a sweep."""
     step = _number(source, "step_s", data.get("step_s", 0.001), positive=True)
     if step > 0.01:
         raise ConfigError(f"{source}: step_s: expected a step in (0, 0.01] s, got {step}")
@@ -230,10 +234,12 @@ def _sweep(data: dict, source: str, name: str) -> StudySpec:
     if decim < 1 or abs(decim * step * rate - 1.0) > 1e-9:
         raise ConfigError(f"{source}: output_rate_hz: {rate} Hz is not an integer divisor of 1/step_s "
                           f"= {1 / step:g} Hz")
-    chunk = data.get("chunk_size", 64)
-    if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
-        raise ConfigError(f"{source}: chunk_size: expected an integer >= 1, got {chunk!r}")
-    classes = _vehicle_classes(source, data.get("vehicle_classes"))
+    return step, decim
+
+
+def _swept_parameters(data: dict, source: str, maneuver: str, classes: dict) -> list:
+    """``[[parameter, [values]], ...]`` of a sweep, checked (known, of this maneuver, not set twice) and
+    their vehicles and variants loaded (before any cluster starts)."""
     params = data.get("parameters") or {}
     if not isinstance(params, dict):
         raise ConfigError(f"{source}: parameters: expected a mapping parameter -> value(s)")
@@ -245,8 +251,7 @@ def _sweep(data: dict, source: str, name: str) -> StudySpec:
             raise ConfigError(f"{source}: parameters.{k}: belongs to the {owner} maneuver, not {maneuver}")
     if "vehicle" in params and "vehicle_class" in params:
         raise ConfigError(f"{source}: parameters: give vehicle or vehicle_class, not both (a class names its base)")
-    axle = [k for k in ("oil_front", "oil_rear") if k in params]
-    for k in axle:
+    for k in (k for k in ("oil_front", "oil_rear") if k in params):
         for w in (("FL", "FR") if k == "oil_front" else ("RL", "RR")):
             if f"oil_{w}" in params:
                 raise ConfigError(f"{source}: parameters: {k} and oil_{w} both set the {w} oil level")
@@ -254,25 +259,33 @@ def _sweep(data: dict, source: str, name: str) -> StudySpec:
     for k, spec in params.items():
         vals = [_check_value(source, k, v, maneuver, classes) for v in _values(source, k, spec)]
         swept.append([k, vals])
-    for k, vals in swept:       # vehicles and variants must load before any cluster starts
+    for k, vals in swept:
         for v in set(vals) if k in ("vehicle", "variant") else ():
             _load(source, f"parameters.{k}", load_vehicle if k == "vehicle" else load_variant, v)
+    return swept
+
+
+def _reference(data: dict, source: str, maneuver: str, classes: dict) -> dict | None:
+    """The sweep's reference run (parameter overrides of the same maneuver), checked, or None."""
     reference = data.get("reference")
-    if reference is not None:
-        if not isinstance(reference, dict) or not reference:
-            raise ConfigError(f"{source}: reference: expected a mapping of parameter overrides, "
-                              f"e.g. {{oil_front: 1.0, oil_rear: 1.0}}")
-        for k, v in reference.items():
-            if k not in PARAMETERS or k in MANEUVER_KEYS:
-                raise ConfigError(f"{source}: reference.{k}: a reference may override oil levels, vehicle, "
-                                  f"vehicle_class or variant (it drives the same maneuver)")
-            v = _check_value(source, k, v, maneuver, classes)
-            if k in ("vehicle", "variant"):
-                _load(source, f"reference.{k}", load_vehicle if k == "vehicle" else load_variant, v)
-            reference[k] = v
-    outputs = _outputs(source, data.get("outputs"), reference is not None)
-    after = _number(source, "after_window_s", data.get("after_window_s", 1.0), positive=True)
-    thr = _number(source, "ring_out_threshold_deg_s", data.get("ring_out_threshold_deg_s", 0.3), positive=True)
+    if reference is None:
+        return None
+    if not isinstance(reference, dict) or not reference:
+        raise ConfigError(f"{source}: reference: expected a mapping of parameter overrides, "
+                          f"e.g. {{oil_front: 1.0, oil_rear: 1.0}}")
+    for k, v in reference.items():
+        if k not in PARAMETERS or k in MANEUVER_KEYS:
+            raise ConfigError(f"{source}: reference.{k}: a reference may override oil levels, vehicle, "
+                              f"vehicle_class or variant (it drives the same maneuver)")
+        v = _check_value(source, k, v, maneuver, classes)
+        if k in ("vehicle", "variant"):
+            _load(source, f"reference.{k}", load_vehicle if k == "vehicle" else load_variant, v)
+        reference[k] = v
+    return reference
+
+
+def _results_format(data: dict, source: str) -> str:
+    """``csv`` or ``parquet`` (which needs pyarrow)."""
     results = data.get("results", "csv")
     if results not in RESULT_FORMATS:
         raise ConfigError(f"{source}: results: expected csv or parquet, got {results!r}")
@@ -282,6 +295,24 @@ def _sweep(data: dict, source: str, name: str) -> StudySpec:
         except ImportError:
             raise ConfigError(f"{source}: results: parquet needs pyarrow (pip install pyarrow), "
                               f"or use results: csv") from None
+    return results
+
+
+def _sweep(data: dict, source: str, name: str) -> StudySpec:
+    maneuver = data.get("maneuver", DEFAULT_MANEUVER)
+    if maneuver not in MANEUVERS:
+        raise ConfigError(f"{source}: maneuver: expected one of {', '.join(MANEUVERS)}, got {maneuver!r}")
+    step, decim = _step_and_decimation(data, source)
+    chunk = data.get("chunk_size", 64)
+    if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
+        raise ConfigError(f"{source}: chunk_size: expected an integer >= 1, got {chunk!r}")
+    classes = _vehicle_classes(source, data.get("vehicle_classes"))
+    swept = _swept_parameters(data, source, maneuver, classes)
+    reference = _reference(data, source, maneuver, classes)
+    outputs = _outputs(source, data.get("outputs"), reference is not None)
+    after = _number(source, "after_window_s", data.get("after_window_s", 1.0), positive=True)
+    thr = _number(source, "ring_out_threshold_deg_s", data.get("ring_out_threshold_deg_s", 0.3), positive=True)
+    results = _results_format(data, source)
     norm = {"name": name, "kind": "sweep", "maneuver": maneuver, "step_s": step, "decim": decim,
             "chunk_size": chunk, "parameters": swept, "vehicle_classes": classes, "outputs": outputs,
             "reference": reference, "after_window_s": after, "ring_out_threshold_deg_s": thr,
@@ -331,7 +362,6 @@ def _plot(source: str, plot: Any, spec: StudySpec) -> dict | None:
 
 
 def _drives(data: dict, source: str, name: str) -> StudySpec:
-    from ...model.params import load_variant
     folder = data.get("folder")
     if not isinstance(folder, str) or not folder:
         raise ConfigError(f"{source}: folder: a drives study needs the folder of recorded drives (*.mcap)")

@@ -19,16 +19,21 @@ from typing import Any
 import numpy as np
 from numba import njit, prange
 
+from ...errors import SuspInputError
+from ...io.drive import read_drive
+from ...model import simulate_batch
 from ...model.layout import P_INDEX
+from ...model.maneuvers import excitation_end
 from ...model.paper import PRIMARY_OUTPUT
+from ..discrepancy import DiscrepancyFinder
+from ..validation_study import simulate_and_validate
 from .runs import (MANEUVER_KEYS, _cache, _lock, inputs_of, maneuver_of, model_of, oil_of,  # noqa: F401
                    params_of, vehicle_params)
+from .spec import expand_runs, reference_run
 
 def after_time(man, wheelbase: float) -> float:
     """When the excitation is over [s]: the rear axle has left the bump / the last steer has ended."""
-    if man.name == "bump_crossing":
-        return (float(man.road.s[-1]) + wheelbase) / man.speed
-    return man.steer_start + man.steer_periods / man.steer_frequency
+    return excitation_end(man, wheelbase)
 
 
 def selection(data: Mapping) -> list[str]:
@@ -116,7 +121,6 @@ def simulate_groups(data: Mapping, runs: Sequence[Mapping], threads: int | None 
     """Simulate ``runs`` batched per (kernel, step count) (:func:`batch_inputs`). Returns one entry per
     batch: ``(idx, Y, ok, t_after, dt_out)`` with ``idx`` the positions in ``runs``, ``Y[B, n, n_sel]`` the
     recorded outputs (the signal first), ``ok[B]`` (ran to the end and finite) and ``t_after[B]``."""
-    from ...model import simulate_batch
     if threads is not None:
         import numba
         # numba sets its config attributes from the environment at import: mypy cannot see them
@@ -310,7 +314,6 @@ def task_batch(data: Mapping, runs: Sequence[Mapping]) -> tuple[list, list]:
     Riding in the same batch, a reference run usually costs nothing: the kernel advances vehicles in
     blocks of 16 lanes and the last block of a batch is rarely full (the example's references are runs of
     the study itself)."""
-    from .spec import reference_run
     batch = list(runs)
     ref = data.get("reference")
     if ref is None:
@@ -347,7 +350,6 @@ _runs_cache: dict = {}     # study hash -> its runs (this process)
 def study_runs(data: Mapping, study: str) -> list[dict]:
     """The runs of the sweep ``data`` (:func:`~.spec.expand_runs`), expanded once per process; ``study``
     is its hash (the cache key; the last two studies are kept)."""
-    from .spec import expand_runs
     with _lock:
         runs = _runs_cache.get(study)
         if runs is None:
@@ -440,9 +442,6 @@ def drive_task(path: str, variants: Sequence[str], diagnose: bool = False) -> di
     """Batch validation of one recorded drive: lockstep simulation with each variant, RMSE per variant
     in the paper's window and signal; with ``diagnose``, the discrepancy finder on this drive alone
     against the first variant. A drive that fails gives a row with ``error`` instead of raising."""
-    from ...errors import SuspInputError
-    from ...io.drive import read_drive
-    from ..validation_study import simulate_and_validate
     row: dict[str, Any] = {"file": path}
     try:
         drive = read_drive(path)
@@ -464,7 +463,6 @@ def drive_task(path: str, variants: Sequence[str], diagnose: bool = False) -> di
 def diagnose_drive(path: str, variant: str) -> dict:
     """The discrepancy finder (``susp diagnose``) on one drive: verdict, terms, RMSE before/after the
     fit on this drive (no held-out drive in a one-drive fit), noise floor."""
-    from ..discrepancy import DiscrepancyFinder
     f = DiscrepancyFinder(variant=variant, heldout=False, progress=False).fit([path])
     rep = f.report()
     return {"diag_verdict": rep["verdict"],

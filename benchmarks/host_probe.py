@@ -8,7 +8,7 @@ runs above it, so what delays it is the machine: the hypervisor, the kernel, rea
 A separate process per CPU (not a thread of the measuring process) keeps the measuring process's GIL and
 its other threads out of the figures, and sees a stall of either virtual CPU.
 
-``HostProbe`` starts and stops the processes; ``python -m susp_sim_ros.host_probe`` is one probe (it
+``HostProbe`` starts and stops the processes; ``python benchmarks/host_probe.py`` is one probe (it
 prints one JSON object when stopped with SIGINT/SIGTERM or after ``--max-duration``). No ROS.
 """
 from __future__ import annotations
@@ -21,8 +21,9 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
-from .analysis.host_stalls import Stall
+from susp_sim_ros.analysis.host_stalls import Stall
 
 __all__ = ["HostProbe", "PROBE_PERIOD_S", "PROBE_PRIORITY", "run_probe"]
 
@@ -116,7 +117,7 @@ class HostProbe:
 
     def start(self) -> "HostProbe":
         for cpu in self.cpus:
-            args = [sys.executable, "-m", "susp_sim_ros.host_probe", "--period-ms", str(self.period_s * 1e3),
+            args = [sys.executable, str(Path(__file__).resolve()), "--period-ms", str(self.period_s * 1e3),
                     "--cpu", str(cpu), "--priority", str(self.priority), "--max-duration", str(self.max_duration_s)]
             # unbuffered, so that select() sees every line still unread
             self._procs.append(subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, bufsize=0))

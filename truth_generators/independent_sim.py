@@ -26,13 +26,13 @@ import yaml
 from numba import njit
 from scipy.interpolate import PchipInterpolator
 
-from ..io.drive import ImuSeries, Series, TestDrive, write_drive
-from ..model.road import RoadProfile
+from susp_sim_ros.io.drive import ImuSeries, Series, TestDrive, write_drive
+from susp_sim_ros.model.road import RoadProfile
 from .independent_roads import TruthManeuver, iso8608_road, iso8608_psd  # noqa: F401 (re-export)
 
 VERSION = "1.0"
-SOURCE = f"synthetic:susp_sim_ros.analysis.independent_sim@{VERSION}"
-_CONFIG = Path(__file__).resolve().parents[2] / "config" / "vehicles" / "passat_b8_like.yaml"
+SOURCE = f"synthetic:truth_generators.independent_sim@{VERSION}"
+_CONFIG = Path(__file__).resolve().parents[1] / "config" / "vehicles" / "passat_b8_like.yaml"
 
 
 # ==== parameters ======================================================================================

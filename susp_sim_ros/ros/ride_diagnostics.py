@@ -10,8 +10,9 @@ import time
 
 import numpy as np
 
-from .model.vehicle import Model
-from .sim_core import SimCore
+from ..control.ride_metrics import RideMonitor
+from ..model.vehicle import Model
+from ..runtime.sim_core import SimCore
 
 
 class SemiActiveDiagnostics:
@@ -22,7 +23,6 @@ class SemiActiveDiagnostics:
     only queued on the publishing path; the metrics are computed when the diagnostics are built."""
 
     def __init__(self, model: Model, period_ns: int):
-        from .analysis.ride import RideMonitor
         vp = model.vehicle
         corner = lambda pair: [pair[a] for a in (0, 0, 1, 1)]  # noqa: E731
         self.monitor = RideMonitor(1e9 / period_ns, gravity=vp.gravity, static_loads=vp.static_wheel_loads(),

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from ..model.layout import WHEELS
+from ..model.layout import OUTPUT_LABELS, WHEELS
 
 #: ISO 2631-1 Wk filter constants (Annex A): frequencies [Hz] and quality factors [-]
 WK_F1, WK_F2, WK_Q1 = 0.4, 100.0, 1.0 / np.sqrt(2.0)
@@ -129,7 +129,6 @@ class RideMonitor:
     lie below)."""
 
     def __init__(self, fs: float, *, gravity: float, static_loads, bump_travel, rebound_travel):
-        from ..model.layout import OUTPUT_LABELS
         idx = {k: i for i, k in enumerate(OUTPUT_LABELS)}
         self._az = idx["AZ_SF"]
         self._fz = [idx[f"F_Z_{w}"] for w in WHEELS]

@@ -37,12 +37,12 @@ from collections.abc import Callable, Hashable, Sequence
 
 import numpy as np
 
-from .errors import SuspInputError
-from .io import messages as M
-from .io.drive import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT
-from .model.layout import OUTPUT_LABELS
-from .model.road import RoadProfile
-from .model.vehicle import Model, Stepper, check_oil
+from ..errors import SuspInputError
+from ..io import messages as M
+from ..io.drive import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT
+from ..model.layout import OUTPUT_LABELS
+from ..model.road import RoadProfile
+from ..model.vehicle import Model, Stepper, check_oil
 
 MAX_ACCEL = 20.0              # m/s^2 (2 g): longitudinal acceleration derived from speed messages is limited to this
 MAX_PATH = 1.0e7              # m, |s| of a road profile sample
@@ -149,7 +149,7 @@ class SimCore:
     """
 
     def __init__(self, model: Model, *, step_s: float = 0.001, publish_rate_hz: float = 100.0,
-                 oil: Sequence[float] = (1.0, 1.0, 1.0, 1.0), input_timeout_s: float = 0.5,
+                 oil: Sequence[float] | np.ndarray = (1.0, 1.0, 1.0, 1.0), input_timeout_s: float = 0.5,
                  max_time_jump_s: float = 10.0):
         if not (math.isfinite(max_time_jump_s) and max_time_jump_s > 0):
             raise SuspInputError(f"max_time_jump_s: expected a time > 0 s, got {max_time_jump_s}")
@@ -236,7 +236,7 @@ class SimCore:
         self.diverged, self.diverged_at_ns = "", None  # a fresh start from rest is healthy again
 
     # -- run-time parameter changes -------------------------------------------------------------------
-    def set_oil(self, oil: Sequence[float]) -> None:
+    def set_oil(self, oil: Sequence[float] | np.ndarray) -> None:
         """New damper oil levels FL, FR, RL, RR; take effect at the next step (SuspInputError if bad)."""
         self.stepper.set_oil(check_oil(oil))
 
@@ -291,7 +291,7 @@ class SimCore:
         self.last_input_ns["/vehicle/steering_wheel_angle"] = int(t_ns)
         return None
 
-    def set_road_profile(self, t_ns: int, data: Sequence[float], dims: Sequence[tuple],
+    def set_road_profile(self, t_ns: int, data: Sequence[float] | np.ndarray, dims: Sequence[tuple],
                          data_offset: int = 0) -> str | None:
         """``/road/profile`` from its data and layout dims ``[(label, size[, stride]), ...]`` (interface
         layout; a stride of 0 means "not given"); ``data_offset`` as in ``MultiArrayLayout``."""
@@ -330,7 +330,7 @@ class SimCore:
         self.last_input_ns["/road/profile"] = int(t_ns)
         return None
 
-    def set_wheel_heights(self, t_ns: int, z: Sequence[float], dims: Sequence[tuple] = (),
+    def set_wheel_heights(self, t_ns: int, z: Sequence[float] | np.ndarray, dims: Sequence[tuple] = (),
                           data_offset: int = 0) -> str | None:
         """``/road/wheel_heights``: data [FL, FR, RL, RR] (after ``data_offset``); layout dims, if given,
         must describe 4 values."""
@@ -354,7 +354,7 @@ class SimCore:
         self.last_input_ns["/road/wheel_heights"] = int(t_ns)
         return None
 
-    def set_damper_command(self, t_ns: int, u: Sequence[float], dims: Sequence[tuple] = (),
+    def set_damper_command(self, t_ns: int, u: Sequence[float] | np.ndarray, dims: Sequence[tuple] = (),
                            data_offset: int = 0) -> str | None:
         """``/vehicle/damper_command``: data [FL, FR, RL, RR] valve commands in [0, 1] (after
         ``data_offset``); layout dims, if given, must describe 4 values. The first valid command switches

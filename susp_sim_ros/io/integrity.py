@@ -1,0 +1,421 @@
+"""Input integrity (issue 28): one check of a recorded test drive that every command runs on what it reads.
+
+:func:`check_drive_integrity` looks at each input series of a :class:`~susp_sim_ros.io.drive.TestDrive`
+(speed, steering, wheel heights, damper command, measured IMU) with the one policy table
+``config/integrity.yaml`` and returns the drive with the defects it can work around worked around, plus
+one :class:`InputFinding` per defect (interface.md, "JSON outputs", ``input_findings``). A defect that
+leaves nothing sound to work on raises :class:`IntegrityError` (a named error, exit 2) naming the file,
+topic, time and what was expected. Pure: numpy only, no rclpy.
+
+Kinds and what is done (``action``):
+
+* ``non_finite`` -- NaN/inf samples are dropped (``excluded``); an input left empty is an error.
+* ``clock_jump`` -- a stamp step forward longer than ``stamps.clock_jump_s`` or backward longer than
+  ``stamps.backward_jump_s``: the samples after it are shifted to close it to one sample period
+  (``repaired``).
+* ``stamp_order`` -- stamps out of order (short backward steps): the samples are sorted (``repaired``).
+* ``duplicate_stamp`` -- two samples with one stamp: the later ones are dropped (``excluded``).
+* ``gap`` -- a hole longer than ``stamps.gap_periods`` median periods (and ``stamps.gap_min_s``): the span
+  is recorded in ``drive.extra["excluded_spans"]`` for the measured IMU (comparisons leave it out,
+  ``excluded``); an input holds its last value over it as the node does (``kept``).
+* ``spike`` -- a sample far from the running median (``spikes.mad_factor`` robust sd, at least the
+  ``spikes.floor_*`` of its signal): dropped (``excluded``).
+* ``implausible_unit`` -- speed beyond ``limits.speed_max`` m/s but plausible as km/h, steering beyond
+  ``limits.steering_max`` rad but plausible as degrees: an error (a topic map with a factor says the unit).
+* ``dead_sensor`` -- an IMU axis without noise (sample-to-sample spread below ``noise.*_dead_*``), or
+  repeating one value for ``noise.dead_run_s``: the axis is listed in ``drive.extra["unusable_signals"]``
+  (``excluded``); consumers that cannot do without it raise :class:`IntegrityError`.
+* ``saturated_sensor`` -- an IMU axis stuck at its extreme: ``kept`` and reported.
+* ``missing_topic`` -- a maneuver driven by the road (``maneuvers.needs_road``) without ``/road/profile`` or
+  ``/road/wheel_heights``: an error (the model would drive a flat road).
+"""
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TextIO
+
+import numpy as np
+
+from ..errors import ConfigError, RecordingError
+from ..model.params import _load_yaml, config_dir
+from . import drive_data as _drive
+
+from .drive_data import Series, TestDrive
+
+KINDS = ("non_finite", "gap", "rate_change", "stamp_order", "duplicate_stamp", "clock_jump", "spike",
+         "implausible_unit", "dead_sensor", "saturated_sensor", "missing_topic", "bad_metadata")
+ACTIONS = ("excluded", "repaired", "kept")
+GYRO_SIGNALS = ("roll_rate", "pitch_rate", "yaw_rate")
+ACCEL_SIGNALS = ("accel_x", "accel_y", "accel_z")
+NS = 1_000_000_000
+
+
+class IntegrityError(RecordingError):
+    """A recording whose defects leave nothing sound to work on (names file, topic, time, what was expected)."""
+
+
+@dataclass(frozen=True)
+class InputFinding:
+    """One defect of a recording and what was done about it (interface.md ``input_findings`` entry)."""
+
+    file: str
+    topic: str
+    kind: str
+    from_s: float
+    to_s: float
+    action: str
+    detail: str
+
+    def to_json(self) -> dict[str, Any]:
+        return {"file": self.file, "topic": self.topic, "kind": self.kind, "from_s": float(self.from_s),
+                "to_s": float(self.to_s), "action": self.action, "detail": self.detail}
+
+    def line(self) -> str:
+        """The one stderr/report line: ``input: FILE TOPIC KIND FROM-TO s ACTION: DETAIL``."""
+        return (f"input: {self.file} {self.topic} {self.kind} {self.from_s:.3f}-{self.to_s:.3f} s "
+                f"{self.action}: {self.detail}")
+
+
+@dataclass
+class IntegrityResult:
+    """The drive with its defects worked around, the findings, and the IMU signals not to be used."""
+
+    drive: TestDrive
+    findings: list[InputFinding] = field(default_factory=list)
+    unusable: set[str] = field(default_factory=set)
+
+
+# ---- policy --------------------------------------------------------------------------------------
+_POLICY_CACHE: dict[str, dict[str, Any]] = {}
+
+
+def load_policy(path: str | Path | None = None) -> dict[str, Any]:
+    """The policy table (``config/integrity.yaml`` or ``path``) as ``{"section.key": value}``;
+    ConfigError naming the file and entry when malformed."""
+    p = Path(path) if path is not None else config_dir() / "integrity.yaml"
+    key = str(p)
+    if key in _POLICY_CACHE:
+        return _POLICY_CACHE[key]
+    if not p.is_file():
+        raise ConfigError(f"{p}: no such integrity policy file")
+    data = _load_yaml(p)
+    out: dict[str, Any] = {}
+    for sec, entries in data.items():
+        if not isinstance(entries, dict):
+            raise ConfigError(f"{p}: section {sec} must be a mapping")
+        for k, e in entries.items():
+            if not isinstance(e, dict) or not {"value", "unit", "source"} <= set(e):
+                raise ConfigError(f"{p}: {sec}.{k} must be a mapping with value, unit and source, got {e!r}")
+            out[f"{sec}.{k}"] = e["value"]
+    _POLICY_CACHE[key] = out
+    return out
+
+
+# ---- helpers -------------------------------------------------------------------------------------
+def _running_median(x: np.ndarray, w: int) -> np.ndarray:
+    """Centred running median of ``x`` (1-D) over ``w`` samples (edges: the nearest full window)."""
+    n = x.size
+    if n < w:
+        return np.full(n, float(np.median(x))) if n else x.copy()
+    win = np.lib.stride_tricks.sliding_window_view(x, w)
+    med = np.median(win, axis=1)
+    h = w // 2
+    return np.concatenate([np.full(h, med[0]), med, np.full(n - med.size - h, med[-1])])
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """``[(i0, i1), ...]`` inclusive index ranges where ``mask`` is True."""
+    m = np.concatenate([[False], mask.astype(bool), [False]])
+    d = np.diff(m.astype(np.int8))
+    starts, ends = np.nonzero(d == 1)[0], np.nonzero(d == -1)[0] - 1
+    return list(zip(starts.tolist(), ends.tolist()))
+
+
+class _Checker:
+    def __init__(self, drive: TestDrive, file: str, policy: dict[str, Any]):
+        self.drive, self.file, self.pol = drive, file, policy
+        starts = [int(s.t_ns[0]) for s in self._all_series() if s is not None and len(s)]
+        self.t0 = min(starts) if starts else 0
+        self.findings: list[InputFinding] = []
+
+    def _all_series(self) -> list:
+        d = self.drive
+        return [d.speed, d.steering, d.wheel_heights, d.damper_command, d.imu]
+
+    def s(self, t_ns: int) -> float:
+        return (int(t_ns) - self.t0) / NS
+
+    def add(self, topic: str, kind: str, t_a: int, t_b: int, action: str, detail: str) -> None:
+        self.findings.append(InputFinding(self.file, topic, kind, round(self.s(t_a), 6), round(self.s(t_b), 6),
+                                          action, detail))
+
+    def fail(self, topic: str, t_a: int, t_b: int, what: str) -> IntegrityError:
+        return IntegrityError(f"{self.file}: topic {topic}: {what} (log time {self.s(t_a):.3f}-"
+                              f"{self.s(t_b):.3f} s from the recording's first message)")
+
+    # -- stamps ----------------------------------------------------------------------------------------
+    def stamps(self, topic: str, t: np.ndarray, v: np.ndarray, *, is_input: bool
+               ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
+        """Non-finite samples, clock jumps, order, duplicates and gaps of one series."""
+        if t.size:
+            bad = ~np.isfinite(v.reshape(t.size, -1)).all(axis=1)
+            if bad.any():
+                for i0, i1 in _runs(bad):
+                    self.add(topic, "non_finite", int(t[i0]), int(t[i1]), "excluded",
+                             f"{i1 - i0 + 1} sample(s) with NaN or inf dropped")
+                t, v = t[~bad], v[~bad]
+                if not t.size:
+                    raise self.fail(topic, 0, 0, "every sample is NaN or inf; expected finite values")
+        if t.size < 3:
+            return t, v, []
+        dt = np.diff(t)
+        pos = dt[dt > 0]
+        period = int(np.median(pos)) if pos.size else 0
+        jump_fwd = int(float(self.pol["stamps.clock_jump_s"]) * NS)
+        jump_back = int(float(self.pol["stamps.backward_jump_s"]) * NS)
+        jumps = np.nonzero((dt > jump_fwd) | (dt < -jump_back))[0]
+        if jumps.size and period > 0:
+            t = t.copy()
+            for k in jumps.tolist():
+                step = int(t[k + 1] - t[k])
+                t[k + 1:] -= step - period
+                self.add(topic, "clock_jump", int(t[k]), int(t[k + 1]), "repaired",
+                         f"log time jumps by {step / NS:+.3f} s after {k + 1} samples; later samples shifted "
+                         f"to close it to one sample period ({period / NS * 1e3:.2f} ms)")
+            dt = np.diff(t)
+        if (dt < 0).any():
+            back = np.nonzero(dt < 0)[0]
+            order = np.argsort(t, kind="stable")
+            self.add(topic, "stamp_order", int(t[back[0]]), int(t[back[-1]]), "repaired",
+                     f"{back.size} sample(s) out of log-time order; sorted by log time")
+            t, v = t[order], v[order]
+            dt = np.diff(t)
+        if (dt == 0).any():
+            dup = np.concatenate([[False], dt == 0])
+            self.add(topic, "duplicate_stamp", int(t[np.nonzero(dup)[0][0]]), int(t[np.nonzero(dup)[0][-1]]),
+                     "excluded", f"{int(dup.sum())} sample(s) repeat the log time of the one before; dropped")
+            t, v = t[~dup], v[~dup]
+            dt = np.diff(t)
+        spans: list[tuple[int, int]] = []
+        if t.size >= 3 and period > 0:
+            lim = max(float(self.pol["stamps.gap_periods"]) * period, float(self.pol["stamps.gap_min_s"]) * NS)
+            for k in np.nonzero(dt > lim)[0].tolist():
+                spans.append((int(t[k]), int(t[k + 1])))
+                self.add(topic, "gap", int(t[k]), int(t[k + 1]), "kept" if is_input else "excluded",
+                         f"no sample for {dt[k] / NS:.3f} s (median period {period / NS * 1e3:.2f} ms); "
+                         + ("the last value is held over it" if is_input
+                            else "left out of comparisons, not interpolated across"))
+        return t, v, spans
+
+    # -- spikes and units ----------------------------------------------------------------------------
+    def spikes(self, topic: str, t: np.ndarray, v: np.ndarray, floor: float, unit: str
+               ) -> tuple[np.ndarray, np.ndarray]:
+        w = int(self.pol["spikes.window"])
+        if t.size < w:
+            return t, v
+        vv = v.reshape(t.size, -1)
+        bad = np.zeros(t.size, bool)
+        for j in range(vv.shape[1]):
+            x = vv[:, j]
+            r = x - _running_median(x, w)
+            sd = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+            bad |= np.abs(r) > max(float(self.pol["spikes.mad_factor"]) * sd, floor)
+        if bad.any() and bad.mean() < 0.05:  # more than 5 % is not a spike but the signal (unit check)
+            for i0, i1 in _runs(bad):
+                peak = float(np.max(np.abs(vv[i0:i1 + 1])))
+                self.add(topic, "spike", int(t[i0]), int(t[i1]), "excluded",
+                         f"{i1 - i0 + 1} sample(s) up to {peak:.4g} {unit} far from the running median "
+                         f"(beyond {floor:g} {unit} and {self.pol['spikes.mad_factor']:g} robust sd); dropped")
+            t, v = t[~bad], v[~bad]
+        return t, v
+
+    def units(self, topic: str, t: np.ndarray, v: np.ndarray, limit: float, factor: float, unit: str,
+              other: str) -> None:
+        if not t.size:
+            return
+        peak = float(np.max(np.abs(v)))
+        if peak > limit:
+            k = int(np.argmax(np.abs(v)))
+            if peak * factor <= limit:
+                raise self.fail(topic, int(t[0]), int(t[-1]),
+                                f"implausible_unit: values up to {peak:.4g} {unit} (at {self.s(t[k]):.3f} s) exceed "
+                                f"the plausible {limit:g} {unit} but fit {other}; expected {unit} (give a topic "
+                                f"map with the unit factor, --topic-map)")
+            raise self.fail(topic, int(t[k]), int(t[k]),
+                            f"values up to {peak:.4g} {unit} exceed the plausible {limit:g} {unit} (and are no "
+                            f"unit mistake); expected a {unit} signal within +-{limit:g}")
+
+    # -- IMU noise -----------------------------------------------------------------------------------
+    def imu_noise(self, topic: str, t: np.ndarray, gyro: np.ndarray, accel: np.ndarray) -> set[str]:
+        unusable: set[str] = set()
+        if t.size < 10:
+            return unusable
+        period = float(np.median(np.diff(t))) / NS
+        run_n = max(int(math.ceil(float(self.pol["noise.dead_run_s"]) / max(period, 1e-9))), 10)
+        for names, data, floor, unit in ((GYRO_SIGNALS, gyro, float(self.pol["noise.gyro_dead_rad_s"]), "rad/s"),
+                                         (ACCEL_SIGNALS, accel, float(self.pol["noise.accel_dead_m_s2"]), "m/s^2")):
+            for j, name in enumerate(names):
+                x = data[:, j]
+                spread = float(np.std(np.diff(x)))
+                if spread < floor:
+                    unusable.add(name)
+                    self.add(topic, "dead_sensor", int(t[0]), int(t[-1]), "excluded",
+                             f"{name} shows no noise (sample-to-sample spread {spread:.3g} {unit}, a live sensor "
+                             f"shows more than {floor:g} {unit}; value {float(np.median(x)):.4g} {unit}); "
+                             f"not used as a measurement")
+                    continue
+                same = np.concatenate([[False], np.diff(x) == 0])
+                for i0, i1 in _runs(same):
+                    if i1 - i0 + 2 >= run_n:
+                        unusable.add(name)
+                        self.add(topic, "dead_sensor", int(t[i0 - 1]), int(t[i1]), "excluded",
+                                 f"{name} repeats {float(x[i0]):.4g} {unit} for {i1 - i0 + 2} samples; "
+                                 f"not used as a measurement")
+                ext = float(np.max(np.abs(x)))
+                at = np.abs(np.abs(x) - ext) <= 1e-9 * max(ext, 1.0)
+                if ext > 0 and at.mean() >= float(self.pol["noise.saturated_fraction"]) and at.sum() >= run_n:
+                    i = np.nonzero(at)[0]
+                    self.add(topic, "saturated_sensor", int(t[i[0]]), int(t[i[-1]]), "kept",
+                             f"{name} sits at {float(x[i[0]]):.4g} {unit} for {int(at.sum())} samples: clipped "
+                             f"by the sensor range, peaks there are lower than the motion")
+        return unusable
+
+    # -- the drive -----------------------------------------------------------------------------------
+    def run(self) -> IntegrityResult:
+        DAMPER_COMMAND, IMU, ROAD_PROFILE = _drive.DAMPER_COMMAND, _drive.IMU, _drive.ROAD_PROFILE
+        SPEED, STEERING, WHEEL_HEIGHTS = _drive.SPEED, _drive.STEERING, _drive.WHEEL_HEIGHTS
+        d, pol = self.drive, self.pol
+        names = d.extra.get("input_topics", {})
+        excluded: dict[str, list[tuple[int, int]]] = {}
+
+        def scalar(key: str, default: str, s: Series | None, floor_key: str | None, unit: str) -> Series | None:
+            if s is None or not len(s):
+                return s
+            topic = names.get(key, default)
+            t, v, _ = self.stamps(topic, s.t_ns, s.values, is_input=True)
+            if floor_key is not None:
+                t, v = self.spikes(topic, t, v, float(pol[floor_key]), unit)
+            return _drive.Series(t, v)
+
+        speed = scalar("speed", SPEED, d.speed, "spikes.floor_speed", "m/s")
+        steering = scalar("steering", STEERING, d.steering, "spikes.floor_steering", "rad")
+        assert speed is not None and steering is not None
+        self.units(names.get("speed", SPEED), speed.t_ns, speed.values, float(pol["limits.speed_max"]),
+                   1.0 / 3.6, "m/s", "km/h")
+        self.units(names.get("steering", STEERING), steering.t_ns, steering.values, float(pol["limits.steering_max"]),
+                   math.pi / 180.0, "rad", "degrees")
+        wh = scalar("wheel_heights", WHEEL_HEIGHTS, d.wheel_heights, "spikes.floor_wheel_heights", "m")
+        cmd = scalar("damper_command", DAMPER_COMMAND, d.damper_command, None, "1")
+        imu = d.imu
+        unusable: set[str] = set()
+        if imu is not None and len(imu):
+            topic = names.get("imu", IMU)
+            t, v, gaps = self.stamps(topic, imu.t_ns, np.hstack([imu.gyro, imu.accel]), is_input=False)
+            if gaps:
+                excluded[topic] = gaps
+            t, v = self._imu_spikes(topic, t, v)
+            imu = _drive.ImuSeries(t, v[:, :3], v[:, 3:])
+            unusable = self.imu_noise(topic, imu.t_ns, imu.gyro, imu.accel)
+        maneuver = str(d.metadata.get("maneuver", ""))
+        needs = [w for w in pol["maneuvers.needs_road"] if str(w).lower() in maneuver.lower()]
+        if needs and d.road is None and (wh is None or not len(wh)):
+            rp = names.get("road_profile", ROAD_PROFILE)
+            self.add(rp, "missing_topic", self.t0, d.t_end_ns, "kept", f"maneuver {maneuver!r} needs the road")
+            raise self.fail(rp, self.t0, d.t_end_ns,
+                            f"missing_topic: maneuver {maneuver!r} is driven by the road but the recording has no "
+                            f"{rp} (nor {names.get('wheel_heights', WHEEL_HEIGHTS)}); expected the road profile "
+                            f"(without it the model would drive a flat road)")
+        extra = dict(d.extra)
+        extra["input_findings"] = [f.to_json() for f in self.findings]
+        extra["excluded_spans"] = excluded
+        extra["unusable_signals"] = sorted(unusable)
+        out = _drive.TestDrive(d.metadata, speed, steering, d.road, wh, imu, extra, damper_command=cmd)
+        return IntegrityResult(out, list(self.findings), unusable)
+
+    def _imu_spikes(self, topic: str, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        w = int(self.pol["spikes.window"])
+        if t.size < w:
+            return t, v
+        floors = [float(self.pol["spikes.floor_gyro"])] * 3 + [float(self.pol["spikes.floor_accel"])] * 3
+        bad = np.zeros(t.size, bool)
+        for j in range(6):
+            x = v[:, j]
+            r = x - _running_median(x, w)
+            sd = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+            bad |= np.abs(r) > max(float(self.pol["spikes.mad_factor"]) * sd, floors[j])
+        if bad.any() and bad.mean() < 0.05:
+            for i0, i1 in _runs(bad):
+                self.add(topic, "spike", int(t[i0]), int(t[i1]), "excluded",
+                         f"{i1 - i0 + 1} IMU sample(s) far from the running median (beyond "
+                         f"{self.pol['spikes.mad_factor']:g} robust sd and {floors[0]:g} rad/s / {floors[3]:g} "
+                         f"m/s^2); dropped")
+            t, v = t[~bad], v[~bad]
+        return t, v
+
+
+def check_drive_integrity(drive: TestDrive, file: str | Path, policy: dict[str, Any] | None = None
+                          ) -> IntegrityResult:
+    """The drive with its defects worked around and one finding per defect; IntegrityError when nothing
+    sound is left (see the module docstring for each kind and its action)."""
+    return _Checker(drive, str(file), policy if policy is not None else load_policy()).run()
+
+
+def require_live_imu(drive: TestDrive, file: str | Path, what: str, signals: tuple[str, ...] = GYRO_SIGNALS
+                     ) -> None:
+    """IntegrityError when ``what`` (a command that fits on the measured IMU) would use a signal the check
+    found dead (``drive.extra["unusable_signals"]``)."""
+    dead = [s for s in signals if s in drive.extra.get("unusable_signals", ())]
+    if dead:
+        topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
+        t_end = (drive.imu.t_ns[-1] - drive.imu.t_ns[0]) / NS if drive.imu is not None and len(drive.imu) else 0.0
+        raise IntegrityError(f"{file}: topic {topic}: dead_sensor {', '.join(dead)} (0.000-{t_end:.3f} s from the "
+                             f"first IMU message): {what} needs a live gyro on every axis (expected noise above "
+                             f"the policy floor); nothing sound to fit on")
+
+
+# ---- reporting -----------------------------------------------------------------------------------
+_COLLECTED: list[dict[str, Any]] = []
+_SEEN: set[tuple] = set()
+
+
+def start_collection() -> None:
+    """Forget the findings reported so far (the CLI calls this before each command)."""
+    _COLLECTED.clear()
+    _SEEN.clear()
+
+
+def report(findings: list[InputFinding], stream: TextIO | None = None) -> None:
+    """One line per finding on stderr (each once per collection) and keep it for :func:`collected`."""
+    out = stream if stream is not None else sys.stderr
+    for f in findings:
+        key = tuple(f.to_json().values())
+        if key in _SEEN:
+            continue
+        _SEEN.add(key)
+        _COLLECTED.append(f.to_json())
+        print(f.line(), file=out)
+
+
+def collected() -> list[dict[str, Any]]:
+    """The findings reported since :func:`start_collection` (``input_findings`` of the command's JSON)."""
+    return [dict(f) for f in _COLLECTED]
+
+
+def append_to_report(path: str | Path) -> None:
+    """Append the ``## Input findings`` section (the findings collected so far) to a Markdown report."""
+    text = markdown(collected())
+    if text:
+        with open(path, "a", encoding="utf-8") as fh:
+            fh.write(text)
+
+
+def markdown(findings: list[dict[str, Any]]) -> str:
+    """The ``## Input findings`` section of a Markdown report (empty text when there are none)."""
+    if not findings:
+        return ""
+    lines = ["", "## Input findings", ""]
+    lines += [f"- {InputFinding(**f).line()}" for f in findings]
+    return "\n".join(lines) + "\n"

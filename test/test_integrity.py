@@ -1,0 +1,248 @@
+"""Input integrity (issue 28): one check of every recording a command reads; findings, never silence.
+
+Damaged copies of the bundled drives (a dead gyro, a missing road profile, a gap, a clock jump, a spike,
+steering in degrees, NaN samples) are detected, worked around and reported, or refused with a named
+error (exit 2); the undamaged drives give no finding at all."""
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from _cli_helpers import run_cli
+from susp_sim_ros.io.drive import ImuSeries, Series, TestDrive, drive_from_recording, read_drive, write_drive
+from susp_sim_ros.io.integrity import (KINDS, IntegrityError, check_drive_integrity, load_policy,
+                                       require_live_imu)
+from susp_sim_ros.io.reader import read_recording
+
+BAGS = Path(__file__).resolve().parents[1] / "bags"
+BUMP = BAGS / "bump_crossing_intact.mcap"
+SINE = BAGS / "sine_steer_intact.mcap"
+NS = 1_000_000_000
+
+
+def raw(path: Path) -> TestDrive:
+    """The drive as recorded, before the integrity check."""
+    return drive_from_recording(read_recording(path))
+
+
+def with_imu(drive: TestDrive, t_ns, gyro, accel) -> TestDrive:
+    return dataclasses.replace(drive, imu=ImuSeries(t_ns, gyro, accel))
+
+
+def kinds(res) -> list[str]:
+    return [f.kind for f in res.findings]
+
+
+@pytest.fixture(scope="module")
+def bump() -> TestDrive:
+    return raw(BUMP)
+
+
+@pytest.fixture(scope="module")
+def sine() -> TestDrive:
+    return raw(SINE)
+
+
+# ---- clean drives ------------------------------------------------------------------------------------
+@pytest.mark.parametrize("path", sorted(BAGS.glob("*.mcap")), ids=lambda p: p.stem)
+def test_bundled_drives_give_no_finding(path):
+    res = check_drive_integrity(raw(path), str(path))
+    assert res.findings == [] and res.unusable == set()
+    d = read_drive(path)
+    assert d.extra["input_findings"] == [] and d.extra["unusable_signals"] == []
+
+
+def test_policy_has_value_unit_source_for_every_entry():
+    pol = load_policy()
+    assert pol["limits.steering_max"] == pytest.approx(15.7) and pol["spikes.window"] >= 3
+
+
+# ---- each kind on a damaged copy ----------------------------------------------------------------------
+def test_dead_gyro_is_found_and_marks_every_axis_unusable(sine):
+    imu = sine.imu
+    res = check_drive_integrity(with_imu(sine, imu.t_ns, np.zeros_like(imu.gyro), imu.accel), "dead.mcap")
+    assert kinds(res).count("dead_sensor") == 3 and res.unusable == {"roll_rate", "pitch_rate", "yaw_rate"}
+    assert all(f.action == "excluded" and f.topic == "/imu/data" for f in res.findings)
+    with pytest.raises(IntegrityError, match="dead_sensor"):
+        require_live_imu(res.drive, "dead.mcap", "diagnose")
+
+
+def test_gyro_that_dies_mid_drive_is_a_dead_span(sine):
+    imu = sine.imu
+    g = imu.gyro.copy()
+    g[800:, 0] = g[800, 0]
+    res = check_drive_integrity(with_imu(sine, imu.t_ns, g, imu.accel), "dies.mcap")
+    (f,) = res.findings
+    assert f.kind == "dead_sensor" and "roll_rate" in f.detail and f.from_s == pytest.approx(
+        (imu.t_ns[800] - sine.t0_ns) / NS, abs=0.01)
+
+
+def test_saturated_axis_is_reported(sine):
+    imu = sine.imu
+    g = imu.gyro.copy()
+    g[:, 2] = np.clip(g[:, 2], -0.1, 0.1)
+    res = check_drive_integrity(with_imu(sine, imu.t_ns, g, imu.accel), "clip.mcap")
+    assert "saturated_sensor" in kinds(res)
+
+
+def test_missing_road_on_a_bump_crossing_is_a_named_error(bump):
+    with pytest.raises(IntegrityError, match=r"missing_topic.*/road/profile"):
+        check_drive_integrity(dataclasses.replace(bump, road=None), "noroad.mcap")
+
+
+def test_imu_gap_is_excluded_not_interpolated(bump):
+    imu = bump.imu
+    keep = (imu.t_ns < imu.t_ns[200]) | (imu.t_ns > imu.t_ns[200] + 2 * NS)
+    res = check_drive_integrity(with_imu(bump, imu.t_ns[keep], imu.gyro[keep], imu.accel[keep]), "gap.mcap")
+    (f,) = res.findings
+    assert f.kind == "gap" and f.action == "excluded" and f.to_s - f.from_s == pytest.approx(2.0, abs=0.02)
+    assert res.drive.extra["excluded_spans"]["/imu/data"]
+
+
+def test_clock_jump_is_repaired(bump):
+    imu = bump.imu
+    t = imu.t_ns.copy()
+    t[500:] += 1000 * NS
+    res = check_drive_integrity(with_imu(bump, t, imu.gyro, imu.accel), "jump.mcap")
+    (f,) = res.findings
+    assert f.kind == "clock_jump" and f.action == "repaired"
+    assert np.array_equal(res.drive.imu.t_ns[:500], imu.t_ns[:500]) and res.drive.imu.t_ns[-1] < t[499] + 10 * NS
+
+
+def test_stamp_order_and_duplicate_stamps(bump):
+    t, v = bump.speed.t_ns.copy(), bump.speed.values.copy()
+    t[100], t[101] = t[101], t[100]
+    t[300] = t[299]
+    res = check_drive_integrity(dataclasses.replace(bump, speed=Series(t, v)), "order.mcap")
+    assert kinds(res) == ["stamp_order", "duplicate_stamp"]
+    assert np.all(np.diff(res.drive.speed.t_ns) > 0)
+
+
+def test_speed_spike_is_excluded(bump):
+    v = bump.speed.values.copy()
+    v[250] = 500.0
+    res = check_drive_integrity(dataclasses.replace(bump, speed=Series(bump.speed.t_ns, v)), "spike.mcap")
+    (f,) = res.findings
+    assert f.kind == "spike" and f.topic == "/vehicle/speed" and len(res.drive.speed) == len(v) - 1
+    assert res.drive.speed.values.max() < 3.0
+
+
+def test_non_finite_samples_are_excluded(sine):
+    imu = sine.imu
+    g = imu.gyro.copy()
+    g[40:43, 1] = np.nan
+    res = check_drive_integrity(with_imu(sine, imu.t_ns, g, imu.accel), "nan.mcap")
+    assert kinds(res) == ["non_finite"] and len(res.drive.imu) == len(imu) - 3
+
+
+def test_steering_in_degrees_is_an_implausible_unit(sine):
+    st_deg = Series(sine.steering.t_ns, np.degrees(sine.steering.values))
+    with pytest.raises(IntegrityError, match="implausible_unit.*degrees"):
+        check_drive_integrity(dataclasses.replace(sine, steering=st_deg), "deg.mcap")
+
+
+def test_speed_in_kmh_beyond_the_bound_is_an_implausible_unit(sine):
+    v = Series(sine.speed.t_ns, sine.speed.values * 3.6 * 2.0)  # 100 km/h recorded in km/h
+    with pytest.raises(IntegrityError, match="implausible_unit.*km/h"):
+        check_drive_integrity(dataclasses.replace(sine, speed=v), "kmh.mcap")
+
+
+def test_finding_json_has_the_interface_keys(bump):
+    v = bump.speed.values.copy()
+    v[250] = 500.0
+    res = check_drive_integrity(dataclasses.replace(bump, speed=Series(bump.speed.t_ns, v)), "spike.mcap")
+    j = res.findings[0].to_json()
+    assert set(j) == {"file", "topic", "kind", "from_s", "to_s", "action", "detail"} and j["kind"] in KINDS
+    assert res.findings[0].line().startswith("input: spike.mcap /vehicle/speed spike ")
+
+
+# ---- property: where and how much damage -------------------------------------------------------------
+@settings(max_examples=10, deadline=None)
+@given(start=st.floats(0.05, 0.8), length_s=st.floats(0.3, 3.0), spike=st.floats(5.0, 400.0),
+       at=st.floats(0.05, 0.95))
+def test_gap_and_spike_anywhere_are_found_where_they_are(bump, start, length_s, spike, at):
+    imu = bump.imu
+    t_a = int(imu.t_ns[0] + start * (imu.t_ns[-1] - imu.t_ns[0]))
+    keep = (imu.t_ns <= t_a) | (imu.t_ns > t_a + int(length_s * NS))
+    v = bump.speed.values.copy()
+    k = int(at * (len(v) - 1))
+    v[k] += spike
+    d = dataclasses.replace(with_imu(bump, imu.t_ns[keep], imu.gyro[keep], imu.accel[keep]),
+                            speed=Series(bump.speed.t_ns, v))
+    res = check_drive_integrity(d, "prop.mcap")
+    gaps = [f for f in res.findings if f.kind == "gap"]
+    spikes = [f for f in res.findings if f.kind == "spike"]
+    if imu.t_ns[keep][-1] > t_a + int(length_s * NS):  # the hole is inside the record
+        assert len(gaps) == 1 and gaps[0].to_s - gaps[0].from_s == pytest.approx(length_s, abs=0.02)
+    assert len(spikes) == 1 and spikes[0].from_s == pytest.approx((bump.speed.t_ns[k] - d.t0_ns) / NS, abs=1e-6)
+    assert set(kinds(res)) <= {"gap", "spike"}
+
+
+# ---- end to end through the command line -------------------------------------------------------------
+@pytest.fixture(scope="module")
+def copies(tmp_path_factory, bump, sine):
+    tmp = tmp_path_factory.mktemp("integrity")
+    imu = sine.imu
+    out = {}
+    out["dead"] = tmp / "sine_dead_gyro.mcap"
+    write_drive(out["dead"], with_imu(sine, imu.t_ns, np.zeros_like(imu.gyro), imu.accel))
+    g = imu.gyro.copy()
+    g[:, 1] = 0.0  # pitch gyro dead only
+    out["dead_pitch"] = tmp / "sine_dead_pitch.mcap"
+    write_drive(out["dead_pitch"], with_imu(sine, imu.t_ns, g, imu.accel))
+    out["noroad"] = tmp / "bump_no_road.mcap"
+    write_drive(out["noroad"], dataclasses.replace(bump, road=None))
+    keep = (imu.t_ns < imu.t_ns[600]) | (imu.t_ns > imu.t_ns[600] + 2 * NS)
+    out["gap"] = tmp / "sine_gap.mcap"
+    write_drive(out["gap"], with_imu(sine, imu.t_ns[keep], imu.gyro[keep], imu.accel[keep]))
+    out["sim"] = tmp / "sine_sim.mcap"
+    rc, _, err = run_cli(["sim", "--drive", SINE, "--out", out["sim"]])
+    assert rc == 0, err
+    return out
+
+
+def _json_or_named_error(argv):
+    rc, out, err = run_cli(argv + ["--json"])
+    assert rc in (0, 2) and "Traceback" not in err, (argv, rc, err)
+    return rc, (json.loads(out) if rc == 0 else None), err
+
+
+def test_cli_validate_on_a_dead_gyro(copies):
+    rc, res, err = _json_or_named_error(["validate", "--measured", copies["dead"], "--simulated", copies["sim"]])
+    assert rc == 2 and "dead_sensor" in err and str(copies["dead"]) in err
+    rc, res, err = _json_or_named_error(["validate", "--measured", copies["dead_pitch"], "--simulated", copies["sim"]])
+    assert rc == 0 and [f["kind"] for f in res["input_findings"]] == ["dead_sensor"]
+    assert "input: " in err and "pitch_rate" in err
+    assert "pitch_rate" not in res["rmse_deg_s"]["whole"] and "roll_rate" in res["rmse_deg_s"]["whole"]
+
+
+def test_cli_validate_leaves_an_imu_gap_out(copies):
+    rc, res, err = _json_or_named_error(["validate", "--measured", copies["gap"], "--simulated", copies["sim"]])
+    assert rc == 0 and [f["kind"] for f in res["input_findings"]] == ["gap"] and "gap" in err
+    clean = _json_or_named_error(["validate", "--measured", SINE, "--simulated", copies["sim"]])[1]
+    assert clean["input_findings"] == []
+    assert res["windows"]["whole"]["signals"]["roll_rate"]["n"] < clean["windows"]["whole"]["signals"]["roll_rate"]["n"]
+
+
+def test_cli_sim_and_diagnose_on_a_dead_gyro(copies, tmp_path):
+    rc, res, err = _json_or_named_error(["sim", "--drive", copies["dead"]])
+    assert rc == 0 and {f["kind"] for f in res["input_findings"]} == {"dead_sensor"}
+    rc, res, err = _json_or_named_error(["diagnose", copies["dead"], "--dry-run", "--out", tmp_path])
+    assert rc == 0 and {f["kind"] for f in res["input_findings"]} == {"dead_sensor"}  # read and checked only
+    rc, res, err = _json_or_named_error(["diagnose", copies["dead"], "--no-heldout", "--no-plots", "--out", tmp_path])
+    assert rc == 2 and "dead_sensor" in err and str(copies["dead"]) in err  # nothing sound to fit on
+
+
+def test_cli_commands_on_a_bump_crossing_without_road(copies, tmp_path):
+    for argv in (["sim", "--drive", copies["noroad"]],
+                 ["validate", "--measured", copies["noroad"], "--simulated", copies["sim"]],
+                 ["diagnose", copies["noroad"], "--dry-run", "--out", tmp_path],
+                 ["inspect", copies["noroad"]]):
+        rc, res, err = _json_or_named_error(argv)
+        assert rc == 2 and "missing_topic" in err and "/road/profile" in err, (argv, err)
