@@ -40,8 +40,13 @@ import sys
 import tempfile
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
+
+# the host-stall probe lives beside the benchmarks (not installed); this file may be loaded from anywhere
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from host_probe import HostProbe  # noqa: E402
 
 
 def _env() -> dict[str, str]:
@@ -53,7 +58,6 @@ def _env() -> dict[str, str]:
 
 
 def run(duration: float, rate_hz: float = 100.0, probe_rt: bool = True) -> dict:
-    from host_probe import HostProbe
     # the machine's own stalls over the whole run; the probes end with the run, also when it fails
     with HostProbe(max_duration_s=duration + 300.0) as host:
         return _run(duration, rate_hz, probe_rt, host)

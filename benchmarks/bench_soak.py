@@ -45,6 +45,10 @@ from pathlib import Path
 
 import numpy as np
 
+# the host-stall probe lives beside the benchmarks (not installed); this file may be loaded from anywhere
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from host_probe import HostProbe  # noqa: E402
+
 MB = 1024 * 1024
 
 
@@ -280,7 +284,6 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     if path.exists():
         path.unlink()
     from susp_sim_ros.analysis.host_stalls import Miss, attribute
-    from host_probe import HostProbe
     host = HostProbe(max_duration_s=duration + 300.0).start()  # the machine's own stalls, whole run
     try:
         probe = Probe(rate_hz, realtime=realtime_probe)
