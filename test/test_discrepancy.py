@@ -204,6 +204,11 @@ def test_written_variant_runs_and_reproduces_the_fit(tmp_path, bump_rear_amp):
     Model(veh, var)
     assert Path(paths["report"]).read_text().startswith("# Discrepancy diagnosis")
     assert all(Path(p).is_file() for p in paths["plots"])
+    # the missing force: one CSV and one loop plot per drive, its section in the report and the JSON
+    assert sorted(Path(p).suffix for p in paths["missing_force"]) == [".csv", ".png"]
+    assert all(Path(p).is_file() for p in paths["missing_force"])
+    assert "## Missing force" in Path(paths["report"]).read_text()
+    assert set(f.report()["missing_force"]["per_drive"]) == {c.name for c in f.cases_}
 
 
 def test_cli_bad_input_exits_2(tmp_path):

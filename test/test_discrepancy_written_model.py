@@ -92,6 +92,23 @@ def test_the_interesting_terms_were_fitted_and_written(diagnosed):
     assert "friction_variant:=" in head and (("vehicle:=" in head) == ("vehicle" in paths))
 
 
+def test_missing_force_is_written_per_drive_and_larger_where_friction_is_unmasked(diagnosed):
+    """Issue 26 on the bundled drives: the interface's CSV columns per drive and the JSON summary; the
+    bundled drives hide amplitude-dependent friction that the oil-empty rear dampers unmask, so the
+    calibrated model lacks more rear-axle force on the rear-empty bump crossing than on the intact one."""
+    base, f, paths = diagnosed
+    per = f.report()["missing_force"]["per_drive"]
+    csvs = [Path(p) for p in paths["missing_force"] if p.endswith(".csv")]
+    assert sorted(p.stem for p in csvs) == sorted(f"missing_force_{c.name}" for c in f.cases_)
+    for p in csvs:
+        head = p.read_text().splitlines()[0].split(",")
+        assert head[:7] == ["t", "front_N", "front_sd_N", "rear_N", "rear_sd_N", "roll_Nm", "roll_sd_Nm"]
+    for entry in per.values():
+        for ch in ("front_N", "rear_N", "roll_Nm"):
+            assert np.isfinite(entry[ch]["rms"]) and entry[ch]["rms"] >= 0 and entry[ch]["sd_mean"] > 0
+    assert per["bump_crossing_rear_empty"]["rear_N"]["rms"] > per["bump_crossing_intact"]["rear_N"]["rms"]
+
+
 def test_written_damper_tables_give_back_the_fitted_hydraulic_curves(diagnosed):
     base, f, paths = diagnosed
     if "vehicle" not in paths:

@@ -162,6 +162,86 @@ def test_finding_json_has_the_interface_keys(bump):
     assert res.findings[0].line().startswith("input: spike.mcap /vehicle/speed spike ")
 
 
+def _t(drive: TestDrive, t_ns) -> float:
+    return (int(t_ns) - drive.t0_ns) / NS
+
+
+def test_imu_decimated_half_way_is_a_rate_change(sine):
+    """A logger that drops to a fifth of the IMU rate half way: one rate_change, from where it changed to
+    the end, saying from and to which rate; the samples are kept as recorded."""
+    imu = sine.imu
+    h = len(imu) // 2
+    keep = np.r_[np.arange(h), np.arange(h, len(imu), 5)]
+    res = check_drive_integrity(with_imu(sine, imu.t_ns[keep], imu.gyro[keep], imu.accel[keep]), "decim.mcap")
+    (f,) = res.findings
+    assert f.kind == "rate_change" and f.action == "kept" and f.topic == "/imu/data"
+    assert f.from_s == pytest.approx(_t(sine, imu.t_ns[h]), abs=0.006)
+    assert f.to_s == pytest.approx(_t(sine, imu.t_ns[keep][-1]), abs=1e-6)
+    assert "from 200 Hz to 40 Hz" in f.detail
+    assert len(res.drive.imu) == keep.size  # nothing dropped
+
+
+def test_input_rate_change_in_the_middle_and_back(bump):
+    """CAN speed at 100 Hz, 20 Hz between 1 and 3 s (the brief's decimating logger), 100 Hz again."""
+    s = bump.speed
+    i_a, i_b = 100, 300
+    keep = np.r_[np.arange(i_a), np.arange(i_a, i_b, 5), np.arange(i_b, len(s))]
+    res = check_drive_integrity(dataclasses.replace(bump, speed=Series(s.t_ns[keep], s.values[keep])), "can.mcap")
+    (f,) = res.findings
+    assert f.kind == "rate_change" and f.topic == "/vehicle/speed" and f.action == "kept"
+    assert f.from_s == pytest.approx(_t(bump, s.t_ns[i_a]), abs=0.011)
+    assert f.to_s == pytest.approx(_t(bump, s.t_ns[i_b]), abs=0.011)
+    assert "from 100 Hz to 20 Hz" in f.detail and "back to 100 Hz" in f.detail
+
+
+def test_rate_change_ignores_gaps_and_jitter(sine):
+    """A hole of 2 s is a gap, not a rate change; stamps jittered by +-40 % of a period are no rate change."""
+    imu = sine.imu
+    keep = (imu.t_ns < imu.t_ns[600]) | (imu.t_ns > imu.t_ns[600] + 2 * NS)
+    res = check_drive_integrity(with_imu(sine, imu.t_ns[keep], imu.gyro[keep], imu.accel[keep]), "gap.mcap")
+    assert kinds(res) == ["gap"]
+    period = int(np.median(np.diff(imu.t_ns)))
+    jitter = np.random.default_rng(28).uniform(-0.4, 0.4, len(imu)) * period
+    t = np.sort(imu.t_ns + jitter.astype(np.int64))
+    res = check_drive_integrity(with_imu(sine, t, imu.gyro, imu.accel), "jitter.mcap")
+    assert "rate_change" not in kinds(res)
+
+
+def test_maneuver_that_names_a_maneuver_but_does_not_classify_is_bad_metadata(bump):
+    meta = {**bump.metadata, "maneuver": "slow_bump_crossing_8kmh"}
+    res = check_drive_integrity(dataclasses.replace(bump, metadata=meta), "meta.mcap")
+    (f,) = res.findings
+    assert f.kind == "bad_metadata" and f.action == "kept" and f.topic == "test_drive"
+    assert "maneuver" in f.detail and "'slow_bump_crossing_8kmh'" in f.detail and "bump_crossing" in f.detail
+    assert f.from_s == 0.0 and f.to_s == pytest.approx(bump.duration_s, abs=1e-6)
+    # free text naming no maneuver of the registry is what the interface allows: no finding
+    for text in ("highway_cruise", "cosine road", "Bump_Crossing_8kmh", ""):
+        ok = check_drive_integrity(dataclasses.replace(bump, metadata={**bump.metadata, "maneuver": text}), "ok")
+        assert ok.findings == [], text
+
+
+def test_unknown_vehicle_state_is_bad_metadata_and_ignored(sine):
+    meta = {**sine.metadata, "vehicle_state": "rear-empty"}
+    res = check_drive_integrity(dataclasses.replace(sine, metadata=meta), "state.mcap")
+    (f,) = res.findings
+    assert f.kind == "bad_metadata" and "vehicle_state" in f.detail and "'rear-empty'" in f.detail
+    assert "rear_empty" in f.detail and f.from_s == 0.0 and f.to_s == pytest.approx(sine.duration_s, abs=1e-6)
+    assert res.drive.oil_levels() == (1.0, 1.0, 1.0, 1.0)  # the state comes from damper_oil_level
+
+
+@pytest.mark.parametrize("oil", ["1,1,2,0", "1,1,empty,0", "1,1,1", "nan,1,1,1"])
+def test_unusable_oil_level_is_a_named_bad_metadata_error(sine, tmp_path, oil):
+    """Every simulation needs the oil levels: a damper_oil_level that is not four fractions in [0, 1] is a
+    named error (exit 2), in memory and when the recording is read, as it was before the kind existed."""
+    d = dataclasses.replace(sine, metadata={**sine.metadata, "damper_oil_level": oil})
+    with pytest.raises(IntegrityError, match=r"damper_oil_level: bad_metadata: expected four"):
+        check_drive_integrity(d, "oil.mcap")
+    p = tmp_path / "oil.mcap"
+    write_drive(p, d)
+    with pytest.raises(IntegrityError, match=r"oil.mcap: test_drive metadata damper_oil_level: bad_metadata"):
+        read_drive(p)
+
+
 # ---- property: where and how much damage -------------------------------------------------------------
 @settings(max_examples=10, deadline=None)
 @given(start=st.floats(0.05, 0.8), length_s=st.floats(0.3, 3.0), spike=st.floats(5.0, 400.0),

@@ -218,8 +218,7 @@ def drive_from_recording(rec: Recording, *, imu_topic: str = IMU,
     if imu_topic != SIM_IMU and rec.by_topic(SIM_IMU):
         extra["sim_imu"] = _imu_series(rec, SIM_IMU)
     drive = TestDrive(metadata, speed, steering, road, wh, imu, extra, damper_command=cmd)
-    if "damper_oil_level" in metadata and not oil_unknown(metadata["damper_oil_level"]):
-        parse_oil(metadata["damper_oil_level"], f"{path}: test_drive metadata damper_oil_level")
+    _integrity.check_oil_metadata(metadata, path)  # bad_metadata: a named error (exit 2), as before
     return drive
 
 

@@ -13,6 +13,10 @@ Kinds and what is done (``action``):
 * ``clock_jump`` -- a stamp step forward longer than ``stamps.clock_jump_s`` or backward longer than
   ``stamps.backward_jump_s``: the samples after it are shifted to close it to one sample period
   (``repaired``).
+* ``rate_change`` -- the message rate changes part way (a logger that decimates): the running median of
+  ``stamps.rate_window`` stamp intervals departs from the topic's median interval by more than
+  ``stamps.rate_factor`` for at least that many intervals; the samples are sound (``kept``), the finding
+  says where and from/to which rate. A single hole never moves the running median (that is a ``gap``).
 * ``stamp_order`` -- stamps out of order (short backward steps): the samples are sorted (``repaired``).
 * ``duplicate_stamp`` -- two samples with one stamp: the later ones are dropped (``excluded``).
 * ``gap`` -- a hole longer than ``stamps.gap_periods`` median periods (and ``stamps.gap_min_s``): the span
@@ -26,12 +30,20 @@ Kinds and what is done (``action``):
   repeating one value for ``noise.dead_run_s``: the axis is listed in ``drive.extra["unusable_signals"]``
   (``excluded``); consumers that cannot do without it raise :class:`IntegrityError`.
 * ``saturated_sensor`` -- an IMU axis stuck at its extreme: ``kept`` and reported.
+* ``bad_metadata`` -- ``test_drive`` metadata the commands rely on, present but unusable (topic
+  ``test_drive``, the whole recording): a ``maneuver`` that mentions a maneuver of the registry
+  (:data:`~susp_sim_ros.model.paper.MANEUVER_KINDS`) but does not start with one of its names, so that
+  :func:`~susp_sim_ros.model.paper.classify_maneuver` reads it as free text (compared over the whole
+  drive; ``kept``), a ``vehicle_state`` that names no vehicle state (ignored, the state comes from
+  ``damper_oil_level``; ``kept``); a ``damper_oil_level`` that is not four fractions in [0, 1] (nor
+  ``unknown``) is an error (every simulation needs the oil levels; :func:`check_oil_metadata`).
 * ``missing_topic`` -- a maneuver driven by the road (``maneuvers.needs_road``) without ``/road/profile`` or
   ``/road/wheel_heights``: an error (the model would drive a flat road).
 """
 from __future__ import annotations
 
 import math
+import re
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,8 +51,9 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from ..errors import ConfigError, RecordingError
-from ..model.params import _load_yaml, config_dir
+from ..errors import RecordingError
+from ..model.paper import MANEUVER_KINDS, STATES, classify_maneuver
+from ..model.params import load_settings
 from . import drive_data as _drive
 
 from .drive_data import Series, TestDrive
@@ -51,6 +64,10 @@ ACTIONS = ("excluded", "repaired", "kept")
 GYRO_SIGNALS = ("roll_rate", "pitch_rate", "yaw_rate")
 ACCEL_SIGNALS = ("accel_x", "accel_y", "accel_z")
 NS = 1_000_000_000
+#: the MCAP metadata record that describes a drive (interface.md); the ``topic`` of a bad_metadata finding
+METADATA_RECORD = "test_drive"
+#: what separates the words of a free-text ``maneuver`` (``bump_crossing_8kmh``, ``slow bump``)
+_WORD_SEP = re.compile(r"[^a-z0-9]+")
 
 
 class IntegrityError(RecordingError):
@@ -89,29 +106,10 @@ class IntegrityResult:
 
 
 # ---- policy --------------------------------------------------------------------------------------
-_POLICY_CACHE: dict[str, dict[str, Any]] = {}
-
-
 def load_policy(path: str | Path | None = None) -> dict[str, Any]:
     """The policy table (``config/integrity.yaml`` or ``path``) as ``{"section.key": value}``;
     ConfigError naming the file and entry when malformed."""
-    p = Path(path) if path is not None else config_dir() / "integrity.yaml"
-    key = str(p)
-    if key in _POLICY_CACHE:
-        return _POLICY_CACHE[key]
-    if not p.is_file():
-        raise ConfigError(f"{p}: no such integrity policy file")
-    data = _load_yaml(p)
-    out: dict[str, Any] = {}
-    for sec, entries in data.items():
-        if not isinstance(entries, dict):
-            raise ConfigError(f"{p}: section {sec} must be a mapping")
-        for k, e in entries.items():
-            if not isinstance(e, dict) or not {"value", "unit", "source"} <= set(e):
-                raise ConfigError(f"{p}: {sec}.{k} must be a mapping with value, unit and source, got {e!r}")
-            out[f"{sec}.{k}"] = e["value"]
-    _POLICY_CACHE[key] = out
-    return out
+    return load_settings("integrity.yaml", path)
 
 
 # ---- helpers -------------------------------------------------------------------------------------
@@ -132,6 +130,45 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     d = np.diff(m.astype(np.int8))
     starts, ends = np.nonzero(d == 1)[0], np.nonzero(d == -1)[0] - 1
     return list(zip(starts.tolist(), ends.tolist()))
+
+
+def _rate_detail(usual_hz: float, here_hz: float, t_a: float, t_b: float, at_start: bool, at_end: bool,
+                 w: int) -> str:
+    """The detail of a ``rate_change`` finding: where the rate changes, from and to which rate."""
+    if at_start and at_end:
+        where = f"{here_hz:.4g} Hz throughout"
+    elif at_start:
+        where = f"the rate changes from {here_hz:.4g} Hz to {usual_hz:.4g} Hz at {t_b:.3f} s"
+    elif at_end:
+        where = f"the rate changes from {usual_hz:.4g} Hz to {here_hz:.4g} Hz at {t_a:.3f} s"
+    else:
+        where = (f"the rate changes from {usual_hz:.4g} Hz to {here_hz:.4g} Hz at {t_a:.3f} s and back to "
+                 f"{usual_hz:.4g} Hz at {t_b:.3f} s")
+    return (f"{where} (median stamp interval over {w} messages); the samples are used as recorded, at the "
+            f"rate they have")
+
+
+def _mentions(text: str) -> list[str]:
+    """The maneuvers of the registry a free-text ``maneuver`` names anywhere (a full name, or an alias as
+    a word)."""
+    t = text.strip().lower()
+    words = set(_WORD_SEP.split(t))
+    return [k.name for k in MANEUVER_KINDS.values() if k.name in t or words & set(k.aliases)]
+
+
+def check_oil_metadata(metadata: dict[str, Any], file: str | Path) -> None:
+    """IntegrityError (``bad_metadata``) when the ``damper_oil_level`` metadata is present, not ``unknown``,
+    and not four comma-separated fractions in [0, 1]: every simulation of the drive needs the oil levels,
+    and guessing them would compare against the wrong vehicle state."""
+    text = metadata.get("damper_oil_level")
+    if text is None or _drive.oil_unknown(text):
+        return
+    try:
+        _drive.parse_oil(text)
+    except RecordingError:
+        raise IntegrityError(f"{file}: {METADATA_RECORD} metadata damper_oil_level: bad_metadata: expected four "
+                             f"comma-separated fractions FL,FR,RL,RR in [0, 1] (or 'unknown'), got {text!r}"
+                             ) from None
 
 
 class _Checker:
@@ -208,7 +245,27 @@ class _Checker:
                          f"no sample for {dt[k] / NS:.3f} s (median period {period / NS * 1e3:.2f} ms); "
                          + ("the last value is held over it" if is_input
                             else "left out of comparisons, not interpolated across"))
+            self.rate_change(topic, t)
         return t, v, spans
+
+    def rate_change(self, topic: str, t: np.ndarray) -> None:
+        """``rate_change`` findings of one series (stamps sorted, without duplicates): each run of at least
+        ``stamps.rate_window`` intervals whose running median departs from the topic's median interval by
+        more than ``stamps.rate_factor``. The running median ignores a single hole (a ``gap``)."""
+        w = int(self.pol["stamps.rate_window"])
+        dt = np.diff(t).astype(float)
+        if dt.size < 2 * w:
+            return
+        factor = float(self.pol["stamps.rate_factor"])
+        level = _running_median(dt, w)
+        base = float(np.median(dt))
+        off = (level > factor * base) | (level < base / factor)
+        usual = float(np.median(dt[~off])) if (~off).any() else base
+        for i0, i1 in _runs(off):
+            if i1 - i0 + 1 >= w:
+                self.add(topic, "rate_change", int(t[i0]), int(t[i1 + 1]), "kept",
+                         _rate_detail(NS / usual, NS / float(np.median(dt[i0:i1 + 1])), self.s(t[i0]),
+                                      self.s(t[i1 + 1]), i0 == 0, i1 + 1 == dt.size, w))
 
     # -- spikes and units ----------------------------------------------------------------------------
     def spikes(self, topic: str, t: np.ndarray, v: np.ndarray, floor: float, unit: str
@@ -319,6 +376,7 @@ class _Checker:
             t, v = self._imu_spikes(topic, t, v)
             imu = _drive.ImuSeries(t, v[:, :3], v[:, 3:])
             unusable = self.imu_noise(topic, imu.t_ns, imu.gyro, imu.accel)
+        self.metadata()
         maneuver = str(d.metadata.get("maneuver", ""))
         needs = [w for w in pol["maneuvers.needs_road"] if str(w).lower() in maneuver.lower()]
         if needs and d.road is None and (wh is None or not len(wh)):
@@ -334,6 +392,25 @@ class _Checker:
         extra["unusable_signals"] = sorted(unusable)
         out = _drive.TestDrive(d.metadata, speed, steering, d.road, wh, imu, extra, damper_command=cmd)
         return IntegrityResult(out, list(self.findings), unusable)
+
+    # -- metadata ------------------------------------------------------------------------------------
+    def metadata(self) -> None:
+        """``bad_metadata`` findings: the ``test_drive`` fields the commands read, present but unusable."""
+        meta, t_end = self.drive.metadata, self.drive.t_end_ns
+        check_oil_metadata(meta, self.file)
+        maneuver = str(meta.get("maneuver", ""))
+        named = _mentions(maneuver)
+        if named and classify_maneuver(maneuver) is None:
+            known = ", ".join(n for k in MANEUVER_KINDS.values() for n in k.names)
+            self.add(METADATA_RECORD, "bad_metadata", self.t0, t_end, "kept",
+                     f"maneuver {maneuver!r} mentions {' and '.join(named)} but does not start with a maneuver "
+                     f"name (expected one of {known} at the start); read as free text: compared over the whole "
+                     f"drive, not the maneuver's window")
+        state = meta.get("vehicle_state")
+        if state is not None and str(state).strip() and str(state).strip() not in STATES:
+            self.add(METADATA_RECORD, "bad_metadata", self.t0, t_end, "kept",
+                     f"vehicle_state {state!r} is no vehicle state (expected one of {', '.join(STATES)}); "
+                     f"ignored: the damper state is taken from damper_oil_level")
 
     def _imu_spikes(self, topic: str, t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         w = int(self.pol["spikes.window"])

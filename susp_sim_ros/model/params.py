@@ -82,6 +82,33 @@ def _load_yaml(path: Path) -> dict:
     return data
 
 
+_SETTINGS_CACHE: dict[str, dict[str, Any]] = {}
+
+
+def load_settings(file_name: str, path: str | os.PathLike | None = None) -> dict[str, Any]:
+    """A settings table of ``config/`` (``file_name``, or ``path``) as ``{"section.key": value}``: every
+    entry a mapping with ``value``, ``unit`` and ``source`` (as the vehicle files), read once per path;
+    ConfigError naming the file and entry when malformed. The one loader of the analysis settings
+    (``integrity.yaml``, ``missing_force.yaml``)."""
+    p = Path(path) if path is not None else config_dir() / file_name
+    key = str(p)
+    if key in _SETTINGS_CACHE:
+        return _SETTINGS_CACHE[key]
+    if not p.is_file():
+        raise ConfigError(f"{p}: no such settings file (expected {file_name})")
+    data = _load_yaml(p)
+    out: dict[str, Any] = {}
+    for sec, entries in data.items():
+        if not isinstance(entries, dict):
+            raise ConfigError(f"{p}: section {sec} must be a mapping")
+        for k, e in entries.items():
+            if not isinstance(e, dict) or not {"value", "unit", "source"} <= set(e):
+                raise ConfigError(f"{p}: {sec}.{k} must be a mapping with value, unit and source, got {e!r}")
+            out[f"{sec}.{k}"] = e["value"]
+    _SETTINGS_CACHE[key] = out
+    return out
+
+
 class _Reader:
     """Reads ``section.key`` entries of one vehicle file with checks and clear errors."""
 

@@ -199,6 +199,18 @@ class Evaluator:
         out.ravel()[:] = signals[run_of]
         return out
 
+    def simulate_outputs(self, st: Structure, x: np.ndarray, r: int, outputs: Sequence[str]) -> np.ndarray:
+        """Any kernel outputs (SI, ``model/layout.py`` labels) of drive ``r`` under structure ``st`` at
+        ``x``, to the drive's end: (n_steps, len(outputs)) at the step times (:attr:`DriveCase.t_sim_s`).
+        The steering offset of the structure applies as in :meth:`simulate`."""
+        U = self.U[r:r + 1, :self.cases[r].n_steps].copy()
+        if "steering_offset" in st.names:
+            U[:, :, U_INDEX["SWA"]] -= st.steer_offset(x)
+        res = simulate_batch(self.model, self.rows(st, x, [r]), U, dt=self.dt, roads=[self.roads[r]],
+                             outputs=list(outputs))
+        self.vehicle_seconds += self.cases[r].n_steps * self.dt
+        return res.values[0]
+
     # -- residuals ----------------------------------------------------------------------------------
     def case_residual(self, r: int, rates: np.ndarray, lag: float, bias: bool) -> np.ndarray:
         """Residual (n_grid, n_sig) simulated - measured (native units) of drive ``r`` from its simulated

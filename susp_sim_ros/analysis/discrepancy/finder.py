@@ -183,6 +183,7 @@ class DiscrepancyFinder:
         self.base_fit_ = base_fit
         # 3. calibration of the known physics (with the measurement chain)
         cur = self._calibrate(ev, model)
+        self.calibrated_fit_ = cur  # what the missing force is estimated against (missing_force_report)
         n = cur.n
         path = [{"step": 0, "structure": list(cur.structure.names), "rss": cur.rss, "bic": cur.bic,
                  "rms_x_noise": math.sqrt(cur.rss / n)}]

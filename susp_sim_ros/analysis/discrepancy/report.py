@@ -16,6 +16,7 @@ from ...model.vehicle import hydraulic_curves, hydraulic_from_measured, velocity
 from .calibration import outside_statement
 from .candidates import BY_NAME, LIBRARY, MEASUREMENT, PHYSICS, axle_map
 from .data import SIGNAL_UNIT, SIGNALS
+from . import missing_force_report
 
 VERDICTS = ("missing_physics", "no_significant_discrepancy", "unexplained_residual", "unmeasured_input")
 
@@ -199,6 +200,8 @@ def interface_json(f) -> dict:
                                    "drives": [x["drive"] for x in u],
                                    "road_estimates": {x["drive"]: x["road_estimate"] for x in u
                                                       if "road_estimate" in x}}
+    if getattr(f, "missing_force_", None) is not None:  # estimated when the outputs were written
+        rep["missing_force"] = f.missing_force_
     return rep
 
 
@@ -376,6 +379,8 @@ def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
     roads = write_estimated_roads(f, out, name)
     if roads:
         paths["estimated_roads"] = roads
+    f.missing_force_ = missing_force_report.write(f, out, name, plots=plots)
+    paths["missing_force"] = f.missing_force_["files"]
     rep = f.report()
     detail = {"result": rep, "path": f.path_, "noise": f.noise_, "heldout": f.heldout_,
               "ranking": ranking_table(f), "tested": f.testable_, "in_base_model": f.in_base_,
@@ -594,6 +599,12 @@ def _md_selection(f, rep: dict, paths: dict, name: str) -> list[str]:
     return L
 
 
+def _md_missing_force(f, rep: dict, paths: dict, name: str) -> list[str]:
+    """The force the fitted model lacks, per drive (:mod:`.missing_force_report`)."""
+    mfj = rep.get("missing_force")
+    return ["", *missing_force_report.markdown(mfj)] if mfj else []
+
+
 def _md_files(f, rep: dict, paths: dict, name: str) -> list[str]:
     """The files written, how to run the fitted model, the plots."""
     L: list[str] = []
@@ -613,7 +624,7 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
     """The diagnosis as Markdown (``report.md``), section by section."""
     L: list[str] = []
     for section in (_md_header, _md_calibration, _md_unmeasured, _md_findings, _md_heldout, _md_selection,
-                    _md_files):
+                    _md_missing_force, _md_files):
         L += section(f, rep, paths, name)
     return "\n".join(L) + "\n"
 

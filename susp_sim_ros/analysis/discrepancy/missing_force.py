@@ -1,0 +1,307 @@
+"""The force the model lacks, estimated from a recording (issue 26: "see the missing force").
+
+What the body IMU says and the model does not is a force. Write the measured motion as the simulated
+one plus an error ``e = q_meas - q_sim`` in the seven vertical coordinates of :mod:`~susp_sim_ros.model.linear`
+(heave, roll, pitch, four wheels). To first order it obeys the model's linearised dynamics driven by the
+generalised force of what is missing::
+
+    M e'' + C e' + K e = B d,      d = [F_front, F_rear, M_roll]
+
+``F_front``/``F_rear`` [N]: vertical force between body and axle (both wheels together), positive when it
+pushes the body up and the wheels down, like the model's own suspension force; ``M_roll`` [N*m]: roll
+moment on the body about x (REP-103, positive rolls the left side up), carried half by each axle as
+opposite forces on its two corners. ``d`` is a first-order Gauss-Markov process (time constant and
+intensity in ``config/missing_force.yaml``); the measurements are the residuals measured - simulated of
+roll rate, pitch rate [rad/s] and vertical specific force [m/s^2] at the IMU's sample times, with the
+finder's per-drive noise floors as their noise. A Kalman filter and Rauch-Tung-Striebel smoother over
+the augmented state ``[e, e', d]`` give ``d(t)`` and its standard deviation.
+
+Why hand-written recursions on scipy.linalg (``expm`` for the exact discretisation, Van Loan 1978)
+rather than filterpy: the model is 17 states and a few thousand samples per drive, the filter also runs
+over missing samples (gaps excluded by the integrity check) and returns the innovations' likelihood that
+chooses the intensity; filterpy's ``KalmanFilter``/``rts_smoother`` would need the same loop around it
+and is unmaintained since 2018.
+
+Sources: Rauch, Tung and Striebel (1965), AIAA J. 3(8); Van Loan (1978), IEEE TAC 23(3) (discretisation);
+Harvey (1989), Forecasting, structural time series models and the Kalman filter, ch. 3.4 (likelihood
+of the innovations); the unknown-input idea as in Friedland (1969), IEEE TAC 14(4) (augmented state).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.signal
+
+from ...model.layout import P_INDEX
+from ...model.linear import LinearModel, linearise
+from ...model.params import load_settings
+
+#: columns of the estimated force, in the order of ``d`` and of the CSV (interface.md)
+CHANNELS = ("front_N", "rear_N", "roll_Nm")
+#: measured signals the estimate uses, with their kernel output names
+MEASURED = ("ROLL_RATE", "PITCH_RATE", "AZ_SF")
+_N_Q = 7   # vertical coordinates of model/linear.py
+_N_D = len(CHANNELS)
+_N_X = 2 * _N_Q + _N_D
+_LOG_2PI = float(np.log(2 * np.pi))
+
+
+def settings(path=None) -> dict:
+    """``config/missing_force.yaml`` as ``{"section.key": value}``."""
+    return load_settings("missing_force.yaml", path)
+
+
+@dataclass(frozen=True)
+class Corners:
+    """Corner positions in the body frame [m] (FL FR RL RR; x forward, y left) from a parameter row."""
+
+    x: np.ndarray
+    y: np.ndarray
+
+    @classmethod
+    def of(cls, P: np.ndarray) -> "Corners":
+        P = np.asarray(P, float).ravel()
+        return cls(P[P_INDEX["X_I"]:P_INDEX["X_I"] + 4].copy(), P[P_INDEX["Y_I"]:P_INDEX["Y_I"] + 4].copy())
+
+    @property
+    def roll_arm_m(self) -> float:
+        """Half the mean track [m]: the lever of a corner force about the roll axis."""
+        return float(np.mean(np.abs(self.y)))
+
+
+def corner_forces(corners: Corners) -> np.ndarray:
+    """(4, 3): the corner forces [N] (FL FR RL RR, positive up on the body) of a unit ``d`` component
+    (1 N front, 1 N rear, 1 N*m roll, the roll moment half on each axle)."""
+    T = np.zeros((4, _N_D))
+    T[0:2, 0] = 0.5
+    T[2:4, 1] = 0.5
+    for left, right in ((0, 1), (2, 3)):
+        track = corners.y[left] - corners.y[right]
+        T[left, 2] = 0.5 / track
+        T[right, 2] = -0.5 / track
+    return T
+
+
+def input_matrix(corners: Corners) -> np.ndarray:
+    """(7, 3) generalised forces in the coordinates of ``model/linear.py`` of a unit ``d`` component: a
+    corner force ``f`` (up on the body) acts on heave with ``f``, on roll with ``y f``, on pitch with
+    ``-x f`` and on its wheel with ``-f`` (``_kernel_template.body_accelerations``)."""
+    return -deflection_jacobian(corners).T @ corner_forces(corners)
+
+
+def deflection_jacobian(corners: Corners) -> np.ndarray:
+    """(4, 7) ``d(deflection)/dq``: deflection ``zw - (z - x theta + y phi)`` (positive in bump,
+    ``_kernel_template.corner_kinematics``)."""
+    J = np.zeros((4, _N_Q))
+    J[:, 0] = -1.0
+    J[:, 1] = -corners.y
+    J[:, 2] = corners.x
+    J[:, 3:] = np.eye(4)
+    return J
+
+
+def equivalent_linear(lin: LinearModel, corners: Corners, deflection: np.ndarray, velocity: np.ndarray,
+                      force: np.ndarray) -> LinearModel:
+    """``lin`` with each corner's damper and friction force replaced by its equivalent linearisation
+    over the drive (Caughey 1963; Roberts and Spanos, Random Vibration and Statistical Linearization,
+    2003): the least-squares ``force ~ a + k deflection + c velocity`` of the simulated (n, 4) series.
+    At standstill the model's damper has no slope (its friction takes the first millimetres per second)
+    and its friction elements are not in ``lin`` at all; along a drive both act as a damping ``c`` and a
+    hysteretic stiffness ``k``, which the error dynamics must carry."""
+    J = deflection_jacobian(corners)
+    c0 = -lin.C[0, 3:]   # the corners' damper slopes at standstill in lin (C = J^T diag(c0) J + tyres)
+    k = np.zeros(4)
+    c = np.zeros(4)
+    for i in range(4):
+        X = np.column_stack([np.ones(len(force)), deflection[:, i] - deflection[:, i].mean(),
+                             velocity[:, i] - velocity[:, i].mean()])
+        coef = np.linalg.lstsq(X, force[:, i], rcond=None)[0]
+        k[i], c[i] = max(coef[1], 0.0), max(coef[2], 0.0)
+    return LinearModel(lin.M, lin.C + J.T @ np.diag(c - c0) @ J, lin.K + J.T @ np.diag(k) @ J)
+
+
+@dataclass(frozen=True)
+class ErrorModel:
+    """The discretised augmented model ``x[k+1] = F x[k] + w``, ``y[k] = H x[k] + v`` (``x = [e, e', d]``)
+    at step ``dt`` [s] for a unit intensity; ``Qe`` and ``Qd`` the process noise of the error states and of
+    ``d`` per unit intensity (``Q = Qe + intensity * Qd``)."""
+
+    F: np.ndarray
+    H: np.ndarray
+    Qe: np.ndarray
+    Qd: np.ndarray
+    dt: float
+    d_scale: np.ndarray
+
+
+def error_model(lin: LinearModel, B: np.ndarray, dt: float, *, tau_s: float, state_sd: float,
+                roll_arm_m: float) -> ErrorModel:
+    """:class:`ErrorModel` of ``M e'' + C e' + K e = B d`` with ``d`` a Gauss-Markov process of time
+    constant ``tau_s``; the roll moment's intensity is that of a corner force at ``roll_arm_m``."""
+    Minv = np.linalg.inv(lin.M)
+    A = np.zeros((_N_X, _N_X))
+    A[:_N_Q, _N_Q:2 * _N_Q] = np.eye(_N_Q)
+    A[_N_Q:2 * _N_Q, :_N_Q] = -Minv @ lin.K
+    A[_N_Q:2 * _N_Q, _N_Q:2 * _N_Q] = -Minv @ lin.C
+    A[_N_Q:2 * _N_Q, 2 * _N_Q:] = Minv @ B
+    A[2 * _N_Q:, 2 * _N_Q:] = -np.eye(_N_D) / tau_s
+    d_scale = np.array([1.0, 1.0, roll_arm_m])
+    Qc_d = np.zeros((_N_X, _N_X))
+    Qc_d[2 * _N_Q:, 2 * _N_Q:] = np.diag(d_scale ** 2)
+    Qc_e = np.zeros((_N_X, _N_X))
+    Qc_e[:2 * _N_Q, :2 * _N_Q] = state_sd ** 2 * np.eye(2 * _N_Q)
+    F, Qe = _van_loan(A, Qc_e, dt)
+    _, Qd = _van_loan(A, Qc_d, dt)
+    H = np.zeros((len(MEASURED), _N_X))
+    H[0, _N_Q + 1] = 1.0     # roll rate error = e'_phi
+    H[1, _N_Q + 2] = 1.0     # pitch rate error = e'_theta
+    H[2] = A[_N_Q]           # vertical specific force error = e''_z (IMU at the centre of gravity)
+    return ErrorModel(F, H, Qe, Qd, dt, d_scale)
+
+
+def _van_loan(A: np.ndarray, Qc: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact discretisation of ``x' = A x + w`` (white ``w`` of intensity ``Qc``) over ``dt``."""
+    n = A.shape[0]
+    V = np.zeros((2 * n, 2 * n))
+    V[:n, :n] = -A
+    V[:n, n:] = Qc
+    V[n:, n:] = A.T
+    E = scipy.linalg.expm(V * dt)
+    F = E[n:, n:].T
+    Q = F @ E[:n, n:]
+    return F, 0.5 * (Q + Q.T)
+
+
+@dataclass
+class Smoothed:
+    """The smoother's ``d`` estimate (n, 3) and its sd (n, 3), and the innovations' log-likelihood."""
+
+    d: np.ndarray
+    sd: np.ndarray
+    loglik: float
+
+
+def smooth(em: ErrorModel, intensity: float, y: np.ndarray, valid: np.ndarray, R: np.ndarray,
+           *, smooth_back: bool = True) -> Smoothed:
+    """Kalman filter (and, with ``smooth_back``, RTS smoother) of ``y`` (n, 3) where ``valid`` (n,) is
+    true; ``R`` (3,) measurement variances. Missing samples are predicted through, never interpolated."""
+    n = len(y)
+    F, H = em.F, em.H
+    Q = em.Qe + intensity * em.Qd
+    x = np.zeros(_N_X)
+    P = np.zeros((_N_X, _N_X))
+    tau = -em.dt / np.log(F[-1, -1])
+    P[2 * _N_Q:, 2 * _N_Q:] = np.diag(intensity * em.d_scale ** 2 * tau / 2)  # stationary d
+    xp = np.empty((n, _N_X))
+    Pp = np.empty((n, _N_X, _N_X))
+    xf = np.empty((n, _N_X))
+    Pf = np.empty((n, _N_X, _N_X))
+    Rm = np.diag(R)
+    loglik = 0.0
+    for k in range(n):
+        if k:
+            x = F @ x
+            P = F @ P @ F.T + Q
+        xp[k], Pp[k] = x, P
+        if valid[k]:
+            HP = H @ P
+            Si = np.linalg.inv(HP @ H.T + Rm)
+            nu = y[k] - H @ x
+            G = HP.T @ Si
+            x = x + G @ nu
+            P = P - G @ HP
+            P = 0.5 * (P + P.T)
+            loglik -= 0.5 * (float(nu @ Si @ nu) - float(np.linalg.slogdet(Si)[1]) + _LOG_2PI * len(nu))
+        xf[k], Pf[k] = x, P
+    if not smooth_back:
+        return Smoothed(xf[:, 2 * _N_Q:], np.sqrt(np.maximum(np.diagonal(Pf, axis1=1, axis2=2)[:, 2 * _N_Q:], 0)),
+                        loglik)
+    xs, Ps = xf.copy(), Pf.copy()
+    for k in range(n - 2, -1, -1):
+        G = np.linalg.solve(Pp[k + 1], F @ Pf[k]).T
+        xs[k] = xf[k] + G @ (xs[k + 1] - xp[k + 1])
+        Ps[k] = Pf[k] + G @ (Ps[k + 1] - Pp[k + 1]) @ G.T
+    var = np.diagonal(Ps, axis1=1, axis2=2)[:, 2 * _N_Q:]
+    return Smoothed(xs[:, 2 * _N_Q:], np.sqrt(np.maximum(var, 0.0)), loglik)
+
+
+@dataclass
+class MissingForce:
+    """The estimated missing force of one drive on a uniform grid ``t`` [s since the drive's first
+    input]: ``force`` and ``sd`` (n, 3) in :data:`CHANNELS` units; ``intensity`` [N^2/s] chosen by the
+    likelihood; ``valid`` the grid samples with a measurement."""
+
+    t: np.ndarray
+    force: np.ndarray
+    sd: np.ndarray
+    intensity: float
+    valid: np.ndarray
+
+
+def uniform_grid(t_meas: np.ndarray) -> tuple[np.ndarray, float]:
+    """A uniform grid [s] at the median sampling interval over the measured span, and the interval."""
+    dt = float(np.median(np.diff(t_meas)))
+    n = int(np.floor((t_meas[-1] - t_meas[0]) / dt + 1e-9)) + 1
+    return t_meas[0] + dt * np.arange(n), dt
+
+
+def on_grid(t_meas: np.ndarray, y_meas: np.ndarray, grid: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """The measured residual at the grid times: each grid time takes the nearest measured sample within
+    half an interval, else it is missing (``valid`` false); nothing is interpolated across a gap."""
+    j = np.clip(np.searchsorted(t_meas, grid), 1, len(t_meas) - 1)
+    j = np.where(np.abs(t_meas[j - 1] - grid) <= np.abs(t_meas[j] - grid), j - 1, j)
+    valid = np.abs(t_meas[j] - grid) <= 0.5 * dt + 1e-9
+    return y_meas[j], valid
+
+
+def estimate(lin: LinearModel, corners: Corners, t_meas: np.ndarray, resid: np.ndarray, sigma: np.ndarray,
+             cfg: dict | None = None) -> MissingForce:
+    """The missing force from the residuals measured - simulated ``resid`` (n, 3) of :data:`MEASURED`
+    (SI) at the measured times ``t_meas`` [s] with noise sd ``sigma`` (3,) (SI); ``lin`` the model
+    linearised at the drive's parameters. The intensity is the grid point of largest likelihood."""
+    cfg = settings() if cfg is None else cfg
+    grid, dt = uniform_grid(np.asarray(t_meas, float))
+    y, valid = on_grid(np.asarray(t_meas, float), np.asarray(resid, float), grid, dt)
+    em = error_model(lin, input_matrix(corners), dt, tau_s=float(cfg["force.time_constant_s"]),
+                     state_sd=float(cfg["force.state_sd"]), roll_arm_m=corners.roll_arm_m)
+    lo, hi, k = cfg["force.intensity_grid"]
+    R = np.maximum(np.asarray(sigma, float), 1e-12) ** 2
+    best = max(np.geomspace(float(lo), float(hi), int(k)),
+               key=lambda q: smooth(em, q, y, valid, R, smooth_back=False).loglik)
+    s = smooth(em, float(best), y, valid, R)
+    return MissingForce(grid, s.d, s.sd, float(best), valid)
+
+
+def estimate_on_model(vehicle, P: np.ndarray, deflection: np.ndarray, velocity: np.ndarray,
+                      force: np.ndarray, t_meas: np.ndarray, resid: np.ndarray, sigma: np.ndarray,
+                      cfg: dict | None = None) -> MissingForce:
+    """:func:`estimate` with the model linearised at the drive's parameter row ``P`` of ``vehicle``, its
+    damper and friction replaced by their equivalent linearisation along the simulated corner series
+    (n_steps, 4): ``deflection`` [m], ``velocity`` [m/s], damper plus friction ``force`` [N]."""
+    corners = Corners.of(P)
+    lin = equivalent_linear(linearise(vehicle, P), corners, deflection, velocity, force)
+    return estimate(lin, corners, t_meas, resid, sigma, cfg)
+
+
+def band_passed(x: np.ndarray, dt: float, cfg: dict | None = None) -> np.ndarray:
+    """``x`` (n, ...) band-passed to the body-mode band of the settings (zero-phase Butterworth)."""
+    cfg = settings() if cfg is None else cfg
+    sos = scipy.signal.butter(2, [float(cfg["band.low_hz"]), float(cfg["band.high_hz"])], btype="band",
+                              fs=1.0 / dt, output="sos")
+    pad = 3 * int(round(1.0 / (dt * float(cfg["band.low_hz"]))))  # three periods of the lowest frequency
+    return scipy.signal.sosfiltfilt(sos, x, axis=0, padlen=min(len(x) - 1, pad))
+
+
+def loop_half_height(force: np.ndarray, deflection_velocity: np.ndarray, cfg: dict | None = None) -> float:
+    """Half the height of a force-deflection loop [N]: half the difference between the mean force in
+    compression and in rebound where the deflection moves faster than the settings' saturation velocity
+    (a friction element has slid there). The friction level of a Coulomb or Dahl element, zero for a
+    spring, small for a slow viscous one; blind to a constant offset (which a body IMU cannot see)."""
+    cfg = settings() if cfg is None else cfg
+    v_min = float(cfg["loops.saturated_velocity_m_s"])
+    up, down = deflection_velocity > v_min, deflection_velocity < -v_min
+    if not (np.any(up) and np.any(down)):
+        return float("nan")
+    return float(0.5 * (np.mean(force[up]) - np.mean(force[down])))

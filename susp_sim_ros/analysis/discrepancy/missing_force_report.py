@@ -1,0 +1,218 @@
+"""The missing force of every drive of a fitted finder (against its calibrated model, before any
+physics term is added: what the calibration could not explain), seen: time series (CSV), loops (PNG), summary
+(``missing_force`` in the JSON) and a report section (issue 26, items 1-2; estimation in
+:mod:`.missing_force`).
+
+Per drive the calibrated model (base structure, calibration and measurement chain as fitted) is
+simulated to the drive's end; the residual measured - simulated of roll rate, pitch rate and vertical
+specific force at the measured sample times (sensor offset removed over the quiet lead-in, else over the
+drive) is turned into the force per axle and the roll moment the model lacks, drawn against the model's
+own deflection and deflection velocity of that axle (mean of its two corners), with the model's own
+suspension force beside it: the hysteresis loops and force-velocity curves an engineer reads physics off.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import missing_force as mf
+from .data import SIGNAL_OF_OUTPUT, SIGNALS, has_road_input
+from .engine import MIN_QUIET_BIAS
+
+_WHEELS = ("FL", "FR", "RL", "RR")
+_AXLE_CORNERS = {"front": (0, 1), "rear": (2, 3)}
+#: kernel outputs simulated per drive: deflection [m], its velocity [m/s], the suspension's forces [N]
+_CORNER_OUTPUTS = ("DEFL", "DEFL_VEL", "F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")
+_OUTPUTS = tuple(mf.MEASURED) + tuple(f"{o}_{w}" for o in _CORNER_OUTPUTS for w in _WHEELS)
+#: CSV columns (interface.md "missing_force": the first seven are the interface's)
+CSV_COLUMNS = ("t", "front_N", "front_sd_N", "rear_N", "rear_sd_N", "roll_Nm", "roll_sd_Nm",
+               "front_deflection_m", "rear_deflection_m", "front_deflection_velocity_m_s",
+               "rear_deflection_velocity_m_s", "front_model_force_N", "rear_model_force_N")
+
+
+@dataclass
+class DriveForce:
+    """One drive's missing force (:class:`~.missing_force.MissingForce`) with the model's own axle
+    deflection [m], deflection velocity [m/s] and suspension force [N] (n, 2: front, rear) on its grid."""
+
+    drive: str
+    est: mf.MissingForce
+    deflection: np.ndarray
+    velocity: np.ndarray
+    model_force: np.ndarray
+    unmeasured_input: bool
+
+
+def _corner(Y: np.ndarray, name: str) -> np.ndarray:
+    j = _OUTPUTS.index(f"{name}_FL")
+    return Y[:, j:j + 4]
+
+
+def _residual(f, fit, r: int, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Measured times [s], residual measured - simulated (n, 3, SI) and noise sd (3,, SI) of drive ``r``
+    against the model of ``fit`` (a :class:`~.fit.FitResult`) simulated as ``Y``."""
+    c = f.cases_[r]
+    st, x = fit.structure, fit.x
+    t_sim = c.t_sim_s
+    tq = c.t_raw_s - st.lag(x)
+    sig = [SIGNALS[[SIGNAL_OF_OUTPUT[s][0] for s in SIGNALS].index(o)] for o in mf.MEASURED]
+    to_si = np.array([1.0 / SIGNAL_OF_OUTPUT[s][1] for s in sig])
+    meas = np.column_stack([c.y_raw[:, SIGNALS.index(s)] for s in sig]) * to_si
+    sim = np.column_stack([np.interp(tq, t_sim, Y[:, j]) for j in range(len(mf.MEASURED))])
+    resid = meas - sim
+    quiet = c.quiet_raw if c.quiet_raw is not None and c.quiet_raw.sum() >= MIN_QUIET_BIAS else np.ones(len(tq), bool)
+    resid -= resid[quiet].mean(axis=0)
+    per, pooled = f.noise_["per_drive"][c.name], f.noise_["noise_floors"]
+    sd = np.array([per[s] if math.isfinite(per.get(s, math.nan)) and per[s] > 0 else pooled[s] for s in sig]) * to_si
+    return c.t_raw_s, resid, sd
+
+
+def _per_axle(t: np.ndarray, t_sim: np.ndarray, corners: np.ndarray, combine) -> np.ndarray:
+    """(n, 2) front and rear of the per-corner series ``corners`` (n_steps, 4) at the times ``t``, its
+    two corners combined by ``combine`` (mean of a deflection, sum of a force)."""
+    return np.column_stack([combine(np.column_stack([np.interp(t, t_sim, corners[:, i]) for i in ij]), axis=1)
+                            for ij in _AXLE_CORNERS.values()])
+
+
+def estimate_drives(f, fit, cfg: dict | None = None) -> dict[str, DriveForce]:
+    """The missing force of every drive of the fitted finder ``f`` against the model of ``fit`` (module
+    docstring)."""
+    cfg = mf.settings() if cfg is None else cfg
+    ev, st, x = f.evaluator_, fit.structure, fit.x
+    out = {}
+    for r, c in enumerate(f.cases_):
+        Y = ev.simulate_outputs(st, x, r, _OUTPUTS)
+        defl, vel = _corner(Y, "DEFL"), _corner(Y, "DEFL_VEL")
+        t, resid, sd = _residual(f, fit, r, Y)
+        est = mf.estimate_on_model(f.model_.vehicle, ev.rows(st, x, [r])[0], defl, vel,
+                                   _corner(Y, "F_DAMPER") + _corner(Y, "F_FRICTION"), t, resid, sd, cfg)
+        force = np.sum([_corner(Y, n) for n in ("F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")], axis=0)
+        out[c.name] = DriveForce(c.name, est, _per_axle(est.t, c.t_sim_s, defl, np.mean),
+                                 _per_axle(est.t, c.t_sim_s, vel, np.mean),
+                                 _per_axle(est.t, c.t_sim_s, force, np.sum), not has_road_input(c))
+    return out
+
+
+def summary(forces: dict[str, DriveForce], cfg: dict | None = None) -> dict:
+    """``missing_force.per_drive`` of the interface: per drive and channel the RMS over the measured
+    samples, the RMS in the body-mode band, the mean sd; per axle the loop's half height (friction-like
+    level, :func:`~.missing_force.loop_half_height`)."""
+    cfg = mf.settings() if cfg is None else cfg
+    per = {}
+    for name, d in forces.items():
+        e = d.est
+        v = e.valid
+        band = mf.band_passed(e.force, float(e.t[1] - e.t[0]), cfg) if len(e.t) > 1 else e.force
+        entry: dict = {}
+        for j, ch in enumerate(mf.CHANNELS):
+            entry[ch] = {"rms": float(np.sqrt(np.mean(e.force[v, j] ** 2))),
+                         "band_rms": float(np.sqrt(np.mean(band[v, j] ** 2))),
+                         "sd_mean": float(np.mean(e.sd[v, j]))}
+            if j < 2:
+                entry[ch]["loop_half_height_N"] = _finite(mf.loop_half_height(e.force[v, j], d.velocity[v, j], cfg))
+        entry["intensity_N2_s"] = e.intensity
+        entry["unmeasured_input"] = d.unmeasured_input
+        per[name] = entry
+    return per
+
+
+def _finite(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def write_csv(d: DriveForce, path: Path) -> None:
+    """The time series of one drive (:data:`CSV_COLUMNS`; SI units as the column names say)."""
+    e = d.est
+    cols = [e.t, e.force[:, 0], e.sd[:, 0], e.force[:, 1], e.sd[:, 1], e.force[:, 2], e.sd[:, 2],
+            d.deflection[:, 0], d.deflection[:, 1], d.velocity[:, 0], d.velocity[:, 1],
+            d.model_force[:, 0], d.model_force[:, 1]]
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(CSV_COLUMNS)
+        for k in np.nonzero(e.valid)[0]:
+            w.writerow([f"{c[k]:.6g}" for c in cols])
+
+
+def plot(d: DriveForce, path: Path, title: str) -> None:
+    """Loops of one drive: per axle the missing force against deflection and against deflection
+    velocity, the model's own suspension force (less its mean) beside it on the right axis; below,
+    the three channels over time with their 95 % band."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    e, v = d.est, d.est.valid
+    fig, ax = plt.subplots(3, 2, figsize=(11, 10))
+    for row, axle in enumerate(_AXLE_CORNERS):
+        for col, (x, label) in enumerate(((d.deflection[:, row] * 1e3, "deflection [mm] (+ bump)"),
+                                         (d.velocity[:, row] * 1e3, "deflection velocity [mm/s]"))):
+            a = ax[row, col]
+            a.plot(x[v], e.force[v, row], color="C3", lw=1.0, label="missing force")
+            a.set_xlabel(label)
+            a.set_ylabel(f"{axle} axle missing force [N]", color="C3")
+            b = a.twinx()
+            m = d.model_force[:, row]
+            b.plot(x[v], m[v] - m[v].mean(), color="0.6", lw=0.7, label="model's suspension force")
+            b.set_ylabel("model's suspension force - mean [N]", color="0.4")
+            a.set_title(f"{axle} axle" + (" (input not measured: includes the road)" if d.unmeasured_input else ""))
+            a.grid(alpha=0.3)
+    gs = ax[2, 0].get_gridspec()
+    ax[2, 0].remove()
+    ax[2, 1].remove()
+    a = fig.add_subplot(gs[2, :])
+    for j, ch in enumerate(mf.CHANNELS):
+        unit = "N*m" if ch.endswith("Nm") else "N"
+        a.plot(e.t, np.where(v, e.force[:, j], np.nan), lw=1.0, label=f"{ch[:-2].rstrip('_')} [{unit}]")
+        a.fill_between(e.t, e.force[:, j] - 2 * e.sd[:, j], e.force[:, j] + 2 * e.sd[:, j], alpha=0.2)
+    a.set_xlabel("time [s]")
+    a.set_ylabel("missing force, +-2 sd")
+    a.legend(loc="upper right")
+    a.grid(alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def write(f, out: Path, name: str, *, plots: bool = True) -> dict:
+    """Estimate, write ``missing_force_<drive>.csv`` (and ``<name>_missing_force_<drive>.png``) into
+    ``out``; returns the interface's ``missing_force`` object."""
+    cfg = mf.settings()
+    forces = estimate_drives(f, f.calibrated_fit_, cfg)
+    files = []
+    for drive, d in forces.items():
+        p = out / f"missing_force_{drive}.csv"
+        write_csv(d, p)
+        files.append(str(p))
+        if plots:
+            p = out / f"{name}_missing_force_{drive}.png"
+            plot(d, p, f"{drive}: the force the calibrated model lacks, estimated from the recording")
+            files.append(str(p))
+    return {"per_drive": summary(forces, cfg), "files": files}
+
+
+def markdown(mf_json: dict) -> list[str]:
+    """The report section."""
+    lines = ["## Missing force", "",
+             "The force the calibrated model (before any physics term) lacks, estimated from each recording "
+             "(Kalman filter and RTS smoother on the model's equivalent-linear error dynamics; body IMU roll "
+             "rate, pitch rate and vertical "
+             "specific force). Read its shape in the loop plots: friction is a rectangle in the force-"
+             "velocity plot (a jump at zero velocity) and a loop of constant height against deflection; "
+             "viscous damping a line through the origin against velocity; a spring a line against deflection. "
+             "The loop half height is the friction-like level of the axle (both wheels).", "",
+             "| drive | front RMS [N] | rear RMS [N] | roll RMS [N*m] | front loop half height [N] | "
+             "rear loop half height [N] | mean sd front / rear [N] |",
+             "|---|---|---|---|---|---|---|"]
+    for drive, e in mf_json["per_drive"].items():
+        def num(x):
+            return "-" if x is None else f"{x:.0f}"
+        lines.append(f"| {drive}{' (input not measured)' if e['unmeasured_input'] else ''} | "
+                     f"{e['front_N']['rms']:.0f} | {e['rear_N']['rms']:.0f} | {e['roll_Nm']['rms']:.0f} | "
+                     f"{num(e['front_N']['loop_half_height_N'])} | {num(e['rear_N']['loop_half_height_N'])} | "
+                     f"{e['front_N']['sd_mean']:.0f} / {e['rear_N']['sd_mean']:.0f} |")
+    lines += ["", "Files: " + ", ".join(Path(p).name for p in mf_json["files"]), ""]
+    return lines
