@@ -27,6 +27,22 @@ def test_top_level_help_lists_every_subcommand():
         assert name in r.stdout
 
 
+def test_top_level_help_imports_no_subcommand_implementation():
+    """``susp --help`` is quick: the CLI's main module names the subcommands and imports a subcommand's
+    implementation (numba kernels, scipy.signal, the model) only when that subcommand runs."""
+    r = _help(str(BIN / "susp"))
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("usage: susp") and "Traceback" not in r.stderr
+    for name in SUBCOMMANDS:
+        assert f"\n    {name}" in r.stdout, name
+    code = ("import sys, susp_sim_ros.cli.main\n"
+            "heavy = [m for m in ('scipy.signal', 'numba', 'susp_sim_ros.model') if m in sys.modules]\n"
+            "print(','.join(heavy))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "", f"importing susp_sim_ros.cli.main imported {r.stdout.strip()}"
+
+
 @pytest.mark.parametrize("name", sorted(SUBCOMMANDS))
 def test_every_subcommand_help(name):
     r = _help(str(BIN / "susp"), name)

@@ -60,32 +60,43 @@ import numpy as np
 
 from ..errors import CsvImportError
 from ..io.drive import MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT, ImuSeries, Series, TestDrive, parse_oil, write_drive
+from ..io.units import FACTORS
 from ..model.params import DEFAULT_VEHICLE
 from ..model.road import RoadProfile
 
 _NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
+#: Column unit suffix -> unit name of :data:`~susp_sim_ros.io.units.FACTORS` (the factor to SI).
+COLUMN_UNITS = {"s": "s", "rad": "rad", "deg": "deg", "m_s": "m/s", "km_h": "km/h", "rad_s": "rad/s",
+                "deg_s": "deg/s", "m_s2": "m/s^2", "m": "m"}
+
+
+def _columns(stem: str, *suffixes: str) -> dict[str, float]:
+    """``{stem_suffix: factor to SI}`` for each unit suffix, in the given order."""
+    return {f"{stem}_{sfx}": FACTORS[COLUMN_UNITS[sfx]] for sfx in suffixes}
+
+
 # quantity -> {column name: factor to SI}
 DRIVE_QUANTITIES: dict[str, dict[str, float]] = {
-    "time": {"time_s": 1.0},
-    "steering": {"steering_wheel_angle_rad": 1.0, "steering_wheel_angle_deg": math.pi / 180},
-    "speed": {"speed_m_s": 1.0, "speed_km_h": 1 / 3.6},
-    "roll_rate": {"roll_rate_rad_s": 1.0, "roll_rate_deg_s": math.pi / 180},
-    "pitch_rate": {"pitch_rate_rad_s": 1.0, "pitch_rate_deg_s": math.pi / 180},
-    "yaw_rate": {"yaw_rate_rad_s": 1.0, "yaw_rate_deg_s": math.pi / 180},
-    "accel_x": {"accel_x_m_s2": 1.0},
-    "accel_y": {"accel_y_m_s2": 1.0},
-    "accel_z": {"accel_z_m_s2": 1.0},
-    "wheel_height_fl": {"wheel_height_fl_m": 1.0},
-    "wheel_height_fr": {"wheel_height_fr_m": 1.0},
-    "wheel_height_rl": {"wheel_height_rl_m": 1.0},
-    "wheel_height_rr": {"wheel_height_rr_m": 1.0},
+    "time": _columns("time", "s"),
+    "steering": _columns("steering_wheel_angle", "rad", "deg"),
+    "speed": _columns("speed", "m_s", "km_h"),
+    "roll_rate": _columns("roll_rate", "rad_s", "deg_s"),
+    "pitch_rate": _columns("pitch_rate", "rad_s", "deg_s"),
+    "yaw_rate": _columns("yaw_rate", "rad_s", "deg_s"),
+    "accel_x": _columns("accel_x", "m_s2"),
+    "accel_y": _columns("accel_y", "m_s2"),
+    "accel_z": _columns("accel_z", "m_s2"),
+    "wheel_height_fl": _columns("wheel_height_fl", "m"),
+    "wheel_height_fr": _columns("wheel_height_fr", "m"),
+    "wheel_height_rl": _columns("wheel_height_rl", "m"),
+    "wheel_height_rr": _columns("wheel_height_rr", "m"),
 }
 DRIVE_REQUIRED = ("time", "steering", "speed", "roll_rate", "pitch_rate", "yaw_rate")
 DRIVE_GROUPS = (("accel_x", "accel_y", "accel_z"),
                 ("wheel_height_fl", "wheel_height_fr", "wheel_height_rl", "wheel_height_rr"))
-ROAD_QUANTITIES: dict[str, dict[str, float]] = {"s": {"s_m": 1.0}, "z_left": {"z_left_m": 1.0},
-                                                "z_right": {"z_right_m": 1.0}}
+ROAD_QUANTITIES: dict[str, dict[str, float]] = {"s": _columns("s", "m"), "z_left": _columns("z_left", "m"),
+                                                "z_right": _columns("z_right", "m")}
 ROAD_REQUIRED = ("s", "z_left", "z_right")
 
 

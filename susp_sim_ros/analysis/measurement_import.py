@@ -55,19 +55,14 @@ import numpy as np
 
 from ..errors import MeasurementImportError, TopicMapError
 from ..io.drive import ImuSeries, Series, TestDrive, parse_oil, write_drive
-from ..io.topic_map import FRAMES, UNITS, parse_frame, unit_factor
+from ..io.topic_map import FRAMES, parse_frame, unit_factor
+from ..io.units import UNIT_ALIASES, UNITS
 from ..model import load_vehicle
 from ..model.paper import IMU_SIGNALS
 from ..model.road import RoadProfile
 from .csv_import import DRIVE_QUANTITIES, csv_to_drive, import_csv, read_road_csv
 from ..model.params import DEFAULT_VEHICLE
 
-#: Unit strings as measurement systems write them -> this package's unit names (topic_map.UNITS).
-UNIT_ALIASES = {"°": "deg", "grad": "deg", "degree": "deg", "deg": "deg", "rad": "rad",
-                "°/s": "deg/s", "deg/s": "deg/s", "grad/s": "deg/s", "rad/s": "rad/s", "1/s": "rad/s",
-                "km/h": "km/h", "kph": "km/h", "kmh": "km/h", "m/s": "m/s", "mph": "mph",
-                "m/s^2": "m/s^2", "m/s2": "m/s^2", "m/s²": "m/s^2", "m/(s^2)": "m/s^2", "g": "g",
-                "m": "m", "mm": "mm", "cm": "cm", "": ""}
 _KIND = {"speed": "speed", "steering_wheel_angle": "angle", "gyro": "rate", "accel": "accel", "wheel": "length"}
 _IMU_AXES = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 _WHEELS = ("fl", "fr", "rl", "rr")

@@ -4,20 +4,20 @@ Each subcommand lives in its own module ``susp_sim_ros.cli.<name>`` exposing ``a
 and ``run(args) -> dict``. The returned dict is printed as one JSON object with ``--json`` (logs go to
 stderr), else as a human summary (its ``"summary"`` entry if present). Exit codes: 0 success, 2 bad
 input (:class:`~susp_sim_ros.errors.SuspInputError`, message only, no traceback), 1 otherwise.
+
+This module stays light (``susp --help`` answers without numba, scipy or the model): it names the
+subcommands, and imports a subcommand's module (with its implementation) and
+:mod:`~susp_sim_ros.cli.dispatch` (running it, integrity findings, printing) only when that subcommand
+is asked for, by module path.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
-import json
-import os
+import importlib.util
 import sys
+from collections.abc import Mapping, Sequence
 from types import ModuleType
-
-import numpy as np
-
-from ..errors import SuspInputError
-from ..io import integrity
 
 SUBCOMMANDS = {
     "sim": "offline run: a paper maneuver or a recorded test drive (lockstep); writes a simulated MCAP",
@@ -37,76 +37,59 @@ SUBCOMMANDS = {
 INTEGRITY_COMMANDS = ("sim", "validate", "diagnose", "inspect", "replay")
 #: subcommands whose module name is not the command name (``import`` is a Python keyword)
 MODULE_NAMES = {"import": "import_measurement"}
+#: the module that runs a parsed subcommand (imported only then)
+DISPATCH_MODULE = "susp_sim_ros.cli.dispatch"
 
 
-def _module(name: str):
-    return importlib.import_module(f"susp_sim_ros.cli.{MODULE_NAMES.get(name, name.replace('-', '_'))}")
+def module_path(name: str) -> str:
+    """The module of subcommand ``name`` (``import-csv`` -> ``susp_sim_ros.cli.import_csv``)."""
+    return f"susp_sim_ros.cli.{MODULE_NAMES.get(name, name.replace('-', '_'))}"
 
 
-def build_parser(available: dict[str, ModuleType]) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="susp", description=__doc__.split("\n")[0])
+def _module(name: str) -> ModuleType:
+    return importlib.import_module(module_path(name))
+
+
+def build_parser(available: Mapping[str, ModuleType | None]) -> argparse.ArgumentParser:
+    """The ``susp`` parser over ``available`` subcommands; a subcommand given as None is listed (name and
+    help) without its arguments, so the top-level help needs none of the subcommand modules."""
+    parser = argparse.ArgumentParser(prog="susp", description=(__doc__ or "").split("\n")[0])
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, mod in available.items():
         # argparse %-formats help strings (not descriptions): a literal "95 %" must be written "95 %%"
         p = sub.add_parser(name, help=SUBCOMMANDS[name].replace("%", "%%"), description=SUBCOMMANDS[name])
         p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-        mod.add_arguments(p)
+        if mod is not None:
+            mod.add_arguments(p)
     return parser
 
 
+def _installed() -> list[str]:
+    """The subcommands whose module is there (found, not imported)."""
+    return [name for name in SUBCOMMANDS if importlib.util.find_spec(module_path(name)) is not None]
+
+
 def _available() -> dict[str, ModuleType]:
-    out = {}
-    for name in SUBCOMMANDS:
-        try:
-            out[name] = _module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name != f"susp_sim_ros.cli.{MODULE_NAMES.get(name, name.replace('-', '_'))}":
-                raise
-    return out
+    """Every installed subcommand's module, imported."""
+    return {name: _module(name) for name in _installed()}
 
 
-def _print_human(result: dict) -> None:
-    if "summary" in result:
-        print(result["summary"])
-        return
-    for k, v in result.items():
-        print(f"{k}: {v}")
+def _command(argv: Sequence[str]) -> str | None:
+    """The subcommand ``argv`` names: its first argument that is not an option (``susp`` itself has only
+    ``-h``), or None."""
+    return next((a for a in argv if not a.startswith("-")), None)
 
 
 def main(argv: list[str] | None = None) -> int:
-    available = _available()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    name = _command(argv)
+    available: dict[str, ModuleType | None] = dict.fromkeys(_installed())
+    if name in available:
+        available[name] = _module(name)
     args = build_parser(available).parse_args(argv)
-    integrity.start_collection()
-    try:
-        result = available[args.command].run(args)
-        if args.command in INTEGRITY_COMMANDS and isinstance(result, dict):
-            result["input_findings"] = integrity.collected()  # interface.md: input integrity
-    except SuspInputError as exc:
-        print(f"susp {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"susp {args.command}: interrupted", file=sys.stderr)
-        return 1
-    except Exception as exc:  # an unexpected failure: say what, keep the traceback for --debug users
-        if "--debug" in sys.argv or os.environ.get("SUSP_DEBUG"):
-            raise
-        print(f"susp {args.command}: failed: {type(exc).__name__}: {exc} (set SUSP_DEBUG=1 for a traceback)",
-              file=sys.stderr)
-        return 1
-    if args.json:
-        json.dump(result, sys.stdout, default=_jsonable)
-        sys.stdout.write("\n")
-    else:
-        _print_human(result)
-    return 0
-
-
-def _jsonable(x):
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return str(x)
+    dispatch = importlib.import_module(DISPATCH_MODULE)
+    return dispatch.run_command(args.command, available[args.command], args,
+                                integrity_findings=args.command in INTEGRITY_COMMANDS)
 
 
 if __name__ == "__main__":

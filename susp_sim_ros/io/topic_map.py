@@ -47,17 +47,7 @@ import numpy as np
 
 from ..errors import TopicMapError
 from ..model.params import config_dir
-
-#: SI factor of each unit, per kind of quantity (value_SI = raw * scale * factor).
-G_STANDARD = 9.80665  # m/s^2 per g, standard gravity (CGPM 1901)
-UNITS: dict[str, dict[str, float]] = {
-    "angle": {"rad": 1.0, "deg": math.pi / 180.0},
-    "speed": {"m/s": 1.0, "km/h": 1.0 / 3.6, "mph": 0.44704},
-    "length": {"m": 1.0, "cm": 0.01, "mm": 0.001},
-    "rate": {"rad/s": 1.0, "deg/s": math.pi / 180.0},
-    "accel": {"m/s^2": 1.0, "m/s2": 1.0, "g": G_STANDARD},
-    "fraction": {"1": 1.0, "%": 0.01},
-}
+from .units import G_STANDARD, UNITS  # SI factor of each unit, per kind of quantity (io/units.py)
 
 #: The inputs a topic map can name: kind of quantity, the interface's topic, message type, default field.
 INPUTS: dict[str, tuple[str, str, str, str]] = {

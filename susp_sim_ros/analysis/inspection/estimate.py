@@ -20,6 +20,7 @@ States (``config/inspection.yaml`` ``states``): ``ok`` from ``ok_from``, ``empty
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import time
@@ -28,12 +29,11 @@ from pathlib import Path
 from collections.abc import Sequence
 
 import numpy as np
-import yaml
 
 from ...errors import ConfigError, SuspInputError
 from ...model import Model
 from ...model.layout import P_INDEX, U_INDEX
-from ...model.params import CORNER_NAMES, config_dir, load_vehicle
+from ...model.params import CORNER_NAMES, load_settings, load_vehicle
 from ...model.road import RoadProfile
 from ..discrepancy.calibration import calibration_candidate, calibration_params
 from ..discrepancy.candidates import CALIBRATION, CandParam, Candidate
@@ -48,13 +48,13 @@ STATES = ("ok", "degraded", "empty")
 
 
 def load_config(path: str | Path | None = None) -> dict:
-    """``config/inspection.yaml`` as {section: {key: value}}."""
-    p = Path(path) if path else config_dir() / "inspection.yaml"
-    try:
-        data = yaml.safe_load(p.read_text())
-        return {sec: {k: v["value"] for k, v in entries.items()} for sec, entries in data.items()}
-    except (OSError, KeyError, TypeError, AttributeError, yaml.YAMLError) as exc:
-        raise ConfigError(f"{p}: cannot read the inspection settings: {exc}") from None
+    """``config/inspection.yaml`` (or ``path``) as {section: {key: value}}, read by the one settings
+    loader (:func:`~susp_sim_ros.model.params.load_settings`); a fresh copy each call (callers edit it)."""
+    out: dict[str, dict] = {}
+    for key, value in load_settings("inspection.yaml", path or None).items():
+        sec, k = key.split(".", 1)
+        out.setdefault(sec, {})[k] = copy.deepcopy(value)
+    return out
 
 
 def state_of(lo: float, hi: float, states_cfg: dict) -> str:
