@@ -9,6 +9,9 @@ this package). Tests and benchmarks import them from the repository root; a stud
 - :mod:`.independent_sim`: an independent implementation of model-spec sections 1-4 (own integrator,
   damper-curve shape, friction scalings, assumed values; ``docs/independent_sim.md``).
 - :mod:`.independent_roads`: its maneuvers and ISO 8608 roads.
+- :mod:`.family`: the generator family over the simulator's form options (each hidden effect in several
+  forms, every assumed item varied, cars within and beyond the priors), split into development and
+  held-out forms in ``family_split.yaml`` before tuning.
 - :mod:`.hidden_force`: drives on the product's kernel with a friction element the estimating model
   lacks and its force exposed (model-made truth for the missing-force estimate's mechanics).
 - :mod:`.roc`: the plug-in that gives the inspection ROC study its bump crossings from the simulator.

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 from numba import njit
-from scipy.interpolate import PchipInterpolator
+from scipy.interpolate import Akima1DInterpolator, PchipInterpolator, PPoly
 
 from susp_sim_ros.io.drive import ImuSeries, Series, TestDrive, write_drive
 from susp_sim_ros.model.road import RoadProfile
@@ -67,6 +67,7 @@ class TruthCar:
     drive_front_share: float = 1.0
     brake_front_share: float = 0.63
     gravity: float = 9.81
+    roll_centre_handling: str = "mean"            # "mean": m_s (h - mean h_rc) a_y; "per_axle": sum F_y,k (h - h_rc,k)
     factors: dict = field(default_factory=dict)   # perturbation factor per parameter (perturbed())
 
     @property
@@ -77,9 +78,11 @@ class TruthCar:
     def total_mass(self) -> float:
         return self.sprung_mass + 2 * self.unsprung_mass[0] + 2 * self.unsprung_mass[1]
 
-    def perturbed(self, rng, lo: float = 0.05, hi: float = 0.15) -> "TruthCar":
+    def perturbed(self, rng, lo: float = 0.05, hi: float = 0.15, extended: bool = False) -> "TruthCar":
         """A car whose sprung mass, inertias, cornering stiffnesses, wheel rates and tyre stiffness differ
-        by a random factor 1 +- U(lo, hi) each (random sign); ``factors`` records them."""
+        by a random factor 1 +- U(lo, hi) each (random sign); ``factors`` records them. ``extended`` also
+        moves the unsprung masses, CG height, anti-roll-bar rates, roll centres and the tyre relaxation
+        length (drawn after the others, so the first draws are those of ``extended=False``)."""
         rng = np.random.default_rng(rng)
 
         def f():
@@ -94,6 +97,15 @@ class TruthCar:
             fac[name] = [ff, fr]
             v = getattr(self, name)
             kw[name] = (v[0] * ff, v[1] * fr)
+        if extended:
+            for name in ("cg_height", "relaxation_length"):
+                fac[name] = f()
+                kw[name] = getattr(self, name) * fac[name]
+            for name in ("unsprung_mass", "arb_rate", "roll_centre"):
+                ff, fr = f(), f()
+                fac[name] = [ff, fr]
+                v = getattr(self, name)
+                kw[name] = (v[0] * ff, v[1] * fr)
         return replace(self, factors=fac, **kw)
 
 
@@ -115,6 +127,9 @@ class TruthFriction:
     oil_scaling: bool = True
     horizontal_scaling: bool = True
     empty_viscous: tuple = (330.0, 260.0)         # oil-empty hydraulic slope N s/m
+    sv_shape: str = "tanh"                        # velocity-scaling form, see s_velocity
+    oil_law: str = "linear"                       # weight of the intact curve: oil ("linear") or oil^2 ("quadratic")
+    damper_curve: str = "pchip"                   # hydraulic curve between measured points: pchip, akima, linear
 
     def perturbed(self, rng, dev_N: float = 2.0) -> "TruthFriction":
         """Levels moved by U(-dev_N, dev_N) each (within the paper's rig tolerance)."""
@@ -135,7 +150,35 @@ class TruthHidden:
     amplitude_tau_s: float = 0.8                  # envelope A = max(|d|, A decaying with this time constant)
     gas_preload_N: tuple = (0.0, 0.0, 0.0, 0.0)   # damper gas force f0 + k d on the body (pushes up)
     gas_rate_N_m: tuple = (0.0, 0.0, 0.0, 0.0)
-    extra_viscous: tuple = (0.0, 0.0)             # N s/m, c * deflection velocity
+    extra_viscous: tuple = (0.0, 0.0)             # N s/m, c * deflection velocity (viscous_law)
+    # forms (AMP_ENVELOPES, AMP_LAWS, AMP_ELEMENTS, VISCOUS_LAWS): the defaults are the forms of version 1.0
+    amplitude_envelope: str = "decaying_peak"     # |d| peak decaying with tau; "stroke": half the decaying
+    #                                               max-min span; "windowed_rms": sqrt(2) x exponentially windowed RMS
+    amplitude_law: str = "saturating"             # A^2/(A^2 + A0^2); "linear": A/A0; "power": (A/A0)^p
+    amplitude_exponent: float = 0.5               # p of the power law
+    amplitude_element: str = "axle"               # inside the axle friction element (scaled by s_h), or
+    #                                               "separate": an own Dahl element, unscaled
+    amplitude_stiffness_factor: float = 0.5       # separate element: Dahl stiffness = factor x friction sigma
+    viscous_law: str = "linear"                   # c v; "power": c v_r sgn(v) |v/v_r|^n;
+    #                                               "saturating": c v_r tanh(v/v_r)
+    viscous_exponent: float = 0.6
+    viscous_ref_m_s: float = 0.1
+    gas_cubic_N_m3: tuple = (0.0, 0.0, 0.0, 0.0)  # progressive gas spring: + k3 d^3
+
+
+AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
+AMP_LAWS = ("saturating", "linear", "power")
+AMP_ELEMENTS = ("axle", "separate")
+VISCOUS_LAWS = ("linear", "power", "saturating")
+ROLL_CENTRE_HANDLINGS = ("mean", "per_axle")
+#: integrators of the mechanical states (Dahl states always by their exact step solution)
+INTEGRATORS = ("rk4", "heun", "semi_implicit_euler")
+
+
+def _code(value: str, names: tuple, what: str) -> float:
+    if value not in names:
+        raise ValueError(f"{what} must be one of {names}, got {value!r}")
+    return float(names.index(value))
 
 
 @dataclass
@@ -191,10 +234,43 @@ def load_measured_dampers(path: str | Path = _CONFIG) -> dict:
         return {k: np.asarray(v, float) for k, v in _FALLBACK_DAMPERS.items()}
 
 
+#: velocity-scaling shapes g(x), x = (|v| - v_ref)/v_s, s_v = max(1, 1 + (s_inf - 1) g(x)): the spec
+#: gives plateau and speed, not the form (kernel code = index)
+SV_SHAPES = ("tanh", "ramp", "sqrt")
+#: oil laws: weight w(oil) of the intact hydraulic curve and of the intact friction level
+OIL_LAWS = ("linear", "quadratic")
+#: damper-curve shapes between the measured points
+DAMPER_CURVES = ("pchip", "akima", "linear")
+
+
+def _sv_shape(x, shape: str):
+    if shape == "tanh":
+        return np.tanh(x)
+    if shape == "ramp":                  # linear to the plateau at x = 2
+        return np.clip(0.5 * x, -1.0, 1.0)
+    if shape == "sqrt":                  # steep start, plateau at x = 3
+        return np.sign(x) * np.minimum(1.0, np.sqrt(np.abs(x) / 3.0))
+    raise ValueError(f"velocity-scaling shape must be one of {SV_SHAPES}, got {shape!r}")
+
+
 def s_velocity(v, fr: TruthFriction):
-    """Own velocity scaling of damper friction: 1 + (s_inf - 1) tanh((|v| - v_ref)/v_s), clipped >= 1."""
+    """Own velocity scaling of damper friction: 1 + (s_inf - 1) g((|v| - v_ref)/v_s), clipped >= 1, with
+    g = tanh by default (``fr.sv_shape``, :data:`SV_SHAPES`)."""
     x = (np.abs(v) - fr.sv_ref) / fr.sv_speed
-    return np.maximum(1.0, 1.0 + (fr.sv_plateau - 1.0) * np.tanh(x))
+    return np.maximum(1.0, 1.0 + (fr.sv_plateau - 1.0) * _sv_shape(x, fr.sv_shape))
+
+
+def _curve(v, F, shape: str) -> PPoly:
+    """A piecewise cubic through (v, F) in the form ``shape`` (:data:`DAMPER_CURVES`)."""
+    if shape == "pchip":
+        return PchipInterpolator(v, F, extrapolate=False)
+    if shape == "akima":
+        return Akima1DInterpolator(v, F)
+    if shape == "linear":
+        slope = np.diff(F) / np.diff(v)
+        c = np.vstack([np.zeros_like(slope), np.zeros_like(slope), slope, F[:-1]])
+        return PPoly(c, v, extrapolate=False)
+    raise ValueError(f"damper curve must be one of {DAMPER_CURVES}, got {shape!r}")
 
 
 def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
@@ -211,7 +287,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
         F = np.where(v > 0, np.maximum(F, 0.0), np.minimum(F, 0.0))
         F[np.abs(v) <= fr.sv_ref + 1e-12] = 0.0
         F = np.maximum.accumulate(F)          # monotone
-        p = PchipInterpolator(v, F, extrapolate=False)
+        p = _curve(v, F, fr.damper_curve)
         dp = p.derivative()
         X.append(v)
         C.append(p.c)
@@ -222,14 +298,16 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
 
 # ==== parameter arrays for the kernel =================================================================
 (G, MS, MT, IXX, IYY, IZZ, H, HRC, HPC, A_, B_, MU, RELAX, VFADE, RATIO, KT, CT, KSTOP, ESTOP, DSCALE,
- SIGMA, SVINF, SVS, SVREF, FRIC, AMPA0, AMPTAU, DRIVEF, BRAKEF, SVON, NP) = range(31)
+ SIGMA, SVINF, SVS, SVREF, FRIC, AMPA0, AMPTAU, DRIVEF, BRAKEF, SVON, AMPENV, AMPLAW, AMPEXP, AMPSEP, SEPSIG,
+ VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, NP) = range(43)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
- WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, NW) = range(24)
+ WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, NW) = range(25)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 18        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]
 
 
-def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on: bool = True):
+def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on: bool = True,
+            integrator: str = "rk4"):
     P = np.zeros(NP)
     P[G], P[MS], P[MT] = car.gravity, car.sprung_mass, car.total_mass
     P[IXX], P[IYY], P[IZZ] = car.roll_inertia, car.pitch_inertia, car.yaw_inertia
@@ -242,6 +320,17 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
     P[FRIC] = 1.0 if fr.enabled else 0.0
     P[AMPA0], P[AMPTAU] = hid.amplitude_A0_m, hid.amplitude_tau_s
     P[DRIVEF], P[BRAKEF] = car.drive_front_share, car.brake_front_share
+    P[AMPENV] = _code(hid.amplitude_envelope, AMP_ENVELOPES, "amplitude_envelope")
+    P[AMPLAW] = _code(hid.amplitude_law, AMP_LAWS, "amplitude_law")
+    P[AMPEXP] = hid.amplitude_exponent
+    P[AMPSEP] = _code(hid.amplitude_element, AMP_ELEMENTS, "amplitude_element")
+    P[SEPSIG] = hid.amplitude_stiffness_factor * fr.sigma
+    P[VISLAW] = _code(hid.viscous_law, VISCOUS_LAWS, "viscous_law")
+    P[VISN], P[VISREF] = hid.viscous_exponent, hid.viscous_ref_m_s
+    P[SVSHAPE] = _code(fr.sv_shape, SV_SHAPES, "sv_shape")
+    P[OILLAW] = _code(fr.oil_law, OIL_LAWS, "oil_law")
+    P[RCMODE] = _code(car.roll_centre_handling, ROLL_CENTRE_HANDLINGS, "roll_centre_handling")
+    P[INTEG] = _code(integrator, INTEGRATORS, "integrator")
     W = np.zeros((4, NW))
     L = car.wheelbase
     for i in range(4):
@@ -260,6 +349,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WCEMPTY], W[i, WAXLE], W[i, WOIL] = fr.empty_viscous[k], k, float(oil[i])
         W[i, WAMPX], W[i, WGF0], W[i, WGK] = hid.amplitude_extra_N[k], hid.gas_preload_N[i], hid.gas_rate_N_m[i]
         W[i, WCV], W[i, WHRC] = hid.extra_viscous[k], car.roll_centre[k]
+        W[i, WGK3] = hid.gas_cubic_N_m3[i]
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -307,8 +397,16 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
         if er > 0.0:
             Fs -= P[KSTOP] * (er + er * er * er / (P[ESTOP] * P[ESTOP]))
         ia = int(W[i, WAXLE])
-        Fh = W[i, WOIL] * _damper(dd[i], ia, X, C, E) + (1.0 - W[i, WOIL]) * W[i, WCEMPTY] * dd[i]
-        Fs += P[DSCALE] * Fh + Ff[i] + W[i, WCV] * dd[i] + W[i, WGF0] + W[i, WGK] * d[i]
+        w_oil = W[i, WOIL] if P[OILLAW] == 0.0 else W[i, WOIL] * W[i, WOIL]
+        Fh = w_oil * _damper(dd[i], ia, X, C, E) + (1.0 - w_oil) * W[i, WCEMPTY] * dd[i]
+        if P[VISLAW] == 0.0:
+            Fv = W[i, WCV] * dd[i]
+        elif P[VISLAW] == 1.0:
+            sg = 1.0 if dd[i] >= 0.0 else -1.0
+            Fv = W[i, WCV] * P[VISREF] * sg * (abs(dd[i]) / P[VISREF]) ** P[VISN]
+        else:
+            Fv = W[i, WCV] * P[VISREF] * math.tanh(dd[i] / P[VISREF])
+        Fs += P[DSCALE] * Fh + Ff[i] + Fv + W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Ft = P[KT] * (ZR[i, j] - y[8 + i]) + P[CT] * (ZRD[i, j] - y[12 + i])
         if W[i, WFZ0] + Ft < 0.0:
             Ft = -W[i, WFZ0]                           # lift-off
@@ -343,7 +441,11 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
     dy[0] = zd
     dy[1] = sF / P[MS]
     dy[2] = phid
-    dy[3] = (sYF + P[MS] * (P[H] - P[HRC]) * (ay + P[G] * phi)) / P[IXX]
+    if P[RCMODE] == 0.0:
+        dy[3] = (sYF + P[MS] * (P[H] - P[HRC]) * (ay + P[G] * phi)) / P[IXX]
+    else:                   # each axle's lateral force acts at its own roll centre
+        mlat = P[MS] / P[MT] * ((y[16] + y[17]) * (P[H] - W[0, WHRC]) + (y[18] + y[19]) * (P[H] - W[2, WHRC]))
+        dy[3] = (sYF + mlat + P[MS] * (P[H] - P[HRC]) * P[G] * phi) / P[IXX]
     dy[4] = thd
     dy[5] = (-sXF + P[MS] * (P[H] - P[HPC]) * (P[G] * th - ax)) / P[IYY]
     dy[6] = ay - v * r
@@ -365,12 +467,86 @@ def _dahl(F, dx, Fc, sigma):
 
 
 @njit(cache=True)
+def _step(y, yt, h, j, V, AX, DSW, ZR, ZRD, Ff, P, W, X, C, E, k1, k2, k3, k4, aux2):
+    """yt = the mechanical states one step on from y (k1 = dy/dt at y given) by the integrator P[INTEG]."""
+    if P[INTEG] == 0.0:            # classical RK4
+        for m in range(NY):
+            yt[m] = y[m] + 0.5 * h * k1[m]
+        _deriv(yt, V[j + 1], AX[j + 1], DSW[j + 1], ZR, ZRD, j + 1, Ff, P, W, X, C, E, k2, aux2)
+        for m in range(NY):
+            yt[m] = y[m] + 0.5 * h * k2[m]
+        _deriv(yt, V[j + 1], AX[j + 1], DSW[j + 1], ZR, ZRD, j + 1, Ff, P, W, X, C, E, k3, aux2)
+        for m in range(NY):
+            yt[m] = y[m] + h * k3[m]
+        _deriv(yt, V[j + 2], AX[j + 2], DSW[j + 2], ZR, ZRD, j + 2, Ff, P, W, X, C, E, k4, aux2)
+        for m in range(NY):
+            yt[m] = y[m] + h / 6.0 * (k1[m] + 2.0 * k2[m] + 2.0 * k3[m] + k4[m])
+    elif P[INTEG] == 1.0:          # Heun (explicit trapezoid, second order)
+        for m in range(NY):
+            yt[m] = y[m] + h * k1[m]
+        _deriv(yt, V[j + 2], AX[j + 2], DSW[j + 2], ZR, ZRD, j + 2, Ff, P, W, X, C, E, k2, aux2)
+        for m in range(NY):
+            yt[m] = y[m] + 0.5 * h * (k1[m] + k2[m])
+    else:                          # semi-implicit (symplectic) Euler: velocities first, positions with them
+        for m in range(NY):
+            yt[m] = y[m] + h * k1[m]
+        for m in (0, 2, 4, 8, 9, 10, 11):
+            yt[m] = y[m] + h * yt[m + 1 if m < 8 else m + 4]
+
+
+@njit(cache=True)
+def _envelope(i, dn, decay, P, Aenv, Ahi, Alo, M2):
+    """Update wheel i's amplitude envelope Aenv[i] [m] with the deflection dn by the form P[AMPENV]."""
+    if P[AMPENV] == 0.0:       # decaying peak of |d|
+        a_prev = Aenv[i] * decay
+        Aenv[i] = abs(dn) if abs(dn) > a_prev else a_prev
+    elif P[AMPENV] == 1.0:     # half the span between a decaying max and min of d
+        hi_prev = dn + (Ahi[i] - dn) * decay
+        lo_prev = dn + (Alo[i] - dn) * decay
+        Ahi[i] = dn if dn > hi_prev else hi_prev
+        Alo[i] = dn if dn < lo_prev else lo_prev
+        Aenv[i] = 0.5 * (Ahi[i] - Alo[i])
+    else:                      # sqrt(2) x RMS over an exponential window
+        M2[i] = decay * M2[i] + (1.0 - decay) * dn * dn
+        Aenv[i] = math.sqrt(2.0 * M2[i])
+
+
+@njit(cache=True)
+def _amplitude_level(extra, A, P):
+    """Extra friction level [N] at envelope A [m] by the law P[AMPLAW]."""
+    if P[AMPLAW] == 0.0:
+        A2 = A * A
+        return extra * A2 / (A2 + P[AMPA0] * P[AMPA0])
+    if P[AMPLAW] == 1.0:
+        return extra * (A / P[AMPA0])
+    return extra * (A / P[AMPA0]) ** P[AMPEXP]
+
+
+@njit(cache=True)
+def _s_velocity(v, P):
+    """Velocity scaling of the damper friction at deflection speed v [m/s] by the shape P[SVSHAPE], >= 1."""
+    xs = (v - P[SVREF]) / P[SVS]
+    if P[SVSHAPE] == 0.0:
+        gs = math.tanh(xs)
+    elif P[SVSHAPE] == 1.0:
+        gs = min(1.0, max(-1.0, 0.5 * xs))
+    else:
+        gs = min(1.0, math.sqrt(abs(xs) / 3.0)) * (1.0 if xs >= 0.0 else -1.0)
+    sv = 1.0 + (P[SVINF] - 1.0) * gs
+    return sv if sv >= 1.0 else 1.0
+
+
+@njit(cache=True)
 def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
     """RK4 on the mechanical states, Dahl states by their exact position-domain solution per step."""
     y = y0.copy()
     Fa = np.zeros(4)
     Fd = np.zeros(4)
+    Fe = np.zeros(4)                 # separate amplitude element
     Aenv = np.zeros(4)
+    Ahi = np.zeros(4)
+    Alo = np.zeros(4)
+    M2 = np.zeros(4)
     Ff = np.zeros(4)
     k1 = np.zeros(NY)
     k2 = np.zeros(NY)
@@ -383,7 +559,7 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
     for k in range(n + 1):
         j = 2 * k
         for i in range(4):
-            Ff[i] = P[FRIC] * (Fa[i] + Fd[i])
+            Ff[i] = P[FRIC] * (Fa[i] + Fd[i] + Fe[i])
         _deriv(y, V[j], AX[j], DSW[j], ZR, ZRD, j, Ff, P, W, X, C, E, k1, aux)
         ay = (y[16] + y[17] + y[18] + y[19]) / P[MT]
         out[k, 0] = y[3]
@@ -398,17 +574,7 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
             out[k, 14 + i] = aux[i, 2]
         if k == n:
             break
-        for m in range(NY):
-            yt[m] = y[m] + 0.5 * h * k1[m]
-        _deriv(yt, V[j + 1], AX[j + 1], DSW[j + 1], ZR, ZRD, j + 1, Ff, P, W, X, C, E, k2, aux2)
-        for m in range(NY):
-            yt[m] = y[m] + 0.5 * h * k2[m]
-        _deriv(yt, V[j + 1], AX[j + 1], DSW[j + 1], ZR, ZRD, j + 1, Ff, P, W, X, C, E, k3, aux2)
-        for m in range(NY):
-            yt[m] = y[m] + h * k3[m]
-        _deriv(yt, V[j + 2], AX[j + 2], DSW[j + 2], ZR, ZRD, j + 2, Ff, P, W, X, C, E, k4, aux2)
-        for m in range(NY):
-            yt[m] = y[m] + h / 6.0 * (k1[m] + 2.0 * k2[m] + 2.0 * k3[m] + k4[m])
+        _step(y, yt, h, j, V, AX, DSW, ZR, ZRD, Ff, P, W, X, C, E, k1, k2, k3, k4, aux2)
         # friction over the step's deflection increment; scalings from the step's start
         share = P[DRIVEF] if AX[j] >= 0.0 else P[BRAKEF]
         for i in range(4):
@@ -417,16 +583,16 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
             sh_share = share if i < 2 else 1.0 - share
             Fx = 0.5 * P[MT] * AX[j] * sh_share - aux[i, 2] * SL[i, j]
             sh = 1.0 + W[i, WKX] * abs(Fx) + W[i, WKY] * abs(y[16 + i])
-            a_prev = Aenv[i] * decay
-            Aenv[i] = abs(dn) if abs(dn) > a_prev else a_prev
-            A2 = Aenv[i] * Aenv[i]
-            Fca = (W[i, WFCA] + W[i, WAMPX] * A2 / (A2 + P[AMPA0] * P[AMPA0])) * sh
-            sv = 1.0
-            if P[SVON] > 0.0:
-                sv = 1.0 + (P[SVINF] - 1.0) * math.tanh((abs(dx) / h - P[SVREF]) / P[SVS])
-                if sv < 1.0:
-                    sv = 1.0
-            soil = 1.0 + (W[i, WSOIL] - 1.0) * (1.0 - W[i, WOIL])
+            _envelope(i, dn, decay, P, Aenv, Ahi, Alo, M2)
+            Famp = _amplitude_level(W[i, WAMPX], Aenv[i], P)
+            if P[AMPSEP] == 0.0:
+                Fca = (W[i, WFCA] + Famp) * sh
+            else:
+                Fca = W[i, WFCA] * sh
+                Fe[i] = _dahl(Fe[i], dx, Famp, P[SEPSIG])
+            sv = _s_velocity(abs(dx) / h, P) if P[SVON] > 0.0 else 1.0
+            w_oil = W[i, WOIL] if P[OILLAW] == 0.0 else W[i, WOIL] * W[i, WOIL]
+            soil = 1.0 + (W[i, WSOIL] - 1.0) * (1.0 - w_oil)
             Fcs = W[i, WFCS] * sv * soil * sh
             Fa[i] = _dahl(Fa[i], dx, Fca, P[SIGMA])
             Fd[i] = _dahl(Fd[i], dx, Fcs, P[SIGMA])
@@ -495,13 +661,15 @@ def _static_offset(P, W, X, C, E):
 
 def simulate(car: TruthCar | None = None, friction: TruthFriction | None = None,
              hidden: TruthHidden | None = None, maneuver: TruthManeuver | None = None,
-             oil=(1.0, 1.0, 1.0, 1.0), step_s: float = 2e-4, y0=None, dampers: bool = True) -> TruthResult:
-    """Run the truth model; noise-free outputs at every step (t = 0 .. duration)."""
+             oil=(1.0, 1.0, 1.0, 1.0), step_s: float = 2e-4, y0=None, dampers: bool = True,
+             integrator: str = "rk4") -> TruthResult:
+    """Run the truth model; noise-free outputs at every step (t = 0 .. duration). ``integrator``: one of
+    :data:`INTEGRATORS` for the mechanical states."""
     car = car or TruthCar()
     friction = friction or TruthFriction()
     hidden = hidden or TruthHidden()
     maneuver = maneuver or TruthManeuver.rest()
-    P, W, X, C, E = _arrays(car, friction, hidden, oil, dampers)
+    P, W, X, C, E = _arrays(car, friction, hidden, oil, dampers, integrator)
     n = int(round(maneuver.duration_s / step_s))
     th = np.arange(2 * n + 3) * (0.5 * step_s)
     V = maneuver.speed(th)
@@ -567,7 +735,7 @@ def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = Non
                hidden: TruthHidden | None = None, maneuver: TruthManeuver | None = None,
                sensor: TruthSensor | None = None, oil=(1.0, 1.0, 1.0, 1.0), seed: int = 0,
                record_road: bool = True, step_s: float = 2e-4, t0_ns: int = 0,
-               return_truth: bool = False):
+               return_truth: bool = False, integrator: str = "rk4"):
     """A truth test drive (``TestDrive``; with ``return_truth`` also the :class:`TruthResult`)."""
     car = car or TruthCar()
     friction = friction or TruthFriction()
@@ -575,7 +743,7 @@ def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = Non
     maneuver = maneuver or TruthManeuver.rest()
     sensor = sensor or TruthSensor()
     oil = tuple(float(o) for o in oil)
-    truth = simulate(car, friction, hidden, maneuver, oil, step_s)
+    truth = simulate(car, friction, hidden, maneuver, oil, step_s, integrator=integrator)
     rng = np.random.default_rng(seed)
     T = maneuver.duration_s
     # IMU: sampled at nominal instants, showing the (band-limited) motion at t - tau; stamps jittered
@@ -614,7 +782,7 @@ def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = Non
         else:
             road = RoadProfile(*rd)
     truth_meta = {
-        "generator": SOURCE, "seed": seed, "step_s": step_s, "oil": list(oil),
+        "generator": SOURCE, "seed": seed, "step_s": step_s, "integrator": integrator, "oil": list(oil),
         "car": asdict(car), "friction": asdict(friction), "hidden": asdict(hidden),
         "sensor": asdict(sensor), "maneuver": maneuver.to_dict(),
         "damper_measured_points": {k: v.tolist() for k, v in load_measured_dampers().items()},
@@ -634,4 +802,6 @@ def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = Non
 
 __all__ = ["TruthCar", "TruthFriction", "TruthHidden", "TruthSensor", "TruthManeuver", "TruthResult",
            "simulate", "make_drive", "body_modes", "hydraulic_curves", "s_velocity", "load_measured_dampers",
+           "SV_SHAPES", "OIL_LAWS", "DAMPER_CURVES", "AMP_ENVELOPES", "AMP_LAWS", "AMP_ELEMENTS", "VISCOUS_LAWS",
+           "ROLL_CENTRE_HANDLINGS", "INTEGRATORS",
            "write_drive", "iso8608_road", "iso8608_psd", "SOURCE"]

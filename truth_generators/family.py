@@ -1,0 +1,236 @@
+"""A family of truth generators: each hidden effect in structurally different forms, every assumed item
+of model-spec varied, other integrators and steps, other cars within and beyond the priors.
+
+Every form runs on :mod:`.independent_sim` (written from the spec alone, never from the product's
+kernel) with its form options (``TruthHidden``'s envelopes, laws and elements, ``TruthFriction``'s
+velocity-scaling shape, oil law and damper-curve shape, ``TruthCar``'s roll-centre handling, the
+integrator and step). The forms are split into a development set and a held-out set in
+``family_split.yaml``, recorded before the finder or the inspection were changed for them; whatever is
+measured on the family reports the two apart (``benchmarks/bench_discrepancy.py --family``).
+
+Public API::
+
+    FORMS: dict[str, GeneratorForm]                 name -> form (registry, one entry per form)
+    SPLITS = ("development", "held_out")
+    split_of(name) -> "development" | "held_out"
+    forms(split=None) -> list[GeneratorForm]        in registry order
+    CASE_DRIVES: the six drives of a case (bump crossing and sine steer; intact, front-empty, rear-empty)
+    make_case(form, seed, gyro_noise_deg_s=0.05, drives=CASE_DRIVES) -> list[(label, TestDrive)]
+
+Every difference of a form from the product's model is in its ``description`` and in
+``docs/independent_sim.md`` ("The generator family").
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from susp_sim_ros.io.drive import TestDrive
+from .independent_sim import TruthCar, TruthFriction, TruthHidden, TruthManeuver, TruthSensor, make_drive
+
+SPLIT_FILE = Path(__file__).resolve().with_name("family_split.yaml")
+SPLITS = ("development", "held_out")
+#: what a form hides: "none" (structure only: the finder must name nothing) or the physics it adds
+EFFECTS = ("none", "amplitude_friction", "extra_viscous", "gas_spring", "lateral_force_friction",
+           "amplitude_and_viscous")
+
+INTACT, FRONT_EMPTY, REAR_EMPTY = (1.0, 1.0, 1.0, 1.0), (0.0, 0.0, 1.0, 1.0), (1.0, 1.0, 0.0, 0.0)
+#: (maneuver kind, oil levels FL FR RL RR, label) of a case: the same six drives for every form
+CASE_DRIVES = (("bump", INTACT, "bump_intact"), ("bump", FRONT_EMPTY, "bump_front_empty"),
+               ("bump", REAR_EMPTY, "bump_rear_empty"), ("sine", INTACT, "sine_intact"),
+               ("sine", FRONT_EMPTY, "sine_front_empty"), ("sine", REAR_EMPTY, "sine_rear_empty"))
+#: perturbation bands of a car's parameters (fraction, random sign): within the vehicle file's priors and
+#: beyond them
+CAR_BANDS = {"nominal": None, "within": (0.05, 0.15), "beyond": (0.15, 0.30)}
+
+
+@dataclass(frozen=True)
+class GeneratorForm:
+    """One form of the family: what the truth hides and how its structure differs from the model's.
+
+    ``expect``: terms of the finder's vocabulary that name the hidden physics (must be found);
+    ``optional``: terms that are right if named and not missed if not (physics the drives barely inform,
+    or that a calibration value can stand in for, e.g. a gas spring's linear rate and the wheel rate).
+    """
+
+    name: str
+    effect: str
+    description: str
+    expect: tuple[str, ...] = ()
+    optional: tuple[str, ...] = ()
+    base: str = "full"
+    hidden: TruthHidden = field(default_factory=TruthHidden)
+    friction: TruthFriction = field(default_factory=TruthFriction)
+    car_band: str = "nominal"
+    car_changes: dict = field(default_factory=dict)
+    integrator: str = "rk4"
+    step_s: float = 2e-4
+
+    @property
+    def split(self) -> str:
+        return split_of(self.name)
+
+    def car(self, seed: int) -> TruthCar:
+        """The form's car: nominal, or every parameter moved within / beyond the priors (seeded)."""
+        car = replace(TruthCar(), **self.car_changes)
+        band = CAR_BANDS[self.car_band]
+        if band is None:
+            return car
+        return car.perturbed(np.random.default_rng(1000 + seed), band[0], band[1], extended=True)
+
+
+def _forms() -> dict[str, GeneratorForm]:
+    amp = dict(effect="amplitude_friction", expect=("friction_amplitude",))
+    visc = dict(effect="extra_viscous", expect=("extra_viscous_damping",))
+    gas = dict(effect="gas_spring", optional=("damper_gas_preload",))
+    lat = dict(effect="lateral_force_friction", base="no_horizontal", expect=("friction_lateral_force",),
+               optional=("friction_longitudinal_force",))
+    other = dict(integrator="heun", step_s=1e-3, friction=TruthFriction(sv_shape="sqrt", damper_curve="akima",
+                                                                       oil_law="quadratic"),
+                 car_changes={"roll_centre_handling": "per_axle"})
+    fs = [
+        GeneratorForm("structure/nominal", "none", "version 1.0 of the independent simulator as it is"),
+        GeneratorForm("structure/heun_1ms", "none", "Heun (second order) at 1 ms instead of RK4 at 0.2 ms",
+                      integrator="heun", step_s=1e-3),
+        GeneratorForm("structure/semi_implicit_euler_0.5ms", "none",
+                      "semi-implicit Euler (first order, symplectic) at 0.5 ms",
+                      integrator="semi_implicit_euler", step_s=5e-4),
+        GeneratorForm("structure/velocity_scaling_ramp", "none",
+                      "damper-friction velocity scaling linear up to its plateau (instead of tanh)",
+                      friction=TruthFriction(sv_shape="ramp")),
+        GeneratorForm("structure/velocity_scaling_sqrt", "none",
+                      "damper-friction velocity scaling rising as a square root to its plateau",
+                      friction=TruthFriction(sv_shape="sqrt")),
+        GeneratorForm("structure/damper_curve_akima", "none",
+                      "Akima (not monotone) damper curve between the measured points instead of PCHIP",
+                      friction=TruthFriction(damper_curve="akima")),
+        GeneratorForm("structure/tyre_lag_0.25m", "none",
+                      "tyre relaxation length 0.25 m instead of 0.5 m (tyre lag, an assumed item)",
+                      car_changes={"relaxation_length": 0.25}),
+        GeneratorForm("structure/roll_centre_per_axle", "none",
+                      "each axle's lateral force acts at its own roll centre (not their mean)",
+                      car_changes={"roll_centre_handling": "per_axle"}),
+        GeneratorForm("structure/car_within_priors", "none",
+                      "every car parameter 5-15 % off (masses, inertias, CG height, rates, tyres, roll centres)",
+                      car_band="within"),
+        GeneratorForm("structure/car_beyond_priors", "none",
+                      "every car parameter 15-30 % off: beyond the vehicle file's priors", car_band="beyond"),
+        GeneratorForm("structure/combined", "none",
+                      "Heun at 1 ms, square-root velocity scaling, Akima damper curve, quadratic oil "
+                      "law (shows only with part-filled dampers), per-axle roll centres and a car 5-15 % off, "
+                      "all at once", car_band="within", **other),
+        GeneratorForm("amplitude/peak_saturating_axle", description="axle friction level + extra A^2/(A^2+A0^2), "
+                      "A a decaying peak of |d| (tau 0.8 s), both axles 12 / 22 N (version 1.0 form)",
+                      hidden=TruthHidden(amplitude_extra_N=(12.0, 22.0)), **amp),
+        GeneratorForm("amplitude/stroke_linear_axle", description="axle friction level + extra A/A0, A half the "
+                      "decaying max-min span (stroke), both axles 5 / 9 N per 8 mm",
+                      hidden=TruthHidden(amplitude_extra_N=(5.0, 9.0), amplitude_envelope="stroke",
+                                         amplitude_law="linear"), **amp),
+        GeneratorForm("amplitude/rms_power_separate", description="a separate Dahl element (half the stiffness, "
+                      "not scaled by horizontal forces) of level extra (A/A0)^0.5, A sqrt(2) x windowed RMS of d, "
+                      "both axles 10 / 18 N, on a car 5-15 % off",
+                      hidden=TruthHidden(amplitude_extra_N=(10.0, 18.0), amplitude_envelope="windowed_rms",
+                                         amplitude_law="power", amplitude_element="separate"),
+                      car_band="within", **amp),
+        GeneratorForm("amplitude/peak_linear_separate_rear", description="rear axle only: a separate element of "
+                      "level extra A/A0, A a decaying peak of |d| (tau 1.5 s), 8 N per 8 mm",
+                      hidden=TruthHidden(amplitude_extra_N=(0.0, 8.0), amplitude_law="linear",
+                                         amplitude_element="separate", amplitude_tau_s=1.5), **amp),
+        GeneratorForm("viscous/linear", description="extra viscous damping c v, 250 / 300 N s/m",
+                      hidden=TruthHidden(extra_viscous=(250.0, 300.0)), **visc),
+        GeneratorForm("viscous/saturating", description="extra damping c v_r tanh(v/v_r), v_r 0.05 m/s, "
+                      "c 400 / 500 N s/m", hidden=TruthHidden(extra_viscous=(400.0, 500.0),
+                                                               viscous_law="saturating", viscous_ref_m_s=0.05),
+                      **visc),
+        GeneratorForm("viscous/power", description="extra damping c v_r sgn(v)|v/v_r|^0.6, v_r 0.1 m/s, "
+                      "c 300 / 380 N s/m", hidden=TruthHidden(extra_viscous=(300.0, 380.0), viscous_law="power",
+                                                             viscous_exponent=0.6, viscous_ref_m_s=0.1), **visc),
+        GeneratorForm("gas/linear_rate", description="damper gas force 150 / 120 N preload + 2500 N/m rate per "
+                      "wheel (the rate competes with the wheel rate)",
+                      hidden=TruthHidden(gas_preload_N=(150.0, 150.0, 120.0, 120.0), gas_rate_N_m=(2500.0,) * 4),
+                      **gas),
+        GeneratorForm("gas/progressive", description="damper gas force 150 / 120 N preload + 1000 N/m + "
+                      "4e6 N/m^3 d^3 per wheel", hidden=TruthHidden(gas_preload_N=(150.0, 150.0, 120.0, 120.0),
+                                                                    gas_rate_N_m=(1000.0,) * 4,
+                                                                    gas_cubic_N_m3=(4e6,) * 4), **gas),
+        GeneratorForm("lateral/nominal", description="the truth's friction grows with the wheel's lateral force "
+                      "(0.28 / 0.27 per kN); the finder starts from a model without it", **lat),
+        GeneratorForm("lateral/other_structure", description="as lateral/nominal on Heun at 1 ms, square-root "
+                      "velocity scaling, Akima damper curve, quadratic oil law, per-axle roll centres",
+                      **lat, **{k: v for k, v in other.items()}),
+        GeneratorForm("amplitude_viscous/rear", "amplitude_and_viscous", "rear axle: amplitude friction "
+                      "(decaying peak, saturating, 20 N) and extra viscous damping 300 N s/m",
+                      expect=("friction_amplitude", "extra_viscous_damping"),
+                      hidden=TruthHidden(amplitude_extra_N=(0.0, 20.0), extra_viscous=(0.0, 300.0))),
+    ]
+    return {f.name: f for f in fs}
+
+
+def _load_split(path: Path = SPLIT_FILE) -> dict[str, str]:
+    with open(path, encoding="utf-8") as fh:
+        doc = yaml.safe_load(fh)
+    out: dict[str, str] = {}
+    for s in SPLITS:
+        for name in doc.get(s) or []:
+            if name in out:
+                raise ValueError(f"{path}: form {name!r} is in both {out[name]} and {s}")
+            out[name] = s
+    return out
+
+
+FORMS: dict[str, GeneratorForm] = _forms()
+SPLIT: dict[str, str] = _load_split()
+SPLIT_RECORDED: str = str(yaml.safe_load(SPLIT_FILE.read_text(encoding="utf-8")).get("recorded"))
+_unsplit = sorted(set(FORMS) - set(SPLIT))
+_unknown = sorted(set(SPLIT) - set(FORMS))
+if _unsplit or _unknown:
+    raise ValueError(f"{SPLIT_FILE}: forms without a split {_unsplit}, split names without a form {_unknown}")
+for _f in FORMS.values():
+    if _f.effect not in EFFECTS:
+        raise ValueError(f"form {_f.name}: effect {_f.effect!r} not one of {EFFECTS}")
+
+
+def split_of(name: str) -> str:
+    """"development" or "held_out" (``family_split.yaml``)."""
+    return SPLIT[name]
+
+
+def forms(split: str | None = None) -> list[GeneratorForm]:
+    """The forms of one split (or all), in registry order."""
+    if split is not None and split not in SPLITS:
+        raise ValueError(f"split must be one of {SPLITS}, got {split!r}")
+    return [f for f in FORMS.values() if split is None or f.split == split]
+
+
+def maneuver(kind: str) -> TruthManeuver:
+    """The case maneuvers: bump crossing at 8 km/h over 6 cm, sine steer at 50 km/h (model-spec 4)."""
+    if kind == "bump":
+        return TruthManeuver.bump()
+    if kind == "sine":
+        return TruthManeuver.sine()
+    raise ValueError(f"case maneuver must be 'bump' or 'sine', got {kind!r}")
+
+
+def make_case(form: GeneratorForm, seed: int, gyro_noise_deg_s: float = 0.05,
+              drives=CASE_DRIVES) -> list[tuple[str, TestDrive]]:
+    """The case's drives of ``form``: white gyro noise of ``gyro_noise_deg_s`` per axis, accelerometer
+    noise 0.02 m/s^2, a small random gyro bias per drive (N(0, 0.02) deg/s per axis); seeded."""
+    rng = np.random.default_rng(seed)
+    car = form.car(seed)
+    out = []
+    for i, (kind, oil, label) in enumerate(drives):
+        bias = rng.normal(0.0, 0.02, 3)
+        sensor = TruthSensor(imu_rate_hz=200, gyro_noise_deg_s=(gyro_noise_deg_s,) * 3,
+                             accel_noise_m_s2=(0.02,) * 3, gyro_bias_deg_s=tuple(float(b) for b in bias))
+        d = make_drive(car, form.friction, form.hidden, maneuver(kind), sensor, oil=oil, seed=seed * 100 + i,
+                       step_s=form.step_s, integrator=form.integrator)
+        d.metadata["family_form"] = form.name
+        out.append((label, d))
+    return out
+
+
+__all__ = ["FORMS", "SPLITS", "SPLIT_RECORDED", "EFFECTS", "CASE_DRIVES", "CAR_BANDS", "GeneratorForm",
+           "split_of", "forms", "maneuver", "make_case"]
