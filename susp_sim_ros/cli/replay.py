@@ -92,11 +92,15 @@ def _timeline(msgs, t0: int, t1: int, clock_ns: int):
 
 def _check_integrity(rec, path) -> None:
     """The input integrity check (io/integrity.py) of a recording that holds a test drive; replay plays the
-    recording as it is, so each finding is reported with action ``kept``. Not a drive: nothing to check."""
+    recording as it is, so each finding is reported with action ``kept``; a defect that leaves nothing sound
+    (an IntegrityError: implausible unit, missing road, unusable oil levels) is a named error (exit 2), as in
+    every command. Not a drive: nothing to check."""
     if not (rec.by_topic(SPEED) and rec.by_topic(STEERING)):
         return
     try:
         drive = drive_from_recording(rec)
+    except integrity.IntegrityError:
+        raise  # bad_metadata (damper_oil_level not four fractions): a named error (exit 2), as in every command
     except RecordingError:
         return  # the topics are checked (and named) below as the replay needs them
     res = integrity.check_drive_integrity(drive, str(path))

@@ -103,7 +103,7 @@ def _pair(args) -> dict:
     dead = set(drive.extra.get("unusable_signals", ()))
     signals = [s for s in va.RATE_SIGNALS if s not in dead]
     if not signals:
-        require_live_imu(drive, args.measured, "validate")
+        require_live_imu(drive, args.measured, "validate", need="at least one live gyro axis")
     try:
         res = va.validate(drive.imu.t_ns, drive.imu.gyro, sim.t_ns, sim.gyro, windows=windows, signals=signals,
                           rate_hz=args.rate, names=(f"{args.measured} {imu_topic}", f"{args.simulated} {topic}"),

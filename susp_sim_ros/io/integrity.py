@@ -203,9 +203,11 @@ class _Checker:
                 for i0, i1 in _runs(bad):
                     self.add(topic, "non_finite", int(t[i0]), int(t[i1]), "excluded",
                              f"{i1 - i0 + 1} sample(s) with NaN or inf dropped")
+                if bad.all():  # the span of the samples (log time 0 would read as before the recording)
+                    raise self.fail(topic, int(t.min()), int(t.max()),
+                                    f"non_finite: every one of its {t.size} sample(s) is NaN or inf; expected "
+                                    f"finite values")
                 t, v = t[~bad], v[~bad]
-                if not t.size:
-                    raise self.fail(topic, 0, 0, "every sample is NaN or inf; expected finite values")
         if t.size < 3:
             return t, v, []
         dt = np.diff(t)
@@ -290,14 +292,18 @@ class _Checker:
         return t, v
 
     def units(self, topic: str, t: np.ndarray, v: np.ndarray, limit: float, factor: float, unit: str,
-              other: str) -> None:
+              other: str, recorded: np.ndarray) -> None:
+        """``implausible_unit`` (an error) when the samples ``v`` (at log times ``t``, spikes dropped) exceed
+        ``limit`` [``unit``] but ``factor`` times them fit (the ``other`` unit); the error names the whole
+        topic, ``recorded`` (its log times as recorded: the spike check may drop edge samples of a signal
+        recorded in the wrong unit)."""
         if not t.size:
             return
         peak = float(np.max(np.abs(v)))
         if peak > limit:
             k = int(np.argmax(np.abs(v)))
             if peak * factor <= limit:
-                raise self.fail(topic, int(t[0]), int(t[-1]),
+                raise self.fail(topic, int(recorded.min()), int(recorded.max()),
                                 f"implausible_unit: values up to {peak:.4g} {unit} (at {self.s(t[k]):.3f} s) exceed "
                                 f"the plausible {limit:g} {unit} but fit {other}; expected {unit} (give a topic "
                                 f"map with the unit factor, --topic-map)")
@@ -361,9 +367,9 @@ class _Checker:
         steering = scalar("steering", STEERING, d.steering, "spikes.floor_steering", "rad")
         assert speed is not None and steering is not None
         self.units(names.get("speed", SPEED), speed.t_ns, speed.values, float(pol["limits.speed_max"]),
-                   1.0 / 3.6, "m/s", "km/h")
+                   1.0 / 3.6, "m/s", "km/h", d.speed.t_ns)
         self.units(names.get("steering", STEERING), steering.t_ns, steering.values, float(pol["limits.steering_max"]),
-                   math.pi / 180.0, "rad", "degrees")
+                   math.pi / 180.0, "rad", "degrees", d.steering.t_ns)
         wh = scalar("wheel_heights", WHEEL_HEIGHTS, d.wheel_heights, "spikes.floor_wheel_heights", "m")
         cmd = scalar("damper_command", DAMPER_COMMAND, d.damper_command, None, "1")
         imu = d.imu
@@ -440,17 +446,31 @@ def check_drive_integrity(drive: TestDrive, file: str | Path, policy: dict[str, 
     return _Checker(drive, str(file), policy if policy is not None else load_policy()).run()
 
 
-def require_live_imu(drive: TestDrive, file: str | Path, what: str, signals: tuple[str, ...] = GYRO_SIGNALS
-                     ) -> None:
-    """IntegrityError when ``what`` (a command that fits on the measured IMU) would use a signal the check
-    found dead (``drive.extra["unusable_signals"]``)."""
+def require_live_imu(drive: TestDrive, file: str | Path, what: str, signals: tuple[str, ...] = GYRO_SIGNALS,
+                     need: str = "a live gyro on every axis") -> None:
+    """IntegrityError when ``what`` (a command that uses the measured IMU, and needs ``need``) would use a
+    signal the check found dead (``drive.extra["unusable_signals"]``); the message says where each died
+    (its ``dead_sensor`` findings, log time from the recording's first message)."""
     dead = [s for s in signals if s in drive.extra.get("unusable_signals", ())]
     if dead:
         topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
-        t_end = (drive.imu.t_ns[-1] - drive.imu.t_ns[0]) / NS if drive.imu is not None and len(drive.imu) else 0.0
-        raise IntegrityError(f"{file}: topic {topic}: dead_sensor {', '.join(dead)} (0.000-{t_end:.3f} s from the "
-                             f"first IMU message): {what} needs a live gyro on every axis (expected noise above "
-                             f"the policy floor); nothing sound to fit on")
+        where = ", ".join(f"{s} {_dead_span(drive, s)}" for s in dead)
+        raise IntegrityError(f"{file}: topic {topic}: dead_sensor {where} (log time from the recording's first "
+                             f"message): {what} needs {need} (expected noise above the policy floor); nothing "
+                             f"sound to work on")
+
+
+def _dead_span(drive: TestDrive, signal: str) -> str:
+    """``FROM-TO s`` of the ``dead_sensor`` findings of ``signal`` (the whole IMU record without one)."""
+    spans = [(float(f["from_s"]), float(f["to_s"])) for f in drive.extra.get("input_findings", ())
+             if f.get("kind") == "dead_sensor" and str(f.get("detail", "")).split(" ", 1)[0] == signal]
+    if not spans and drive.imu is not None and len(drive.imu):
+        starts = [int(x.t_ns[0]) for x in (drive.speed, drive.steering, drive.wheel_heights,
+                                           drive.damper_command, drive.imu) if x is not None and len(x)]
+        spans = [((int(drive.imu.t_ns[0]) - min(starts)) / NS, (int(drive.imu.t_ns[-1]) - min(starts)) / NS)]
+    if not spans:
+        return "(no samples)"
+    return ", ".join(f"{a:.3f}-{b:.3f} s" for a, b in spans)
 
 
 # ---- reporting -----------------------------------------------------------------------------------

@@ -31,6 +31,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...errors import ConfigError, SuspInputError
+from ...io.drive_data import TestDrive
+from ...io.integrity import require_live_imu
 from ...model import Model
 from ...model.layout import P_INDEX, U_INDEX
 from ...model.params import CORNER_NAMES, load_settings, load_vehicle
@@ -166,10 +168,14 @@ def evaluator_for(model: Model, cases: Sequence[DriveCase], cfg: dict) -> tuple[
     """The :class:`Evaluator` of prepared drives ``cases`` for ``model``: signals narrowed to the
     configured ones, the recorded oil levels withheld (every drive starts intact), noise per drive and
     signal from the measurement itself (robust std of its 3rd differences), quiet lead-ins marked for
-    the sensor bias."""
+    the sensor bias. IntegrityError (exit 2) when the integrity check found one of the configured signals
+    dead (``dead_sensor``) in a drive read from a recording."""
     want = list(cfg["estimator"]["signals"])
     noise = {}
     for c in cases:
+        if isinstance(c.drive, TestDrive):  # a signal the integrity check found dead is no measurement
+            require_live_imu(c.drive, c.path, "the inspection", signals=tuple(want),
+                             need=f"every one of {', '.join(want)} live")
         c.oil = np.ones(4)          # the estimator is not told the recorded state
         select_signals(c, want)
         if not c.signals:
