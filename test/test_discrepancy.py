@@ -222,3 +222,30 @@ def test_cli_bad_input_exits_2(tmp_path):
     p = subprocess.run([sys.executable, "-m", "susp_sim_ros.cli.main", "diagnose", str(tmp_path / "nope.mcap")],
                        capture_output=True, text=True, cwd=ROOT, timeout=120)
     assert p.returncode == 2 and "nope.mcap" in p.stderr
+
+
+def test_measurement_entries_judged_on_their_intervals(monkeypatch):
+    """Issue 24: a measurement-chain entry whose interval from the data alone holds no effect is dropped;
+    one whose interval holds it only with the held vehicle values is not named but listed as competing
+    with the held values that bring most of its width, with the measurement that separates them."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy import finder as fm
+    st = Structure(["time_offset", "steering_offset"])
+    f = fm.DiscrepancyFinder()
+    f.result_ = SimpleNamespace(structure=st, x=np.array([0.0019, 0.004]), bic=100.0)
+    f.consider_names_ = ["a:all", "b:all", "tyre_damping:front"]
+    f.consider_keys_ = ["geometry.a", "geometry.b", "tyre_damping (front)"]
+    f.consider_contrib_ = np.array([[1.0e-4, 0.9e-4, 1e-7], [0.0, 0.0, 0.0]])   # variance shares [s^2]
+    data = (np.array([0.0007, 0.001]), np.array([0.0032, 0.007]))          # the data alone: both non-zero
+    wide = (np.array([-0.025, 0.001]), np.array([0.029, 0.007]))           # with the held values
+    monkeypatch.setattr(fm.DiscrepancyFinder, "_ci95", lambda self, fit, consider=True: wide if consider else data)
+    monkeypatch.setattr(fm.DiscrepancyFinder, "ci95_", lambda self: wide)
+    drop, competing = f._judge_measurement_terms()
+    assert drop == [] and [c["name"] for c in competing] == ["time_offset"]
+    c = competing[0]
+    assert c["competes_with"] == ["a:all", "b:all"]          # 0.8 of the width between them, strongest first
+    assert "geometry.a" in c["reveal_with"] and "geometry.b" in c["reveal_with"]
+    assert c["ci95"]["lag"] == [-0.025, 0.029]
+    data = (np.array([-0.001, 0.001]), np.array([0.004, 0.007]))
+    drop, competing = f._judge_measurement_terms()
+    assert drop == ["time_offset"] and competing == []

@@ -165,9 +165,16 @@ def consider_covariance(J_est: np.ndarray, H: np.ndarray, J_con: np.ndarray, sd_
     k = J_est.shape[1]
     if J_con.shape[1] == 0 or k == 0:
         return np.zeros((k, k))
-    Hec = weight * (J_est.T @ J_con)
-    S = np.linalg.pinv(H) @ Hec
+    S = consider_sensitivity(J_est, H, J_con, weight)
     return (S * sd_con[None, :] ** 2) @ S.T
+
+
+def consider_sensitivity(J_est: np.ndarray, H: np.ndarray, J_con: np.ndarray, weight: float) -> np.ndarray:
+    """``S = H^-1 H_ec`` (k x n_con): how far each estimated parameter moves per unit error of each consider
+    parameter (:func:`consider_covariance`; arguments as there). ``(S[i, j] sd_j)^2`` is the share of
+    parameter i's consider variance that consider value j brings: what the estimate competes with."""
+    Hec = weight * (J_est.T @ J_con)
+    return np.linalg.pinv(H) @ Hec
 
 
 def vehicle_at(vp: VehicleParams, params: Sequence[CalParam], theta: Sequence[float]) -> VehicleParams:

@@ -95,6 +95,12 @@ class Candidate:
     def neutral(self) -> np.ndarray:
         return np.array([p.neutral for p in self.params], float)
 
+    def effect_in_interval(self, lo: np.ndarray, hi: np.ndarray) -> bool:
+        """Whether the 95 % intervals ``[lo, hi]`` of the parameters all hold "no effect" (every
+        parameter's neutral value inside its interval). A term without parameters (its effect estimated
+        elsewhere, e.g. a sensor bias) gives False."""
+        return bool(self.params) and all(lo[k] <= p.neutral <= hi[k] for k, p in enumerate(self.params))
+
 
 def _set_axles(P, key, front, rear):
     k = P_INDEX[key]

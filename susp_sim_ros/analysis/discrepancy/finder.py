@@ -43,9 +43,9 @@ from ...model.params import TermSetting
 from ...model.terms import get_term
 from ...progress import progress
 from .calibration import (STEP_OF_SD, CalParam, calibration_candidate, calibration_entries, calibration_params,
-                          consider_covariance, consider_params, identifiability,
+                          consider_params, consider_sensitivity, identifiability,
                           vehicle_at)
-from .candidates import BY_NAME, CALIBRATION, LIBRARY, PHYSICS
+from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PHYSICS
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .data import SIGNAL_UNIT, as_cases
 from .engine import Evaluator, Structure
@@ -69,6 +69,7 @@ DATA_WEIGHTS = (1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01)  # candidate weights of t
 WEIGHT_TOLERANCE = 0.005   # ... the largest within 0.5 % of the best held-out residual is taken
 MIN_STABLE = 0.5           # ... and be selected (train-set BIC test) in at least half the refits
 RECALIBRATION_NFEV = 8      # iterations of the recalibration of every ranged value a term must beat
+COMPETES_SHARE = 0.8        # the held values named as competing bring this share of a term's consider variance
 TERM_CANDIDATES = tuple(c for c in LIBRARY if c.term_module)  # candidates that are kernel terms
 
 
@@ -230,17 +231,91 @@ class DiscrepancyFinder:
         if any(c.kind == PHYSICS for c in cur.structure.cands):  # final polish, calibration jointly
             cur = fit_structure(ev, cur.structure, cur.x, allidx, max_nfev=30)
             self._set_calibration(cur)
-        self.result_, self.path_, self.accepted_ = cur, path, accepted
+        self.path_, self.accepted_ = path, accepted
         self.ranking_ = ranking or []
+        self._finish(ev, cur)
+        # 6. the measurement chain judged on its intervals: an entry the data do not support is dropped;
+        # one a held vehicle value could stand in for is not named but listed as competing with it
+        self.competing_: list[dict] = []
+        drop, competing = self._judge_measurement_terms()
+        if drop:
+            self._finish(ev, self._drop_terms(ev, self.result_, drop, path, accepted))
+            drop, competing = self._judge_measurement_terms()
+        self.competing_ = competing
+        return self
+
+    def _finish(self, ev: Evaluator, cur: FitResult) -> None:
+        """Stage 5 on the final structure: the intervals' ingredients, the leave-one-drive-out of the
+        whole result against the base model, the calibration table."""
+        self.result_ = cur
         self.consider_se_ = self._consider_se(ev, cur)
         self.prior_scale_ = cur.prior_scale() if self.calibrate else 1.0
         if self.identifiability_ is not None:
             self.identifiability_["prior_scale"] = self.prior_scale_
-        # 5. leave-one-drive-out of the whole result against the base model
         self.heldout_ = self._heldout(ev, cur) if self.heldout else None
         self.jackknife_se_ = _jackknife_se(self.heldout_, len(cur.x))
         self._set_calibration(cur)
-        return self
+
+    def _judge_measurement_terms(self) -> tuple[list[str], list[dict]]:
+        """The final structure's measurement-chain terms (time offset, steering offset) whose 95 %
+        intervals hold no effect: those whose interval from the data alone (posterior and drive-to-drive
+        spread) holds it, to drop; and those whose interval holds it only with the values the calibration
+        held at their file value (:meth:`_consider_se`), as entries ``{name, competes_with, reveal_with,
+        why, value, ci95}``: the held values that bring most of the interval's width (at least
+        :data:`COMPETES_SHARE` of it between them, strongest first) could stand in for the term."""
+        st, x = self.result_.structure, self.result_.x
+        lo, hi = self.ci95_()
+        lo_d, hi_d = self._ci95(self.result_, consider=False)
+        drop, competing = [], []
+        for k, name in enumerate(st.names):
+            cand = BY_NAME.get(name)
+            if cand is None or cand.kind != MEASUREMENT:
+                continue
+            a, b = st.offsets[k], st.offsets[k + 1]
+            if cand.effect_in_interval(lo_d[a:b], hi_d[a:b]):
+                drop.append(name)
+            elif cand.effect_in_interval(lo[a:b], hi[a:b]):
+                rivals = self._competitors(a, b)
+                keys = [self.consider_keys_[self.consider_names_.index(r)] for r in rivals]
+                competing.append({
+                    "name": name, "competes_with": rivals,
+                    "reveal_with": f"a measurement of {', '.join(keys) or 'the held vehicle values'} (held at the "
+                                   f"vehicle file's value; the drives do not pin it), then {cand.reveal_with}",
+                    "value": {p.name: float(v) for p, v in zip(cand.params, x[a:b])},
+                    "ci95": {p.name: [float(lo[a + j]), float(hi[a + j])] for j, p in enumerate(cand.params)},
+                    "why": f"its 95 % interval holds no effect once {', '.join(rivals) or 'the held values'} "
+                           "may lie anywhere in their priors: the drives cannot tell the two apart"})
+        return drop, competing
+
+    def _competitors(self, a: int, b: int) -> list[str]:
+        """The held values (``PARAM:where``) that bring most of the consider variance of parameters a..b."""
+        contrib = getattr(self, "consider_contrib_", None)
+        if contrib is None or not contrib.size:
+            return []
+        share = contrib[a:b].sum(axis=0)
+        order = np.argsort(share)[::-1]
+        total, out, acc = float(share.sum()), [], 0.0
+        for j in order:
+            if total <= 0 or acc >= COMPETES_SHARE * total:
+                break
+            out.append(self.consider_names_[j])
+            acc += float(share[j])
+        return out
+
+    def _drop_terms(self, ev: Evaluator, cur: FitResult, names: list[str], path: list,
+                    accepted: list) -> FitResult:
+        """``cur`` without the terms ``names`` (refitted, calibration jointly), each drop in the path."""
+        allidx = tuple(range(len(ev.cases)))
+        st = cur.structure
+        for name in names:
+            st = st.without(name)
+        f = fit_structure(ev, st, st.embed(cur.structure, cur.x), allidx, max_nfev=TRIAL_NFEV)
+        for name in names:
+            path.append({"step": len(path), "removed": name, "structure": list(st.names), "rss": f.rss,
+                         "bic": f.bic, "delta_bic": cur.bic - f.bic,
+                         "why": "its 95 % interval from the drives holds no effect: not named"})
+        accepted[:] = [a for a in accepted if a["name"] not in names]
+        return f
 
     def _base_run(self, ev: Evaluator, model, cases: list[DriveCase]) -> None:
         """Stages 1-2: the base model's run, quiet lead-ins and noise floors per signal; which signals
@@ -356,12 +431,13 @@ class DiscrepancyFinder:
         differs from the car's."""
         return self._ci95(self.result_)
 
-    def _ci95(self, fit: FitResult) -> tuple[np.ndarray, np.ndarray]:
+    def _ci95(self, fit: FitResult, consider: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`ci95_`; ``consider`` False leaves out what the held values add (the data alone)."""
         if fit is not getattr(self, "result_", None):
             return fit.ci95()
         lo, hi = fit.ci95(getattr(self, "prior_scale_", 1.0))
         se = (hi - lo) / (2 * 1.96)
-        cons = getattr(self, "consider_se_", None)
+        cons = getattr(self, "consider_se_", None) if consider else None
         if cons is not None and len(cons) == len(fit.x):
             se = np.sqrt(se ** 2 + cons ** 2)
         jk = getattr(self, "jackknife_se_", None)
@@ -376,6 +452,9 @@ class DiscrepancyFinder:
         simulations with each of them stepped by a tenth of its standard deviation. This is what lets a
         calibrated value's interval include the truth when the data pin it only through an assumed value
         (the unsprung masses, the tyre damping, a friction level the drives do not inform, ...)."""
+        self.consider_contrib_ = np.zeros((len(fit.x), 0))
+        self.consider_names_: list[str] = []   # PARAM:where, as in the calibration table
+        self.consider_keys_: list[str] = []    # the vehicle file's key of each
         if not self.calibrate or fit.jac is None or not len(fit.x):
             return None
         cons = self._held_values()
@@ -391,8 +470,11 @@ class DiscrepancyFinder:
         Jc = ((R[1:] - R[0]) / h[:, None]).T
         if st.bias:
             Jc = debias(ev, Jc, fit.idx)
-        C = consider_covariance(fit.jac, fit.information(), Jc, sd, fit.data_information_scale())
-        return np.sqrt(np.clip(np.diag(C), 0, None))
+        S = consider_sensitivity(fit.jac, fit.information(), Jc, fit.data_information_scale())
+        self.consider_contrib_ = (S * sd[None, :]) ** 2
+        self.consider_names_ = [f"{p.field}:{p.where}" for p in cons]
+        self.consider_keys_ = [p.key if p.where == "all" else f"{p.key} ({p.where})" for p in cons]
+        return np.sqrt(np.clip(self.consider_contrib_.sum(axis=1), 0, None))
 
     # -- signals ------------------------------------------------------------------------------------
     def _case_sigma(self, c: DriveCase) -> np.ndarray:

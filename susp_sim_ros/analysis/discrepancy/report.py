@@ -50,9 +50,10 @@ def term_entries(f) -> list[dict]:
     lo, hi = f.ci95_()
     out = []
     acc = {a["name"]: a for a in f.accepted_}
+    competing = {c["name"] for c in getattr(f, "competing_", [])}
     for k, name in enumerate(st.names):
-        if name not in BY_NAME:  # the calibration: reported in its own table, never as a term
-            continue
+        if name not in BY_NAME or name in competing:  # the calibration has its own table; a competing
+            continue                                  # entry is listed as not identifiable
         cand = BY_NAME[name]
         a, b = st.offsets[k], st.offsets[k + 1]
         x = res.x[a:b]
@@ -176,6 +177,7 @@ def interface_json(f) -> dict:
     terms = term_entries(f) if v not in ("unexplained_residual", "unmeasured_input") else [
         t for t in term_entries(f) if BY_NAME[t["name"]].kind == MEASUREMENT]
     ni = [{"name": s["name"], "reveal_with": s["reveal_with"]} for s in f.skipped_]
+    ni += [{k: _clean(c[k]) for k in ("name", "reveal_with", "competes_with")} for c in getattr(f, "competing_", [])]
     ho = f.heldout_ or {}
     rep = {
         "verdict": v,
@@ -545,7 +547,8 @@ def _md_findings(f, rep: dict, paths: dict, name: str) -> list[str]:
     if not rep["terms"]:
         L.append("- none")
     L += ["", "## Not identifiable from these drives", ""]
-    L += [f"- {s['name']}: {s['why']}; reveal with {s['reveal_with']}" for s in f.skipped_] or ["- none"]
+    L += [f"- {s['name']}: {s['why']}; reveal with {s['reveal_with']}"
+          for s in [*f.skipped_, *getattr(f, "competing_", [])]] or ["- none"]
     if f.in_base_:
         L += ["", f"Already in the base model (not tested): {', '.join(f.in_base_)}."]
     return L
