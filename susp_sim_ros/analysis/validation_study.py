@@ -12,9 +12,10 @@ node replaying the drive), validate each simulation against the measured IMU
 - per drive, the ride and road-holding metrics (:mod:`.ride_recording`) of each variant's simulation and
   the measured Wk comfort over the same time (``drives[].ride``, a table in the report).
 
-The maneuver of a drive comes from its ``test_drive`` metadata (``maneuver`` starting with
-``bump_crossing`` or ``sine_steer``), the vehicle state from ``damper_oil_level``. Drives of other
-maneuvers are validated and reported but stay out of the paper tables.
+The maneuver of a drive comes from its ``test_drive`` metadata (``maneuver`` starting with a name or
+alias of the maneuver registry, :func:`~susp_sim_ros.model.paper.classify_maneuver`: ``bump_crossing``
+or ``sine_steer``), the vehicle state from ``damper_oil_level``. Drives of other maneuvers are validated
+and reported but stay out of the paper tables.
 
 Speed: the four variants share one compiled kernel; a lockstep run of a bundled drive takes a few tens
 of milliseconds, so the whole study over ``bags/`` takes a few seconds (most of it plotting). Batch runs
@@ -36,7 +37,8 @@ from ..io.drive import TestDrive, read_drive
 from ..io.messages import SUSPENSION_COLUMNS
 from ..model import Model
 from ..model.maneuvers import vehicle_state
-from ..model.paper import MANEUVERS, STATES, VARIANT_LABEL, VARIANTS, classify_maneuver as _classify
+from ..model.paper import (HEADLINE_MANEUVER, MANEUVERS, STATES, VARIANT_LABEL, VARIANTS,
+                           classify_maneuver)  # re-exported: analysis/discrepancy/data.py imports it from here
 from ..progress import progress as make_progress
 from ..runtime.lockstep import run_lockstep
 from . import validation as va
@@ -55,11 +57,6 @@ COLORS = {"full": "tab:blue", "no_horizontal": "tab:orange", "no_velocity": "tab
 
 def _synthetic_source() -> str:
     return SOURCE
-
-
-def classify_maneuver(text: str) -> str | None:
-    """``bump_crossing``/``sine_steer`` from the free-text metadata ``maneuver``; ``None`` otherwise."""
-    return _classify(text)
 
 
 def classify_state(oil: Sequence[float] | np.ndarray) -> str:
@@ -279,8 +276,8 @@ def _report_findings(drives: Sequence[DriveResult], tab: dict, found: dict) -> l
     lines: list[str] = []
     synthetic = [d for d in drives if d.source.startswith("synthetic:")]
     lines += ["## Findings against the paper", ""]
-    bi = found.get("bump_crossing", {}).get("intact")
-    br = found.get("bump_crossing", {}).get("rear_empty")
+    bi = found.get(HEADLINE_MANEUVER.name, {}).get("intact")
+    br = found.get(HEADLINE_MANEUVER.name, {}).get("rear_empty")
     if bi:
         ok = bi["spread_max_over_min"] < 1.5
         lines.append(f"- Intact car, bump crossing: the variants are {'nearly equal' if ok else 'NOT equal'} "
@@ -300,7 +297,7 @@ def _report_findings(drives: Sequence[DriveResult], tab: dict, found: dict) -> l
                      + (": hardly visible in the overlay plot." if rel < 0.05 else "."))
     if br and "dahl_only_over_full" in br:
         r = br["dahl_only_over_full"]
-        row = tab["bump_crossing"]["rear_empty"]
+        row = tab[HEADLINE_MANEUVER.name]["rear_empty"]
         lines.append(f"- Rear dampers oil-empty, bump crossing: `dahl_only` has {r:.1f} times the RMSE of "
                      f"`full` ({row['dahl_only']:.3f} vs {row['full']:.3f} deg/s); the paper reports 65 times.")
         lines += ["", "Why the ratio differs from the paper's 65: a ratio of RMSEs is set by its denominator. "
@@ -446,12 +443,13 @@ def validation_summary_text(result: dict) -> str:
         lines.append("  " + f"{'state':<13}" + "".join(f"{v:>15}" for v in vs))
         for s, row in by_s.items():
             lines.append("  " + f"{s:<13}" + "".join(f"{row.get(v, math.nan):>15.3f}" for v in vs))
-    f = result["findings"].get("bump_crossing", {})
+    m = HEADLINE_MANEUVER.name
+    f = result["findings"].get(m, {})
     if "rear_empty" in f and "dahl_only_over_full" in f["rear_empty"]:
-        lines.append(f"bump_crossing rear_empty: dahl_only / full = {f['rear_empty']['dahl_only_over_full']:.2f} "
+        lines.append(f"{m} rear_empty: dahl_only / full = {f['rear_empty']['dahl_only_over_full']:.2f} "
                      f"(paper: {PAPER_RATIO:g})")
     if "intact" in f:
-        lines.append(f"bump_crossing intact: max / min over variants = {f['intact']['spread_max_over_min']:.2f}")
+        lines.append(f"{m} intact: max / min over variants = {f['intact']['spread_max_over_min']:.2f}")
     ride = [(Path(d["file"]).stem, d["ride"]) for d in result.get("drives", []) if d.get("ride")]
     if ride:
         v = result["variants"][0]

@@ -6,6 +6,7 @@ Bad input (unknown channel, unit, malformed map, unreadable file) is an error na
 from __future__ import annotations
 
 from ..analysis.measurement_import import import_measurement
+from ..model.paper import MANEUVER_KINDS
 from ..model.params import DEFAULT_VEHICLE
 
 
@@ -27,7 +28,8 @@ def add_output_arguments(p) -> None:
     p.add_argument("--vehicle", default=DEFAULT_VEHICLE, help="vehicle parameter set name (metadata; with an "
                                                                "OpenCRG road its front track places the wheel "
                                                                "tracks)")
-    p.add_argument("--maneuver", default="", help="maneuver text, e.g. bump_crossing_8kmh or sine_steer_50kmh")
+    p.add_argument("--maneuver", default="", help="maneuver text, e.g. "
+                   + " or ".join(k.label for k in MANEUVER_KINDS.values()))
     p.add_argument("--oil", default="1,1,1,1", help="damper oil levels FL,FR,RL,RR in [0, 1]")
     p.add_argument("--source", default="measured", help="metadata source (default: measured)")
     p.add_argument("--notes", default="", help="free text kept in the metadata")

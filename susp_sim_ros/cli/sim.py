@@ -22,14 +22,15 @@ from ..io.topic_map import add_topic_map_argument
 from ..runtime.lockstep import maneuver_drive, run_lockstep
 from ..model import Model
 from ..model.maneuvers import STATES, paper_maneuver, vehicle_state
-from ..model.paper import DEFAULT_MANEUVER, MANEUVER_CHOICES
+from ..model.paper import DEFAULT_MANEUVER, MANEUVER_CHOICES, maneuver_kind
 from ..runtime.sim_core import DivergenceError
 from ..model.params import DEFAULT_VEHICLE
 
 
 def add_arguments(p) -> None:
     p.add_argument("--maneuver", choices=MANEUVER_CHOICES, default=None,
-                   help="paper maneuver (default bump when no --drive is given)")
+                   help=f"paper maneuver (default {maneuver_kind(DEFAULT_MANEUVER).aliases[0]} when no --drive "
+                        "is given)")
     p.add_argument("--drive", metavar="X.MCAP", help="recorded test drive to run in lockstep (MCAP file, rosbag2 "
                    "directory or .db3 file)")
     p.add_argument("--state", choices=STATES, default=None,

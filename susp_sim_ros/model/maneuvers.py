@@ -15,7 +15,8 @@ from ..errors import ConfigError
 from .params import config_dir, load_vehicle
 from .road import RoadProfile, cosine_bump
 from .vehicle import make_inputs
-from .paper import MANEUVERS, STATES, maneuver_kind  # noqa: F401  (MANEUVERS, STATES re-exported)
+from .paper import (BUMP_CROSSING, MANEUVERS, SINE_STEER, STATES,  # noqa: F401  (MANEUVERS, STATES re-exported)
+                    ManeuverKind, maneuver_kind)
 
 
 
@@ -33,6 +34,20 @@ def _value(cfg: dict, section: str, key: str, path="config/maneuvers.yaml"):
         return cfg[section][key]["value"]
     except (KeyError, TypeError):
         raise ConfigError(f"{path}: missing {section}.{key}.value") from None
+
+
+def _arguments(kind: ManeuverKind, given: dict) -> dict[str, float]:
+    """The factory keywords of ``kind`` (its ``config_keys``, in order): each given value, else its default
+    from ``config/maneuvers.yaml``."""
+    cfg = _maneuver_config()
+    return {kw: float(given[kw] if given[kw] is not None else _value(cfg, kind.config_section, key))
+            for kw, key in kind.config_keys}
+
+
+def maneuver_defaults(name: str) -> dict[str, float]:
+    """The default values of a maneuver's factory keywords (name or alias; ``config/maneuvers.yaml``)."""
+    kind = maneuver_kind(name)
+    return _arguments(kind, {kw: None for kw, _ in kind.config_keys})
 
 
 def vehicle_state(name: str) -> tuple[float, float, float, float]:
@@ -93,25 +108,22 @@ def bump_crossing(*, speed=None, height=None, length=None, start=None, settle_ti
     default :func:`reference_wheelbase`."""
     if wheelbase is None:
         wheelbase = reference_wheelbase()
-    cfg = _maneuver_config()
-    g = lambda k, v: float(v if v is not None else _value(cfg, "bump_crossing", k))
-    speed, height, length = g("speed", speed), g("bump_height", height), g("bump_length", length)
-    start, settle = g("bump_start", start), g("settle_time", settle_time)
-    duration = (start + length + wheelbase) / speed + settle
-    return Maneuver("bump_crossing", duration, speed, cosine_bump(height, length, start))
+    v = _arguments(BUMP_CROSSING, dict(speed=speed, height=height, length=length, start=start,
+                                       settle_time=settle_time))
+    duration = (v["start"] + v["length"] + wheelbase) / v["speed"] + v["settle_time"]
+    return Maneuver(BUMP_CROSSING.name, duration, v["speed"], cosine_bump(v["height"], v["length"], v["start"]))
 
 
 def sine_steer(*, speed=None, amplitude=None, frequency=None, periods=None, lead_time=None,
                settle_time=None, duration=None) -> Maneuver:
     """Sinusoidal steering at constant speed on a flat road (``duration`` overrides the length)."""
-    cfg = _maneuver_config()
-    g = lambda k, v: float(v if v is not None else _value(cfg, "sine_steer", k))
-    speed, amp, freq = g("speed", speed), g("amplitude", amplitude), g("frequency", frequency)
-    periods, lead, settle = g("periods", periods), g("lead_time", lead_time), g("settle_time", settle_time)
+    v = _arguments(SINE_STEER, dict(speed=speed, amplitude=amplitude, frequency=frequency, periods=periods,
+                                    lead_time=lead_time, settle_time=settle_time))
+    freq, periods, lead = v["frequency"], v["periods"], v["lead_time"]
     if freq <= 0 or periods <= 0:
-        raise ConfigError(f"sine_steer: frequency and periods must be > 0, got {freq}, {periods}")
-    total = duration if duration is not None else lead + periods / freq + settle
-    return Maneuver("sine_steer", total, speed, RoadProfile.flat(), amp, freq, lead, periods)
+        raise ConfigError(f"{SINE_STEER.name}: frequency and periods must be > 0, got {freq}, {periods}")
+    total = duration if duration is not None else lead + periods / freq + v["settle_time"]
+    return Maneuver(SINE_STEER.name, total, v["speed"], RoadProfile.flat(), v["amplitude"], freq, lead, periods)
 
 
 def paper_maneuver(name: str, wheelbase: float | None = None) -> Maneuver:

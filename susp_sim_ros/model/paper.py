@@ -20,9 +20,12 @@ class ManeuverKind:
     """One of the paper's maneuvers: everything the code needs to know about it, in one entry.
 
     ``factory`` names the function of :mod:`susp_sim_ros.model.maneuvers` that builds it (with the values
-    of ``config/maneuvers.yaml``, section ``name``); ``sweep_arguments`` maps each study parameter of this
+    of ``config/maneuvers.yaml``, section ``name``); ``config_keys`` maps each of that function's keywords
+    to the key of its default value in that section; ``sweep_arguments`` maps each study parameter of this
     maneuver to that function's keyword; ``uses_wheelbase``: the factory takes the vehicle's wheelbase
-    (the drive lasts until the rear axle has passed the excitation)."""
+    (the drive lasts until the rear axle has passed the excitation). A drive's free-text ``maneuver``
+    metadata is recognised as this kind when it starts with one of its :attr:`names`
+    (:func:`classify_maneuver`)."""
 
     name: str
     aliases: tuple[str, ...]
@@ -41,11 +44,21 @@ class ManeuverKind:
     #: the paper measures the ring-out after the excitation (model-spec 5)
     ring_out: bool
     sweep_arguments: tuple[tuple[str, str], ...]
+    #: (factory keyword, key in ``config/maneuvers.yaml``) of each default value the factory reads
+    config_keys: tuple[tuple[str, str], ...]
+    #: the paper's headline finding is on this maneuver (``dahl_only`` 65 times the RMSE of ``full`` with
+    #: oil-empty rear dampers; the findings of ``susp validate --study``)
+    headline: bool = False
 
     @property
     def primary_signal(self) -> str:
         """The signal name of the JSON outputs (``primary_output`` in lower case)."""
         return self.primary_output.lower()
+
+    @property
+    def config_section(self) -> str:
+        """Its section in ``config/maneuvers.yaml`` (its name): the default values of ``config_keys``."""
+        return self.name
 
     @property
     def steers(self) -> bool:
@@ -61,12 +74,24 @@ class ManeuverKind:
 MANEUVER_KINDS: dict[str, ManeuverKind] = {k.name: k for k in (
     ManeuverKind("bump_crossing", ("bump",), "bump_crossing", "PITCH_RATE", "pitch", needs_road_profile=True,
                  uses_wheelbase=True, window="bump", label="bump_crossing_8kmh", ring_out=True,
-                 sweep_arguments=(("speed", "speed"), ("bump_height", "height"), ("bump_length", "length"))),
+                 sweep_arguments=(("speed", "speed"), ("bump_height", "height"), ("bump_length", "length")),
+                 config_keys=(("speed", "speed"), ("height", "bump_height"), ("length", "bump_length"),
+                              ("start", "bump_start"), ("settle_time", "settle_time")), headline=True),
     ManeuverKind("sine_steer", ("sine",), "sine_steer", "ROLL_RATE", "roll", needs_road_profile=False,
                  uses_wheelbase=False, window="steering", label="sine_steer_50kmh", ring_out=False,
                  sweep_arguments=(("speed", "speed"), ("steer_amplitude", "amplitude"),
-                                  ("steer_frequency", "frequency"))),
+                                  ("steer_frequency", "frequency")),
+                 config_keys=(("speed", "speed"), ("amplitude", "amplitude"), ("frequency", "frequency"),
+                              ("periods", "periods"), ("lead_time", "lead_time"),
+                              ("settle_time", "settle_time"))),
 )}
+#: the entries by what they are, for code that needs one particular maneuver (its factory, its findings)
+BUMP_CROSSING = MANEUVER_KINDS["bump_crossing"]
+SINE_STEER = MANEUVER_KINDS["sine_steer"]
+#: the maneuver of the paper's headline finding (the entry with ``headline``)
+HEADLINE_MANEUVER = next(k for k in MANEUVER_KINDS.values() if k.headline)
+#: the maneuvers whose ring-out the paper measures, in registry order
+RING_OUT_MANEUVERS = tuple(m for m, k in MANEUVER_KINDS.items() if k.ring_out)
 MANEUVERS = tuple(MANEUVER_KINDS)
 DEFAULT_MANEUVER = MANEUVERS[0]
 #: every name a maneuver is known by: the aliases first, then the full names

@@ -185,7 +185,7 @@ def bump_drive(model, draw: Mapping, roc: Mapping, dt: float = 0.001):
     accel = y[:, 3:] + roc["accel_noise_m_s2"] * rng.standard_normal((len(t), 3))
     t_in = np.arange(0.0, man.duration + 1e-9, 0.01)
     t_in_ns = t0 + np.round(t_in * 1e9).astype(np.int64)
-    meta = {"vehicle": vp.name, "maneuver": f"bump_crossing_{draw['speed_kmh']:.0f}kmh",
+    meta = {"vehicle": vp.name, "maneuver": f"{man.name}_{draw['speed_kmh']:.0f}kmh",
             "damper_oil_level": "unknown", "source": "simulated:inspection_roc"}
     drive = TestDrive(meta, Series(t_in_ns, np.full(t_in.size, man.speed)), Series(t_in_ns.copy(), np.zeros(t_in.size)),
                       man.road, None, ImuSeries(t0 + np.round(t * 1e9).astype(np.int64), gyro, accel), {})
