@@ -15,10 +15,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from _cli_helpers import run_cli
-from susp_sim_ros.io.drive import ImuSeries, Series, TestDrive, drive_from_recording, read_drive, write_drive
+from susp_sim_ros.analysis import csv_import
+from susp_sim_ros.analysis.discrepancy.data import load_cases
+from susp_sim_ros.io.drive import (MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT, ImuSeries, Series, TestDrive,
+                                   drive_from_recording, drive_messages, read_drive, write_drive)
 from susp_sim_ros.io.integrity import (KINDS, IntegrityError, check_drive_integrity, load_policy,
                                        require_live_imu)
 from susp_sim_ros.io.reader import read_recording
+from susp_sim_ros.io.recorder import McapRecorder
+from susp_sim_ros.model.params import load_vehicle
+from susp_sim_ros.runtime import sim_core as core_limits
 
 BAGS = Path(__file__).resolve().parents[1] / "bags"
 BUMP = BAGS / "bump_crossing_intact.mcap"
@@ -60,7 +66,18 @@ def test_bundled_drives_give_no_finding(path):
 
 def test_policy_has_value_unit_source_for_every_entry():
     pol = load_policy()
-    assert pol["limits.steering_max"] == pytest.approx(15.7) and pol["spikes.window"] >= 3
+    assert pol["limits.steering_max"] == pytest.approx(4 * np.pi) and pol["spikes.window"] >= 3
+
+
+def test_the_input_limits_are_declared_once_and_used_by_the_node_and_the_check():
+    """One limit per input (config/integrity.yaml, ``limits``): the node (SimCore), the CSV import and the
+    drive API read the check's values; the node rejects just beyond the steering limit and names it."""
+    pol = load_policy()
+    assert (MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT) == (pol["limits.speed_max"], pol["limits.steering_max"],
+                                                           pol["limits.wheel_height_max"])
+    assert (core_limits.MAX_SPEED, core_limits.MAX_STEERING, core_limits.MAX_WHEEL_HEIGHT) == (
+        MAX_SPEED, MAX_STEERING, MAX_WHEEL_HEIGHT)
+    assert (csv_import.MAX_SPEED, csv_import.MAX_STEERING) == (MAX_SPEED, MAX_STEERING)
 
 
 # ---- each kind on a damaged copy ----------------------------------------------------------------------
@@ -122,6 +139,100 @@ def test_stamp_order_and_duplicate_stamps(bump):
     res = check_drive_integrity(dataclasses.replace(bump, speed=Series(t, v)), "order.mcap")
     assert kinds(res) == ["stamp_order", "duplicate_stamp"]
     assert np.all(np.diff(res.drive.speed.t_ns) > 0)
+
+
+def _write_messages(path: Path, drive: TestDrive, msgs) -> Path:
+    """Write ``msgs`` (``drive_messages`` rows) in the order given: a recorder that stored them so."""
+    with McapRecorder(path, metadata={str(k): str(v) for k, v in drive.metadata.items()}, overwrite=True) as rec:
+        for t, topic, mt, msg, latched in msgs:
+            rec.write(topic, mt, t, msg, latched=latched)
+    return path
+
+
+def test_messages_stored_out_of_log_time_order_are_a_stamp_order_finding(bump, tmp_path):
+    """Two speed messages stored in the file in swapped order (each with its own log time): the check sees
+    the file order, reports stamp_order (repaired) where it is and reads the series sorted, as a clean
+    copy reads."""
+    msgs = drive_messages(bump)
+    slots = [i for i, m in enumerate(msgs) if m[1] == "/vehicle/speed"]
+    i, j = slots[200], slots[201]
+    msgs[i], msgs[j] = msgs[j], msgs[i]
+    path = _write_messages(tmp_path / "order.mcap", bump, msgs)
+    d = read_drive(path)
+    (f,) = d.extra["input_findings"]
+    assert f["kind"] == "stamp_order" and f["topic"] == "/vehicle/speed" and f["action"] == "repaired"
+    assert (f["from_s"], f["to_s"]) == (pytest.approx(_t(bump, bump.speed.t_ns[200]), abs=1e-6),
+                                        pytest.approx(_t(bump, bump.speed.t_ns[201]), abs=1e-6))
+    clean = read_drive(_write_messages(tmp_path / "clean.mcap", bump, drive_messages(bump)))
+    assert clean.extra["input_findings"] == []
+    np.testing.assert_array_equal(d.speed.t_ns, clean.speed.t_ns)
+    np.testing.assert_array_equal(d.speed.values, clean.speed.values)
+
+
+def test_backward_clock_jump_stored_in_file_order_is_a_clock_jump(bump, tmp_path):
+    """The IMU clock steps 2 s back half way, the messages stored as they came: one clock_jump (repaired,
+    the later samples moved to follow the earlier ones), not the interleaved samples that sorting by log
+    time would make (rate_change, duplicate_stamp)."""
+    imu = bump.imu
+    k = len(imu) // 2
+    t = imu.t_ns.copy()
+    t[k + 1:] -= 2 * NS
+    rows = [m for m in drive_messages(dataclasses.replace(bump, imu=None))]
+    rows += [m for m in drive_messages(with_imu(dataclasses.replace(bump, speed=Series([], []),
+                                                                    steering=Series([], []), road=None),
+                                                t, imu.gyro, imu.accel)) if m[1] == "/imu/data"]
+    order = np.argsort(t, kind="stable")  # drive_messages sorted the IMU by log time: back to file order
+    imu_rows = [m for m in rows if m[1] == "/imu/data"]
+    rows = [m for m in rows if m[1] != "/imu/data"] + [imu_rows[int(np.nonzero(order == n)[0][0])]
+                                                       for n in range(len(t))]
+    d = read_drive(_write_messages(tmp_path / "back.mcap", bump, rows))
+    kinds_found = [f["kind"] for f in d.extra["input_findings"]]
+    assert kinds_found == ["clock_jump"], d.extra["input_findings"]
+    assert len(d.imu) == len(imu) and np.all(np.diff(d.imu.t_ns) > 0)
+    np.testing.assert_array_equal(d.imu.gyro, imu.gyro)  # every sample kept, in the order measured
+
+
+def test_out_of_range_inputs_are_dropped_with_a_finding(bump, sine):
+    """Samples the node rejects (negative speed, steering beyond the limit that is no unit mistake, a damper
+    command outside [0, 1], a wheel height beyond 1 m) are dropped with one out_of_range finding each, where
+    they are; nothing is interpolated in their place."""
+    v = bump.speed.values.copy()
+    v[300:320] = -0.5
+    n = len(bump.speed)
+    cmd = np.full((n, 4), 0.5)
+    cmd[100:110, 2] = 1.5
+    wh = np.zeros((n, 4))
+    wh[50:70, 0] = 1.2
+    d = dataclasses.replace(bump, speed=Series(bump.speed.t_ns, v),
+                            damper_command=Series(bump.speed.t_ns, cmd),
+                            wheel_heights=Series(bump.speed.t_ns, wh))
+    res = check_drive_integrity(d, "range.mcap")
+    got = {f.topic: f for f in res.findings}
+    assert kinds(res) == ["out_of_range"] * 3 and set(got) == {"/vehicle/speed", "/road/wheel_heights",
+                                                                "/vehicle/damper_command"}
+    assert all(f.action == "excluded" for f in res.findings)
+    f = got["/vehicle/speed"]
+    assert (f.from_s, f.to_s) == (pytest.approx(_t(bump, bump.speed.t_ns[300]), abs=1e-6),
+                                  pytest.approx(_t(bump, bump.speed.t_ns[319]), abs=1e-6))
+    assert len(res.drive.speed) == n - 20 and res.drive.speed.values.min() >= 0.0
+    assert not np.isin(bump.speed.t_ns[300:320], res.drive.speed.t_ns).any()  # left out, not interpolated
+    assert len(res.drive.damper_command) == n - 10 and res.drive.damper_command.values.max() <= 1.0
+    assert len(res.drive.wheel_heights) == n - 20
+    st_v = sine.steering.values.copy()
+    st_v[300:320] = 800.0  # rad: beyond the limit, and no unit mistake (800 deg is beyond it too)
+    res = check_drive_integrity(dataclasses.replace(sine, steering=Series(sine.steering.t_ns, st_v)), "st.mcap")
+    (f,) = res.findings
+    assert f.kind == "out_of_range" and f.topic == "/vehicle/steering_wheel_angle" and "12.57" in f.detail
+    assert np.abs(res.drive.steering.values).max() <= MAX_STEERING
+
+
+def test_inputs_with_nothing_in_range_are_a_named_error(bump):
+    v = np.full(len(bump.speed), -1.0)
+    with pytest.raises(IntegrityError, match=r"/vehicle/speed: out_of_range: every one of its"):
+        check_drive_integrity(dataclasses.replace(bump, speed=Series(bump.speed.t_ns, v)), "neg.mcap")
+    road = dataclasses.replace(bump.road, zl=bump.road.zl + 2.0)
+    with pytest.raises(IntegrityError, match=r"/road/profile: out_of_range: road elevation"):
+        check_drive_integrity(dataclasses.replace(bump, road=road), "road.mcap")
 
 
 def test_speed_spike_is_excluded(bump):
@@ -326,3 +437,45 @@ def test_cli_commands_on_a_bump_crossing_without_road(copies, tmp_path):
                  ["inspect", copies["noroad"]]):
         rc, res, err = _json_or_named_error(argv)
         assert rc == 2 and "missing_topic" in err and "/road/profile" in err, (argv, err)
+
+
+# ---- the discrepancy finder's (and the inspection's) measured signals ------------------------------------
+def _case(path: Path, drive: TestDrive):
+    write_drive(path, drive)
+    (case,) = load_cases([path], wheelbase=load_vehicle().wheelbase)
+    return case
+
+
+def test_discrepancy_finder_leaves_out_dead_and_saturated_signals(bump, tmp_path):
+    """Each of the six IMU signals the check found dead or saturated is not used as a measurement by the
+    discrepancy finder (load_cases): an accelerometer axis that freezes, a yaw gyro clipped by its range;
+    the live signals stay."""
+    imu = bump.imu
+    assert _case(tmp_path / "clean.mcap", bump).signals == ("roll_rate", "pitch_rate", "yaw_rate", "accel_x",
+                                                             "accel_y", "accel_z")
+    a = imu.accel.copy()
+    a[:, 0] = a[0, 0]  # longitudinal accelerometer frozen
+    a[len(imu) // 2:, 2] = a[len(imu) // 2, 2]  # vertical accelerometer dies half way
+    g = imu.gyro.copy()
+    c = float(np.quantile(np.abs(g[:, 2]), 0.6))
+    g[:, 2] = np.clip(g[:, 2], -c, c)
+    case = _case(tmp_path / "damaged.mcap", with_imu(bump, imu.t_ns, g, a))
+    assert case.signals == ("roll_rate", "pitch_rate", "accel_y")
+    assert case.y_meas.shape[1] == 3 and case.y_raw.shape[1] == 6
+
+
+def test_discrepancy_finder_refuses_a_dead_gyro_or_a_saturated_primary_signal(bump, tmp_path):
+    """A dead gyro axis is refused as before (said in plain grammar); the maneuver's primary gyro signal
+    (pitch rate of a bump crossing) clipped by its range leaves nothing sound for its figures: refused."""
+    imu = bump.imu
+    g = imu.gyro.copy()
+    g[:, 0] = 0.0
+    with pytest.raises(IntegrityError, match=r"dead_sensor roll_rate .*the discrepancy finder and the inspection "
+                                             r"need a live gyro on every axis"):
+        _case(tmp_path / "dead.mcap", with_imu(bump, imu.t_ns, g, imu.accel))
+    g = imu.gyro.copy()
+    c = float(np.quantile(np.abs(g[:, 1]), 0.6))
+    g[:, 1] = np.clip(g[:, 1], -c, c)
+    with pytest.raises(IntegrityError, match=r"saturated_sensor pitch_rate .*need the maneuver's primary signal "
+                                             r"pitch_rate within the sensor range"):
+        _case(tmp_path / "clipped.mcap", with_imu(bump, imu.t_ns, g, imu.accel))

@@ -11,8 +11,8 @@ with a missing or extra field, a cell that is not a finite number, or a time tha
 raises :class:`~susp_sim_ros.errors.CsvImportError` naming the file, the line and the column. Nothing is
 skipped silently, and an unknown column is an error too (a misspelt column would otherwise vanish). A
 leading UTF-8 byte-order mark is ignored. Values the simulation node would reject (speed outside
-[0, 100] m/s, |steering-wheel angle| > 4 pi rad, |wheel height| or |road elevation| > 1 m) are errors
-too, naming file, line and column.
+[0, 70] m/s, |steering-wheel angle| > 4 pi rad, |wheel height| or |road elevation| > 1 m: the one set of
+limits, ``limits`` in ``config/integrity.yaml``) are errors too, naming file, line and column.
 
 **Drive file** (one row per sample; all channels share the row's time):
 

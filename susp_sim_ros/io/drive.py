@@ -27,6 +27,10 @@ from ..model.params import DEFAULT_VEHICLE
 
 log = logging.getLogger(__name__)
 
+#: the order :func:`drive_from_recording` reads the input series in: as stored (the integrity check sorts
+#: them, with a ``stamp_order`` or ``clock_jump`` finding where the file is out of log-time order)
+INPUT_ORDER = "file"
+
 TOPIC_TYPES = {SPEED: M.FLOAT64, STEERING: M.FLOAT64, ROAD_PROFILE: M.FLOAT64_ARRAY,
                WHEEL_HEIGHTS: M.FLOAT64_ARRAY, IMU: M.IMU, SIM_IMU: M.IMU, DAMPER_COMMAND: M.FLOAT64_ARRAY}
 
@@ -50,11 +54,12 @@ def check_topic(rec: Recording, topic: str, msgtype: str | None = None) -> None:
                       f"(expected ros2msg / cdr)")
 
 
-def _fields(rec: Recording, topic: str, extract, msgtype: str | None = None) -> list:
-    """``[(log_time_ns, extract(msg)), ...]``; a message without the expected fields is a named error."""
+def _fields(rec: Recording, topic: str, extract, msgtype: str | None = None, order: str = "log") -> list:
+    """``[(log_time_ns, extract(msg)), ...]`` in ``order`` (:meth:`~.reader.Recording.decode_topic`: ``"log"``
+    sorted by log time, ``"file"`` as stored); a message without the expected fields is a named error."""
     check_topic(rec, topic, msgtype)
     out = []
-    for t, m in rec.decode_topic(topic):
+    for t, m in rec.decode_topic(topic, order=order):
         try:
             out.append((t, extract(m)))
         except (AttributeError, TypeError, ValueError, IndexError, KeyError) as exc:
@@ -68,14 +73,14 @@ def _field_error(rec: Recording, mi, exc: Exception) -> RecordingError:
                           f"({mi.name}) not readable as a number: {type(exc).__name__}: {exc}")
 
 
-def _scalar_series(rec: Recording, mi) -> Series:
-    """A mapped scalar input (``MappedInput``) as a Series in SI."""
+def _scalar_series(rec: Recording, mi, order: str = "log") -> Series:
+    """A mapped scalar input (``MappedInput``) as a Series in SI, its messages in ``order`` (see :func:`_fields`)."""
     f = mi.factor
     if mi.field == ("data",) and f == 1.0:
         extract = lambda m: float(m.data)  # noqa: E731 - the interface layout: exactly as before
     else:
         extract = lambda m: float(get_field(m, mi.field)) * f  # noqa: E731
-    items = _fields(rec, mi.topic, extract, mi.msgtype)
+    items = _fields(rec, mi.topic, extract, mi.msgtype, order)
     t = np.array([t for t, _ in items], dtype=np.int64)
     v = np.array([v for _, v in items], dtype=float)
     return Series(t, v)
@@ -102,7 +107,9 @@ def road_from_msg(msg: Any, where: str) -> RoadProfile:
         raise RecordingError(f"{where}: malformed road profile: {exc}") from None
 
 
-def _imu_series(rec: Recording, topic: str, mapping: MappedImu | None = None) -> ImuSeries:
+def _imu_series(rec: Recording, topic: str, mapping: MappedImu | None = None, order: str = "log") -> ImuSeries:
+    """The IMU samples of ``topic`` (gyro [rad/s], specific force [m/s^2], body axes through ``mapping``),
+    its messages in ``order`` (see :func:`_fields`)."""
     mapping = mapping if mapping is not None and mapping.topic == topic else MappedImu(topic, msgtype=M.IMU)
     if mapping.angular_velocity == ("angular_velocity",) and mapping.linear_acceleration == ("linear_acceleration",):
         def extract(m):
@@ -112,7 +119,7 @@ def _imu_series(rec: Recording, topic: str, mapping: MappedImu | None = None) ->
         def extract(m):
             g, a = get_field(m, mapping.angular_velocity), get_field(m, mapping.linear_acceleration)
             return (float(g.x), float(g.y), float(g.z), float(a.x), float(a.y), float(a.z))
-    items = _fields(rec, topic, extract, mapping.msgtype)
+    items = _fields(rec, topic, extract, mapping.msgtype, order)
     t = np.array([t for t, _ in items], dtype=np.int64)
     v = np.array([x for _, x in items], dtype=float).reshape(-1, 6)
     gyro, accel = mapping.to_body(v[:, :3], v[:, 3:])
@@ -165,10 +172,11 @@ def _road_profile(rec: Recording, rp) -> RoadProfile | None:
     return road
 
 
-def _per_wheel_series(rec: Recording, topic: str, extract, msgtype: str | None = None) -> Series | None:
-    """A series of four values [FL, FR, RL, RR] per message on ``topic`` (``extract(msg)`` gives them),
-    or None when the topic has no message."""
-    items = _fields(rec, topic, extract, msgtype)
+def _per_wheel_series(rec: Recording, topic: str, extract, msgtype: str | None = None,
+                      order: str = "log") -> Series | None:
+    """A series of four values [FL, FR, RL, RR] per message on ``topic`` (``extract(msg)`` gives them,
+    messages in ``order``, see :func:`_fields`), or None when the topic has no message."""
+    items = _fields(rec, topic, extract, msgtype, order)
     if not items:
         return None
     if any(len(v) != 4 for _, v in items):
@@ -178,8 +186,15 @@ def _per_wheel_series(rec: Recording, topic: str, extract, msgtype: str | None =
 
 def drive_from_recording(rec: Recording, *, imu_topic: str = IMU,
                          topic_map: TopicMap | str | os.PathLike | None = None) -> TestDrive:
-    """The test drive in ``rec``; ``topic_map`` (module :mod:`~susp_sim_ros.io.topic_map`; None = the
-    interface's topics) says where each input is and how to convert it."""
+    """The test drive in ``rec``, as recorded; ``topic_map`` (module :mod:`~susp_sim_ros.io.topic_map`; None =
+    the interface's topics) says where each input is and how to convert it.
+
+    The input series (speed, steering, wheel heights, damper command, measured IMU) hold their samples in
+    the order the file stores them (:data:`INPUT_ORDER`), so that the integrity check
+    (:func:`~susp_sim_ros.io.integrity.check_drive_integrity`, which every reader of a drive runs next)
+    sees stamps out of log-time order and backward clock jumps and repairs them with a finding; for a file
+    stored in log-time order that is log-time order. The road profile, oil levels and ``extra["sim_imu"]``
+    are read in log-time order."""
     path = rec.path
     mapped = topic_map is not None
     tm = load_topic_map(topic_map)
@@ -196,14 +211,14 @@ def drive_from_recording(rec: Recording, *, imu_topic: str = IMU,
             via = f" (the {mi.name} of topic map {tm.source})" if mapped else ""
             raise RecordingError(f"{path}: missing topic {mi.topic}{via} (topics: "
                                  f"{', '.join(sorted(rec.topics())) or 'none'}{why})")
-    speed = _scalar_series(rec, tm.speed)
-    steering = _scalar_series(rec, tm.steering_wheel_angle)
+    speed = _scalar_series(rec, tm.speed, INPUT_ORDER)
+    steering = _scalar_series(rec, tm.steering_wheel_angle, INPUT_ORDER)
     rp, whm = tm.road_profile, tm.wheel_heights
     road = _road_profile(rec, rp)
     wh = _per_wheel_series(rec, whm.topic, lambda m: [float(x) * whm.factor if whm.factor != 1.0 else float(x)
-                                                      for x in get_field(m, whm.field)], whm.msgtype)
-    cmd = _per_wheel_series(rec, DAMPER_COMMAND, lambda m: [float(x) for x in m.data])
-    imu = _imu_series(rec, imu_topic, tm.imu) if rec.by_topic(imu_topic) else None
+                                                      for x in get_field(m, whm.field)], whm.msgtype, INPUT_ORDER)
+    cmd = _per_wheel_series(rec, DAMPER_COMMAND, lambda m: [float(x) for x in m.data], order=INPUT_ORDER)
+    imu = _imu_series(rec, imu_topic, tm.imu, INPUT_ORDER) if rec.by_topic(imu_topic) else None
     metadata = dict(rec.metadata.get("test_drive", {}))
     if tm.damper_oil_level is not None and rec.by_topic(tm.damper_oil_level.topic):
         om = tm.damper_oil_level

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import RecordingError, SuspInputError
+from ..model.params import load_settings
 from ..model.road import RoadProfile
 
 SPEED = "/vehicle/speed"
@@ -20,11 +21,15 @@ DAMPER_COMMAND = "/vehicle/damper_command"  # semi-active valve command [FL, FR,
 IMU = "/imu/data"
 SIM_IMU = "/sim/imu/data"
 
-#: Input values beyond which a message is absurd; the node rejects them (SimCore), the offline tools
-#: refuse drives containing them.
-MAX_SPEED = 100.0               # m/s
-MAX_STEERING = 4.0 * np.pi      # rad, steering-wheel angle
-MAX_WHEEL_HEIGHT = 1.0          # m, road height under a wheel / road profile elevation
+#: The input limits, declared once with unit and source in ``config/integrity.yaml`` (section ``limits``):
+#: values beyond them are absurd; the node rejects such a message (SimCore), the integrity check of the
+#: offline tools drops such samples (``out_of_range``, :mod:`.integrity`), the CSV import refuses them.
+LIMITS = load_settings("integrity.yaml")
+MAX_SPEED = float(LIMITS["limits.speed_max"])                # m/s (speeds in [0, MAX_SPEED])
+MAX_STEERING = float(LIMITS["limits.steering_max"])          # rad, |steering-wheel angle|
+MAX_WHEEL_HEIGHT = float(LIMITS["limits.wheel_height_max"])  # m, |road height under a wheel / profile elevation|
+#: the range of a semi-active valve command [1] (interface.md, "Added inputs": 0 softest, 1 hardest)
+DAMPER_COMMAND_RANGE = (0.0, 1.0)
 
 
 @dataclass

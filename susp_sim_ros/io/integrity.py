@@ -17,7 +17,9 @@ Kinds and what is done (``action``):
   ``stamps.rate_window`` stamp intervals departs from the topic's median interval by more than
   ``stamps.rate_factor`` for at least that many intervals; the samples are sound (``kept``), the finding
   says where and from/to which rate. A single hole never moves the running median (that is a ``gap``).
-* ``stamp_order`` -- stamps out of order (short backward steps): the samples are sorted (``repaired``).
+* ``stamp_order`` -- messages stored out of log-time order (short backward steps; the check sees each
+  input series in the order the file stores it, :func:`~susp_sim_ros.io.drive.drive_from_recording`): the
+  samples are sorted (``repaired``).
 * ``duplicate_stamp`` -- two samples with one stamp: the later ones are dropped (``excluded``).
 * ``gap`` -- a hole longer than ``stamps.gap_periods`` median periods (and ``stamps.gap_min_s``): the span
   is recorded in ``drive.extra["excluded_spans"]`` for the measured IMU (comparisons leave it out,
@@ -26,10 +28,19 @@ Kinds and what is done (``action``):
   ``spikes.floor_*`` of its signal): dropped (``excluded``).
 * ``implausible_unit`` -- speed beyond ``limits.speed_max`` m/s but plausible as km/h, steering beyond
   ``limits.steering_max`` rad but plausible as degrees: an error (a topic map with a factor says the unit).
+* ``out_of_range`` -- input samples outside what the node accepts (the one set of limits, ``limits.*`` of
+  the policy, which :data:`~susp_sim_ros.io.drive_data.MAX_SPEED` and friends read): a speed below 0 or
+  above ``limits.speed_max`` m/s, a steering angle beyond +-``limits.steering_max`` rad, a wheel height
+  beyond +-``limits.wheel_height_max`` m (values that are no unit mistake), a damper command outside
+  [0, 1]: dropped (``excluded``; the value before them holds, as the node keeps its last value when it
+  rejects a message; never replaced by interpolated values); an input left without a sample, or a road
+  profile beyond +-``limits.wheel_height_max`` m (one message: nothing left), is an error.
 * ``dead_sensor`` -- an IMU axis without noise (sample-to-sample spread below ``noise.*_dead_*``), or
   repeating one value for ``noise.dead_run_s``: the axis is listed in ``drive.extra["unusable_signals"]``
   (``excluded``); consumers that cannot do without it raise :class:`IntegrityError`.
-* ``saturated_sensor`` -- an IMU axis stuck at its extreme: ``kept`` and reported.
+* ``saturated_sensor`` -- an IMU axis stuck at its extreme: ``kept`` and reported; the axis is listed in
+  ``drive.extra["saturated_signals"]`` (its peaks are lower than the motion: the discrepancy finder and the
+  inspection leave it out of their comparisons, or refuse when it is a signal they cannot do without).
 * ``bad_metadata`` -- ``test_drive`` metadata the commands rely on, present but unusable (topic
   ``test_drive``, the whole recording): a ``maneuver`` that mentions a maneuver of the registry
   (:data:`~susp_sim_ros.model.paper.MANEUVER_KINDS`) but does not start with one of its names, so that
@@ -59,7 +70,7 @@ from . import drive_data as _drive
 from .drive_data import Series, TestDrive
 
 KINDS = ("non_finite", "gap", "rate_change", "stamp_order", "duplicate_stamp", "clock_jump", "spike",
-         "implausible_unit", "dead_sensor", "saturated_sensor", "missing_topic", "bad_metadata")
+         "implausible_unit", "out_of_range", "dead_sensor", "saturated_sensor", "missing_topic", "bad_metadata")
 ACTIONS = ("excluded", "repaired", "kept")
 GYRO_SIGNALS = ("roll_rate", "pitch_rate", "yaw_rate")
 ACCEL_SIGNALS = ("accel_x", "accel_y", "accel_z")
@@ -98,11 +109,13 @@ class InputFinding:
 
 @dataclass
 class IntegrityResult:
-    """The drive with its defects worked around, the findings, and the IMU signals not to be used."""
+    """The drive with its defects worked around, the findings, the IMU signals not to be used
+    (``dead_sensor``) and those clipped by the sensor range (``saturated_sensor``)."""
 
     drive: TestDrive
     findings: list[InputFinding] = field(default_factory=list)
     unusable: set[str] = field(default_factory=set)
+    saturated: set[str] = field(default_factory=set)
 
 
 # ---- policy --------------------------------------------------------------------------------------
@@ -228,8 +241,8 @@ class _Checker:
         if (dt < 0).any():
             back = np.nonzero(dt < 0)[0]
             order = np.argsort(t, kind="stable")
-            self.add(topic, "stamp_order", int(t[back[0]]), int(t[back[-1]]), "repaired",
-                     f"{back.size} sample(s) out of log-time order; sorted by log time")
+            self.add(topic, "stamp_order", int(t[back + 1].min()), int(t[back].max()), "repaired",
+                     f"{back.size} sample(s) stored out of log-time order; sorted by log time")
             t, v = t[order], v[order]
             dt = np.diff(t)
         if (dt == 0).any():
@@ -296,7 +309,8 @@ class _Checker:
         """``implausible_unit`` (an error) when the samples ``v`` (at log times ``t``, spikes dropped) exceed
         ``limit`` [``unit``] but ``factor`` times them fit (the ``other`` unit); the error names the whole
         topic, ``recorded`` (its log times as recorded: the spike check may drop edge samples of a signal
-        recorded in the wrong unit)."""
+        recorded in the wrong unit). Values beyond ``limit`` that are no unit mistake are left to
+        :meth:`in_range` (``out_of_range``)."""
         if not t.size:
             return
         peak = float(np.max(np.abs(v)))
@@ -307,15 +321,40 @@ class _Checker:
                                 f"implausible_unit: values up to {peak:.4g} {unit} (at {self.s(t[k]):.3f} s) exceed "
                                 f"the plausible {limit:g} {unit} but fit {other}; expected {unit} (give a topic "
                                 f"map with the unit factor, --topic-map)")
-            raise self.fail(topic, int(t[k]), int(t[k]),
-                            f"values up to {peak:.4g} {unit} exceed the plausible {limit:g} {unit} (and are no "
-                            f"unit mistake); expected a {unit} signal within +-{limit:g}")
+
+    def in_range(self, topic: str, s: Series | None, lo: float, hi: float, unit: str, limit: str
+                 ) -> Series | None:
+        """``out_of_range``: the samples of input ``s`` (sorted, checked) with a value outside [``lo``, ``hi``]
+        [``unit``] (what the node accepts; ``limit`` names the policy entry) dropped, one finding per run of
+        them; IntegrityError when no sample is left."""
+        if s is None or not len(s):
+            return s
+        t = s.t_ns
+        v = s.values.reshape(len(s), -1)
+        bad = np.asarray(((v < lo) | (v > hi)).any(axis=1), dtype=bool)
+        if not bad.any():
+            return s
+        if bad.all():
+            raise self.fail(topic, int(t.min()), int(t.max()),
+                            f"out_of_range: every one of its {t.size} sample(s) is outside [{lo:.4g}, {hi:.4g}] {unit} "
+                            f"({limit}); expected values the node accepts, within [{lo:.4g}, {hi:.4g}] {unit}")
+        for i0, i1 in _runs(bad):
+            seg = v[i0:i1 + 1]
+            self.add(topic, "out_of_range", int(t[i0]), int(t[i1]), "excluded",
+                     f"{i1 - i0 + 1} sample(s) outside [{lo:.4g}, {hi:.4g}] {unit} ({limit}; values from "
+                     f"{float(seg.min()):.4g} to {float(seg.max()):.4g} {unit}); dropped as the node rejects them "
+                     f"(the value before them holds), not interpolated")
+        return _drive.Series(t[~bad], s.values[~bad])
 
     # -- IMU noise -----------------------------------------------------------------------------------
-    def imu_noise(self, topic: str, t: np.ndarray, gyro: np.ndarray, accel: np.ndarray) -> set[str]:
+    def imu_noise(self, topic: str, t: np.ndarray, gyro: np.ndarray, accel: np.ndarray
+                  ) -> tuple[set[str], set[str]]:
+        """``dead_sensor`` and ``saturated_sensor`` findings of the IMU (gyro [rad/s], accel [m/s^2] at log
+        times ``t`` [ns]); the names of the dead and of the saturated signals."""
         unusable: set[str] = set()
+        saturated: set[str] = set()
         if t.size < 10:
-            return unusable
+            return unusable, saturated
         period = float(np.median(np.diff(t))) / NS
         run_n = max(int(math.ceil(float(self.pol["noise.dead_run_s"]) / max(period, 1e-9))), 10)
         for names, data, floor, unit in ((GYRO_SIGNALS, gyro, float(self.pol["noise.gyro_dead_rad_s"]), "rad/s"),
@@ -341,10 +380,12 @@ class _Checker:
                 at = np.abs(np.abs(x) - ext) <= 1e-9 * max(ext, 1.0)
                 if ext > 0 and at.mean() >= float(self.pol["noise.saturated_fraction"]) and at.sum() >= run_n:
                     i = np.nonzero(at)[0]
+                    saturated.add(name)
                     self.add(topic, "saturated_sensor", int(t[i[0]]), int(t[i[-1]]), "kept",
                              f"{name} sits at {float(x[i[0]]):.4g} {unit} for {int(at.sum())} samples: clipped "
-                             f"by the sensor range, peaks there are lower than the motion")
-        return unusable
+                             f"by the sensor range, peaks there are lower than the motion; left out of the "
+                             f"discrepancy finder's and the inspection's comparisons")
+        return unusable, saturated
 
     # -- the drive -----------------------------------------------------------------------------------
     def run(self) -> IntegrityResult:
@@ -370,10 +411,23 @@ class _Checker:
                    1.0 / 3.6, "m/s", "km/h", d.speed.t_ns)
         self.units(names.get("steering", STEERING), steering.t_ns, steering.values, float(pol["limits.steering_max"]),
                    math.pi / 180.0, "rad", "degrees", d.steering.t_ns)
+        speed_max, steer_max = float(pol["limits.speed_max"]), float(pol["limits.steering_max"])
+        wh_max = float(pol["limits.wheel_height_max"])
+        speed = self.in_range(names.get("speed", SPEED), speed, 0.0, speed_max, "m/s", "limits.speed_max")
+        steering = self.in_range(names.get("steering", STEERING), steering, -steer_max, steer_max, "rad",
+                                 "limits.steering_max")
+        assert speed is not None and steering is not None
         wh = scalar("wheel_heights", WHEEL_HEIGHTS, d.wheel_heights, "spikes.floor_wheel_heights", "m")
+        wh = self.in_range(names.get("wheel_heights", WHEEL_HEIGHTS), wh, -wh_max, wh_max, "m",
+                           "limits.wheel_height_max")
         cmd = scalar("damper_command", DAMPER_COMMAND, d.damper_command, None, "1")
+        lo, hi = _drive.DAMPER_COMMAND_RANGE
+        cmd = self.in_range(names.get("damper_command", DAMPER_COMMAND), cmd, lo, hi, "1",
+                            "the valve command range of interface.md")
+        self.road_range(names.get("road_profile", ROAD_PROFILE), wh_max)
         imu = d.imu
         unusable: set[str] = set()
+        saturated: set[str] = set()
         if imu is not None and len(imu):
             topic = names.get("imu", IMU)
             t, v, gaps = self.stamps(topic, imu.t_ns, np.hstack([imu.gyro, imu.accel]), is_input=False)
@@ -381,7 +435,7 @@ class _Checker:
                 excluded[topic] = gaps
             t, v = self._imu_spikes(topic, t, v)
             imu = _drive.ImuSeries(t, v[:, :3], v[:, 3:])
-            unusable = self.imu_noise(topic, imu.t_ns, imu.gyro, imu.accel)
+            unusable, saturated = self.imu_noise(topic, imu.t_ns, imu.gyro, imu.accel)
         self.metadata()
         maneuver = str(d.metadata.get("maneuver", ""))
         needs = [w for w in pol["maneuvers.needs_road"] if str(w).lower() in maneuver.lower()]
@@ -396,8 +450,22 @@ class _Checker:
         extra["input_findings"] = [f.to_json() for f in self.findings]
         extra["excluded_spans"] = excluded
         extra["unusable_signals"] = sorted(unusable)
+        extra["saturated_signals"] = sorted(saturated)
         out = _drive.TestDrive(d.metadata, speed, steering, d.road, wh, imu, extra, damper_command=cmd)
-        return IntegrityResult(out, list(self.findings), unusable)
+        return IntegrityResult(out, list(self.findings), unusable, saturated)
+
+    def road_range(self, topic: str, limit_m: float) -> None:
+        """``out_of_range`` (an error: the road profile is one message, nothing is left without it): an
+        elevation of the road profile beyond +-``limit_m`` [m] (``limits.wheel_height_max``)."""
+        road = self.drive.road
+        if road is None or not len(road):
+            return
+        z = np.concatenate([np.abs(road.zl), np.abs(road.zr)])
+        if not np.all(np.isfinite(z)) or float(z.max()) <= limit_m:
+            return
+        raise self.fail(topic, self.t0, self.t0,
+                        f"out_of_range: road elevation up to {float(z.max()):.4g} m beyond +-{limit_m:g} m "
+                        f"(limits.wheel_height_max); expected a road the node accepts")
 
     # -- metadata ------------------------------------------------------------------------------------
     def metadata(self) -> None:
@@ -447,23 +515,35 @@ def check_drive_integrity(drive: TestDrive, file: str | Path, policy: dict[str, 
 
 
 def require_live_imu(drive: TestDrive, file: str | Path, what: str, signals: tuple[str, ...] = GYRO_SIGNALS,
-                     need: str = "a live gyro on every axis") -> None:
-    """IntegrityError when ``what`` (a command that uses the measured IMU, and needs ``need``) would use a
-    signal the check found dead (``drive.extra["unusable_signals"]``); the message says where each died
-    (its ``dead_sensor`` findings, log time from the recording's first message)."""
+                     need: str = "a live gyro on every axis", *, saturated: bool = False,
+                     verb: str = "needs") -> None:
+    """IntegrityError when ``what`` (a command that uses the measured IMU, and ``verb`` -- "needs", or
+    "need" after a plural ``what`` -- ``need``) would use one of ``signals`` the check found dead
+    (``drive.extra["unusable_signals"]``) or, with ``saturated``, clipped by the sensor range
+    (``drive.extra["saturated_signals"]``); the message names each kind and says where (its findings, log
+    time from the recording's first message)."""
     dead = [s for s in signals if s in drive.extra.get("unusable_signals", ())]
+    clipped = [s for s in signals if saturated and s not in dead and s in drive.extra.get("saturated_signals", ())]
+    if not dead and not clipped:
+        return
+    topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
+    parts, expected = [], []
     if dead:
-        topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
-        where = ", ".join(f"{s} {_dead_span(drive, s)}" for s in dead)
-        raise IntegrityError(f"{file}: topic {topic}: dead_sensor {where} (log time from the recording's first "
-                             f"message): {what} needs {need} (expected noise above the policy floor); nothing "
-                             f"sound to work on")
+        parts.append("dead_sensor " + ", ".join(f"{s} {_dead_span(drive, s)}" for s in dead))
+        expected.append("noise above the policy floor")
+    if clipped:
+        parts.append("saturated_sensor " + ", ".join(f"{s} {_dead_span(drive, s, 'saturated_sensor')}"
+                                                     for s in clipped))
+        expected.append("an axis within its sensor range")
+    raise IntegrityError(f"{file}: topic {topic}: {'; '.join(parts)} (log time from the recording's first "
+                         f"message): {what} {verb} {need} (expected {' and '.join(expected)}); nothing sound to "
+                         f"work on")
 
 
-def _dead_span(drive: TestDrive, signal: str) -> str:
-    """``FROM-TO s`` of the ``dead_sensor`` findings of ``signal`` (the whole IMU record without one)."""
+def _dead_span(drive: TestDrive, signal: str, kind: str = "dead_sensor") -> str:
+    """``FROM-TO s`` of the ``kind`` findings of ``signal`` (the whole IMU record without one)."""
     spans = [(float(f["from_s"]), float(f["to_s"])) for f in drive.extra.get("input_findings", ())
-             if f.get("kind") == "dead_sensor" and str(f.get("detail", "")).split(" ", 1)[0] == signal]
+             if f.get("kind") == kind and str(f.get("detail", "")).split(" ", 1)[0] == signal]
     if not spans and drive.imu is not None and len(drive.imu):
         starts = [int(x.t_ns[0]) for x in (drive.speed, drive.steering, drive.wheel_heights,
                                            drive.damper_command, drive.imu) if x is not None and len(x)]

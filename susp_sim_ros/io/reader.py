@@ -100,10 +100,19 @@ class Recording:
     def by_topic(self, topic: str) -> list[RawMessage]:
         return [m for m in self.messages if m.topic == topic]
 
-    def decode_topic(self, topic: str) -> list[tuple[int, Any]]:
-        """``(log_time_ns, decoded message)`` of a topic, in log-time order; RecordingError on bad CDR."""
+    def decode_topic(self, topic: str, *, order: str = "log") -> list[tuple[int, Any]]:
+        """``(log_time_ns, decoded message)`` of a topic; RecordingError on bad CDR.
+
+        ``order``: ``"log"`` sorts by log time (stable: messages with one log time stay in file order);
+        ``"file"`` keeps the order the messages are stored in, for the input integrity check
+        (:mod:`~susp_sim_ros.io.integrity`: out-of-order stamps and backward clock jumps are findings it
+        repairs, not something to hide). The two are the same for a file whose messages are stored in
+        log-time order."""
+        if order not in ("log", "file"):
+            raise ValueError(f"decode_topic: order must be 'log' or 'file', got {order!r}")
+        msgs = self.by_topic(topic)
         out = []
-        for m in sorted(self.by_topic(topic), key=lambda m: m.log_time_ns):
+        for m in (msgs if order == "file" else sorted(msgs, key=lambda m: m.log_time_ns)):
             try:
                 out.append((m.log_time_ns, m.decoded(self.decoding_schema(m.channel_id))))
             except Exception as exc:  # mcap_ros2 raises assorted errors on malformed CDR/schema

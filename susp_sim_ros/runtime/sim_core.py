@@ -286,7 +286,8 @@ class SimCore:
             return self._reject("non_finite", f"/vehicle/steering_wheel_angle: rejected non-finite value {a}")
         if abs(a) > MAX_STEERING:
             return self._reject("steering_range", f"/vehicle/steering_wheel_angle: rejected {a} rad "
-                                                  f"(|angle| > 4 pi)")
+                                                  f"(|angle| > {MAX_STEERING / math.pi:g} pi = "
+                                                  f"{MAX_STEERING:.4g} rad)")
         self.steering = a
         self.last_input_ns["/vehicle/steering_wheel_angle"] = int(t_ns)
         return None

@@ -19,7 +19,7 @@ import numpy as np
 
 from ...errors import RecordingError, SuspInputError
 from ...io.drive import TestDrive, read_drive
-from ...io.integrity import require_live_imu
+from ...io.integrity import IntegrityError, require_live_imu
 from ...model.layout import N_U, U_INDEX
 from ...model.paper import IMU_OUTPUTS, IMU_SIGNALS
 from ...model.road import RoadProfile
@@ -160,6 +160,36 @@ def primary_signals(maneuver: str | None) -> tuple[str, ...]:
     return (va.MANEUVER_SIGNAL[maneuver],) if maneuver in va.MANEUVER_SIGNAL else GYRO
 
 
+#: what :func:`require_sound_imu` names as the user of the measured IMU (load_cases serves both)
+USERS = "the discrepancy finder and the inspection"
+
+
+def unsound_signals(drive) -> dict[str, str]:
+    """The IMU signals (:data:`SIGNALS` names) the input integrity check (:mod:`susp_sim_ros.io.integrity`)
+    found unfit to compare against, each with its finding's kind: ``dead_sensor`` (no noise, or one value
+    repeated: ``drive.extra["unusable_signals"]``) or ``saturated_sensor`` (clipped by the sensor range,
+    peaks lower than the motion: ``drive.extra["saturated_signals"]``). Empty for a drive that was not
+    checked (built in memory)."""
+    extra = getattr(drive, "extra", {}) or {}
+    out = {s: "saturated_sensor" for s in extra.get("saturated_signals", ()) if s in SIGNALS}
+    out.update({s: "dead_sensor" for s in extra.get("unusable_signals", ()) if s in SIGNALS})
+    return out
+
+
+def require_sound_imu(path: str | Path, drive) -> None:
+    """IntegrityError (exit 2) when the drive leaves nothing sound to compare: a gyro axis the integrity
+    check found dead (every gyro axis is a comparison signal of some maneuver, and the finder's fallback
+    signal), or the maneuver's primary gyro signal(s) (:func:`primary_signals`, what the finder's deg/s
+    figures are about) clipped by the sensor range. Other dead or saturated signals are left out
+    (:func:`prepare_case`)."""
+    require_live_imu(drive, path, USERS, verb="need")  # io/integrity.py: dead gyro axes
+    maneuver = classify_maneuver(drive.metadata.get("maneuver", ""))
+    prim = primary_signals(maneuver)
+    require_live_imu(drive, path, USERS, signals=prim, saturated=True, verb="need",
+                     need=f"the maneuver's primary signal{'s' if len(prim) > 1 else ''} {', '.join(prim)} "
+                          f"within the sensor range")
+
+
 def prepare_case(path: str | Path, drive, *, wheelbase: float, dt: float = 0.001,
                  signals: Sequence[str] | None = None) -> DriveCase:
     """A :class:`DriveCase` of a read drive (``drive`` from :func:`~susp_sim_ros.io.drive.read_drive`).
@@ -167,7 +197,9 @@ def prepare_case(path: str | Path, drive, *, wheelbase: float, dt: float = 0.001
     The comparison is made at the measured IMU sample times inside the drive's analysis window (the
     simulation, at 1 kHz and smooth, is interpolated onto them; the measurement is never resampled, so
     the residual holds the sensor's noise exactly as sampled). ``signals`` (default: all six IMU
-    signals) are narrowed to the excited ones by the finder once the noise is known.
+    signals) are narrowed to the excited ones by the finder once the noise is known. A signal the
+    integrity check found dead or saturated (:func:`unsound_signals`) is left out: not used as a
+    measurement (``y_raw`` keeps all six columns, as recorded).
     """
     path = Path(path)
     if drive.imu is None or len(drive.imu) < 10:
@@ -184,6 +216,13 @@ def prepare_case(path: str | Path, drive, *, wheelbase: float, dt: float = 0.001
     unknown = [x for x in signals if x not in SIGNALS]
     if unknown:
         raise SuspInputError(f"unknown signals {unknown}; known: {', '.join(SIGNALS)}")
+    unsound = unsound_signals(drive)
+    signals = tuple(x for x in signals if x not in unsound)
+    if not signals:
+        topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
+        kinds = " or ".join(sorted(set(unsound.values())))
+        raise IntegrityError(f"{path}: topic {topic}: every signal asked for is {kinds} (see the input findings): "
+                             f"nothing sound to compare against")
     axes = np.array([SIGNALS.index(x) for x in signals])
     meas_all = np.column_stack([np.degrees(drive.imu.gyro), drive.imu.accel])
     t_meas, m_meas = va.check_series(drive.imu.t_ns, meas_all, f"{path} /imu/data")
@@ -229,7 +268,7 @@ def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.0
         if not p.exists():  # a file, or a rosbag2 directory
             raise SuspInputError(f"{p}: no such file")
         drive = read_drive(p, topic_map=topic_map)
-        require_live_imu(drive, p, "the discrepancy finder and the inspection")  # io/integrity.py
+        require_sound_imu(p, drive)  # io/integrity.py findings; other dead/saturated signals are left out
         case = prepare_case(p, drive, wheelbase=wheelbase, dt=dt)
         if case.name in names:
             case.name = f"{case.name}_{len(names)}"
