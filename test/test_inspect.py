@@ -145,3 +145,46 @@ def test_without_roll_rate_only_the_axles_are_identifiable():
             e = res.wheels_[w]
             assert e["identifiable"] == "axle" and e["oil_level"] == a["oil_level"] and e["ci95"] == a["ci95"]
             assert "roll rate" in e["why"]
+
+
+def _crossing(tmp_path, speed_kmh, height_m, name):
+    sensor = ind.TruthSensor(gyro_noise_deg_s=(0.05, 0.05, 0.05))
+    d = ind.make_drive(ind.TruthCar(), None, None, ind.TruthManeuver.bump(speed_kmh=speed_kmh, height_m=height_m),
+                       sensor, (1.0, 1.0, 1.0, 1.0), seed=5)
+    p = tmp_path / f"{name}.mcap"
+    ind.write_drive(p, d, overwrite=True)
+    return p
+
+
+def test_a_crossing_outside_the_protocol_is_warned_about_with_wider_intervals(tmp_path):
+    """Issue 27: the report states the crossing it saw against the protocol it is validated for; a drive
+    too fast over too high a bump gets a warning with the reason and wider intervals."""
+    inside = inspect_drives([_crossing(tmp_path, 9.0, 0.06, "inside")])
+    outside = inspect_drives([_crossing(tmp_path, 22.0, 0.10, "outside")])
+    seen = inside.protocol_["seen"][0]
+    assert seen["speed_m_s"] == pytest.approx(9.0 / 3.6, rel=0.01)
+    assert seen["bump_height_m"] == pytest.approx(0.06, rel=0.01)
+    assert 0.2 < seen["peak_damper_velocity_m_s"]["front"] < outside.protocol_["seen"][0][
+        "peak_damper_velocity_m_s"]["front"]
+    assert inside.protocol_["warnings"] == []
+    quantities = {w["quantity"] for w in outside.protocol_["warnings"]}
+    assert quantities == {"speed_m_s", "bump_height_m"}
+    assert all("validated for" in w["reason"] for w in outside.protocol_["warnings"])
+    assert any("outside the test protocol" in n for n in outside.notes_)
+    width = {r: [e["ci95"][1] - e["ci95"][0] for e in res.axles_.values()] for r, res in
+             (("in", inside), ("out", outside))}
+    assert outside.protocol_["model_form_sd"] == 2 * inside.protocol_["model_form_sd"]
+    for w_in, w_out in zip(width["in"], width["out"]):
+        assert w_out > w_in
+
+
+def test_protocol_names_a_drive_set_that_excites_one_axle_only():
+    from susp_sim_ros.analysis.inspection import protocol
+    cfg = load_config()["protocol"]
+    seen = [{"drive": "d", "speed_m_s": 2.5, "bump_height_m": 0.05,
+             "peak_damper_velocity_m_s": {"front": 0.4, "rear": 0.0}}]
+    found = protocol.warnings(seen, {"front": {"identifiable": "axle"}, "rear": {"identifiable": "no"}}, cfg)
+    assert [w["quantity"] for w in found] == ["axles_excited"] and "rear" in found[0]["reason"]
+    assert protocol.model_form_factor(found, cfg) == 1.0      # a set-level warning, no drive outside
+    slow = [dict(seen[0], speed_m_s=1.0)]
+    assert protocol.model_form_factor(protocol.warnings(slow, {}, cfg), cfg) == cfg["outside_model_form_factor"]

@@ -43,6 +43,7 @@ from ..discrepancy.data import SIGNALS, DriveCase, load_cases, mark_quiet, selec
 from ..discrepancy.engine import Evaluator, Structure
 from ..discrepancy.fit import FitResult, debias, fd_jacobian, fit_structure, n_effective
 from ..discrepancy.locate import noise_sigma
+from . import protocol
 from ...model.params import DEFAULT_VEHICLE
 
 AXLE_WHEELS = {"front": (0, 1), "rear": (2, 3)}
@@ -114,12 +115,14 @@ class Inspection:
     noise_: dict = field(default_factory=dict)
     vehicle_: str = ""
     notes_: list = field(default_factory=list)
+    protocol_: dict = field(default_factory=dict)   # the crossings seen against the test protocol
 
     def to_json(self) -> dict:
         """The interface object (interface.md, ``susp inspect``) plus details."""
         return {"wheels": self.wheels_, "axles": self.axles_, "elapsed_s": self.elapsed_s_,
                 "vehicle": self.vehicle_, "nuisance": self.nuisance_,
                 "identifiability": self.identifiability_, "noise": self.noise_, "notes": self.notes_,
+                "protocol": self.protocol_,
                 "fit": {"success": self.fit_.success, "message": self.fit_.message, "nfev": self.fit_.nfev,
                         "rms_x_noise": math.sqrt(self.fit_.rss / max(self.fit_.n, 1))}}
 
@@ -308,7 +311,12 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     if groups and est.get("consider"):
         cov = cov + oil_consider_covariance(ev, fit, cal, nuisance_params(model, est["consider"]))
     se = np.sqrt(np.clip(np.diag(cov), 0, None))
-    sd_m = float(est["model_form_sd"])
+    seen = protocol.crossings(ev, fit.structure, fit.x)
+    found = protocol.warnings(seen, ident, cfg["protocol"])
+    # outside the protocol the model-form error is larger than where the inspection was validated
+    sd_m = float(est["model_form_sd"]) * protocol.model_form_factor(found, cfg["protocol"])
+    notes += [f"outside the test protocol: {w['drive'] + ': ' if w['drive'] else ''}{w['reason']}" for w in found]
+    notes += protocol.curve_notes(seen, model.vehicle.damper_velocity)
     x = fit.x
     oil_off: int = st.offsets[1] if groups else 0     # unused without groups
     by_group = {}
@@ -348,7 +356,9 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
                      "value": float(x[k]), "ci95": [float(x[k] - 1.96 * se[k]), float(x[k] + 1.96 * se[k])]})
     if not fit.success and fit.nfev < int(est["max_nfev"]):
         notes.append(f"fit did not converge: {fit.message}")
-    res = Inspection(wheels, axles, nuis, fit, ev, ident, 0.0, noise, model.vehicle.name, notes)
+    res = Inspection(wheels, axles, nuis, fit, ev, ident, 0.0, noise, model.vehicle.name, notes,
+                     {"validated_for": dict(cfg["protocol"]), "seen": seen, "warnings": found,
+                      "model_form_sd": sd_m})
     res.elapsed_s_ = time.perf_counter() - t_start
     return res
 

@@ -107,10 +107,37 @@ def write_inspection_report(res, out: str | Path, cfg: dict, drives) -> dict:
               f"{d['fit']['rms_x_noise']:.2f} x the sensor noise.", ""]
     for n in d["notes"]:
         lines.append(f"- note: {n}")
+    lines += _protocol_lines(d.get("protocol") or {})
     lines += ["", "## Measured vs fitted", ""] + [f"![{p}]({p})" for p in pngs]
     (out / "inspection.md").write_text("\n".join(lines) + "\n")
     return {"report": str(out / "inspection.md"), "json": str(out / "inspection.json"),
             "plots": [str(out / p) for p in pngs + [iv]]}
+
+
+def _protocol_lines(p: dict) -> list[str]:
+    """The report's test-protocol section: each drive's crossing against what the inspection is validated
+    for, and the warnings (speeds in km/h and heights in cm for reading; SI in the JSON)."""
+    if not p:
+        return []
+    v = p["validated_for"]
+    out = ["", "## Test protocol", "",
+           f"Validated for crossings at {v['speed_m_s'][0] * 3.6:.0f}-{v['speed_m_s'][1] * 3.6:.0f} km/h over "
+           f"{v['bump_height_m'][0] * 100:.0f}-{v['bump_height_m'][1] * 100:.0f} cm bumps, both axles crossing.",
+           "",
+           "| drive | speed [km/h] | bump height [cm] | peak damper velocity front / rear [m/s] |", "|---|---|---|---|"]
+    for s in p["seen"]:
+        h = "-" if s["bump_height_m"] is None else f"{s['bump_height_m'] * 100:.1f}"
+        pv = s["peak_damper_velocity_m_s"]
+        out.append(f"| {s['drive']} | {s['speed_m_s'] * 3.6:.1f} | {h} | {pv['front']:.2f} / {pv['rear']:.2f} |")
+    out.append("")
+    if p["warnings"]:
+        out += [f"- **outside the protocol**: {w['drive'] + ': ' if w['drive'] else ''}{w['reason']}"
+                for w in p["warnings"]]
+        out.append(f"- the intervals carry a model-form sd of {p['model_form_sd']:.3f} (oil fraction), widened "
+                   "because the inspection was not validated there")
+    else:
+        out.append("- every drive within the protocol")
+    return out
 
 
 def _jsonable(x):
