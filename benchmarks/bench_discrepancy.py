@@ -404,7 +404,8 @@ def summarise(results: list[dict]) -> dict:
 
 FAMILY_TARGETS = {"precision": 0.9, "recall": 0.9, "verdicts_right_fraction": 1.0,
                   "max_named_terms_on_structure_runs": 1, "min_structure_runs": 20,
-                  "zero_interval_measurement_findings": 0, "max_heldout_over_structure_level": 1.05}
+                  "zero_interval_measurement_findings": 0, "max_heldout_over_structure_level": 1.05,
+                  "nothing_missing_above_structure_level": 0}
 
 
 def summarise_family(results: list[dict]) -> dict:
@@ -422,6 +423,11 @@ def summarise_family(results: list[dict]) -> dict:
     named_structure = sum(len(r["named_physics"]) for r in structure)
     zero_meas = sum(len(r["zero_interval_measurement_terms"]) for r in results)
     worst = max(ratios.items(), key=lambda kv: kv[1]) if ratios else None
+    # issue 24 item 5: "nothing missing" only where no more remains than the structure-only runs leave
+    top = max(lvl) if lvl else None
+    dishonest = sorted(r["case"] for r in results if r["verdict"] == "no_significant_discrepancy"
+                       and top is not None and r["heldout_after_over_noise"] is not None
+                       and r["heldout_after_over_noise"] > top)
     s = {k: base[k] for k in ("n_cases", "true_positives", "handled_not_identifiable", "false_positives",
                               "false_negatives", "precision", "recall", "verdicts_right", "verdicts_right_fraction",
                               "total_s")}
@@ -436,6 +442,8 @@ def summarise_family(results: list[dict]) -> dict:
         "heldout_over_structure_level": ratios,
         "max_heldout_over_structure_level": worst[1] if worst else None,
         "max_heldout_over_structure_level_case": worst[0] if worst else None,
+        "structure_max_heldout_over_noise": top,
+        "nothing_missing_above_structure_level": dishonest,
     })
     t = FAMILY_TARGETS
     s["targets"] = dict(t)
@@ -446,6 +454,7 @@ def summarise_family(results: list[dict]) -> dict:
         and len(structure) >= t["min_structure_runs"],
         "zero_interval_measurement_findings": zero_meas == t["zero_interval_measurement_findings"],
         "max_heldout_over_structure_level": worst is None or worst[1] <= t["max_heldout_over_structure_level"],
+        "nothing_missing_above_structure_level": len(dishonest) == t["nothing_missing_above_structure_level"],
     }
     return s
 
