@@ -38,7 +38,7 @@ from ..io.messages import SUSPENSION_COLUMNS
 from ..model import Model
 from ..model.maneuvers import vehicle_state
 from ..model.paper import (HEADLINE_MANEUVER, MANEUVERS, STATES, VARIANT_LABEL, VARIANTS,
-                           classify_maneuver)  # re-exported: analysis/discrepancy/data.py imports it from here
+                           classify_maneuver)
 from ..progress import progress as make_progress
 from ..runtime.lockstep import run_lockstep
 from . import validation as va

@@ -21,11 +21,11 @@ from ...errors import RecordingError, SuspInputError
 from ...io.drive import TestDrive, read_drive
 from ...io.integrity import IntegrityError, require_live_imu
 from ...model.layout import N_U, U_INDEX
-from ...model.paper import IMU_OUTPUTS, IMU_SIGNALS
+from ...model.paper import IMU_OUTPUTS, IMU_SIGNALS, classify_maneuver
 from ...model.road import RoadProfile
 from ...runtime.sim_core import accel_between
 from .. import validation as va
-from ..validation_study import classify_maneuver, classify_state
+from ..validation_study import classify_state
 
 NS = va.NS
 SIM_RATE_HZ = 1000.0  # the model's 1 ms step
