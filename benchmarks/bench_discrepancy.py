@@ -481,7 +481,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--json", action="store_true", help="one JSON object on stdout, progress on stderr")
     ap.add_argument("--cases", default=None, help="comma-separated case names (default: all)")
-    ap.add_argument("--noise", default="0.05,0.15", help="gyro noise levels deg/s (default 0.05,0.15)")
+    ap.add_argument("--noise", default=None,
+                    help="gyro noise levels deg/s (default 0.05,0.15; with --family 0.05)")
     ap.add_argument("--quick", action="store_true", help="null, amplitude, other_car at the first noise level")
     ap.add_argument("--family", choices=SPLITS + ("all",), default=None,
                     help="run the generator family's forms of this split (truth_generators/family.py) instead of "
@@ -491,7 +492,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.family:
         return _main_family(args)
-    noises = [float(x) for x in args.noise.split(",") if x]
+    noises = [float(x) for x in (args.noise or "0.05,0.15").split(",") if x]
     names = [c for c in (args.cases or ",".join(CASES)).split(",") if c]
     unknown = [c for c in names if c not in CASES]
     if unknown:
@@ -517,12 +518,7 @@ def main(argv=None) -> int:
     by_noise = {str(n): summarise([r for r in results if r["noise_deg_s"] == n]) for n in noises}
     out = {"noise_levels_deg_s": noises, "cases": results, "summary": summary, "by_noise": by_noise,
            "elapsed_s": time.perf_counter() - t0}
-    if args.json:
-        json.dump(out, sys.stdout, default=lambda x: x.item() if hasattr(x, "item") else str(x))
-        sys.stdout.write("\n")
-    else:
-        for r in results:
-            print(_line(r))
+    if _emit(out, args.json):
         s = summary
         print(f"precision {s['precision']:.2f} recall {s['recall']:.2f} (TP {s['true_positives']} + handled "
               f"{s['handled_not_identifiable']}, FP {s['false_positives']}, FN {s['false_negatives']}); verdicts "
@@ -533,9 +529,20 @@ def main(argv=None) -> int:
     return 0
 
 
+def _emit(out: dict, as_json: bool) -> bool:
+    """``out`` as one JSON object on stdout, or one line per case (split-prefixed for family cases);
+    True when the caller should print its text summary."""
+    if as_json:
+        json.dump(out, sys.stdout, default=lambda x: x.item() if hasattr(x, "item") else str(x))
+        sys.stdout.write("\n")
+        return False
+    for r in out["cases"]:
+        print((f"[{r['split']}] " if r.get("split") else "") + _line(r))
+    return True
+
+
 def _main_family(args) -> int:
-    noises = [float(x) for x in args.noise.split(",") if x][:1] if args.noise == "0.05,0.15" else \
-        [float(x) for x in args.noise.split(",") if x]
+    noises = [float(x) for x in (args.noise or "0.05").split(",") if x]
     seeds = [int(x) for x in args.seeds.split(",") if x]
     chosen = forms(None if args.family == "all" else args.family)
     if args.forms:
@@ -560,12 +567,7 @@ def _main_family(args) -> int:
     out = {"family": args.family, "split_recorded": SPLIT_RECORDED, "split": {f.name: f.split for f in chosen},
            "noise_levels_deg_s": noises, "seeds": seeds, "cases": results, "by_split": by_split,
            "elapsed_s": time.perf_counter() - t0}
-    if args.json:
-        json.dump(out, sys.stdout, default=lambda x: x.item() if hasattr(x, "item") else str(x))
-        sys.stdout.write("\n")
-    else:
-        for r in results:
-            print(f"[{r['split']}] " + _line(r))
+    if _emit(out, args.json):
         for sp, s in by_split.items():
             print(f"{sp}: precision {s['precision']:.2f} recall {s['recall']:.2f}; verdicts {s['verdicts_right']}/"
                   f"{s['n_cases']}; named on {s['structure_runs']} structure runs "

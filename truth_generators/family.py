@@ -160,7 +160,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       "(0.28 / 0.27 per kN); the finder starts from a model without it", **lat),
         GeneratorForm("lateral/other_structure", description="as lateral/nominal on Heun at 1 ms, square-root "
                       "velocity scaling, Akima damper curve, quadratic oil law, per-axle roll centres",
-                      **lat, **{k: v for k, v in other.items()}),
+                      **lat, **other),
         GeneratorForm("amplitude_viscous/rear", "amplitude_and_viscous", "rear axle: amplitude friction "
                       "(decaying peak, saturating, 20 N) and extra viscous damping 300 N s/m",
                       expect=("friction_amplitude", "extra_viscous_damping"),

@@ -8,10 +8,9 @@ import os
 import sys
 from types import ModuleType
 
-import numpy as np
-
 from ..errors import SuspInputError
 from ..io import integrity
+from ..io.json_values import jsonable
 
 
 def run_command(name: str, module: ModuleType | None, args: argparse.Namespace, *, integrity_findings: bool) -> int:
@@ -39,7 +38,7 @@ def run_command(name: str, module: ModuleType | None, args: argparse.Namespace, 
               file=sys.stderr)
         return 1
     if args.json:
-        json.dump(result, sys.stdout, default=_jsonable)
+        json.dump(result, sys.stdout, default=jsonable)
         sys.stdout.write("\n")
     else:
         _print_human(result)
@@ -53,13 +52,6 @@ def _print_human(result: dict) -> None:
     for k, v in result.items():
         print(f"{k}: {v}")
 
-
-def _jsonable(x):
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return str(x)
 
 
 __all__ = ["run_command"]

@@ -30,6 +30,8 @@ DEFAULT_VEHICLE = "passat_b8_like"
 AXLES = ("front", "rear")
 CORNER_AXLE = (0, 0, 1, 1)  # FL, FR, RL, RR -> front, rear
 CORNER_NAMES = ("FL", "FR", "RL", "RR")
+#: axle -> its corners' indices (front: FL, FR; rear: RL, RR), from CORNER_AXLE
+AXLE_CORNERS = {a: tuple(i for i, k in enumerate(CORNER_AXLE) if k == j) for j, a in enumerate(AXLES)}
 
 
 def config_dir() -> Path:

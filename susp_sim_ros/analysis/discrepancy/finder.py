@@ -236,12 +236,11 @@ class DiscrepancyFinder:
         self._finish(ev, cur)
         # 6. the measurement chain judged on its intervals: an entry the data do not support is dropped;
         # one a held vehicle value could stand in for is not named but listed as competing with it
-        self.competing_: list[dict] = []
         drop, competing = self._judge_measurement_terms()
         if drop:
             self._finish(ev, self._drop_terms(ev, self.result_, drop, path, accepted))
-            drop, competing = self._judge_measurement_terms()
-        self.competing_ = competing
+            _, competing = self._judge_measurement_terms()
+        self.competing_: list[dict] = competing
         return self
 
     def _finish(self, ev: Evaluator, cur: FitResult) -> None:

@@ -19,15 +19,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ...model.params import AXLE_CORNERS, CORNER_NAMES
 from . import missing_force as mf
 from .data import SIGNAL_OF_OUTPUT, SIGNALS, has_road_input
 from .engine import MIN_QUIET_BIAS
 
-_WHEELS = ("FL", "FR", "RL", "RR")
-_AXLE_CORNERS = {"front": (0, 1), "rear": (2, 3)}
 #: kernel outputs simulated per drive: deflection [m], its velocity [m/s], the suspension's forces [N]
 _CORNER_OUTPUTS = ("DEFL", "DEFL_VEL", "F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")
-_OUTPUTS = tuple(mf.MEASURED) + tuple(f"{o}_{w}" for o in _CORNER_OUTPUTS for w in _WHEELS)
+_OUTPUTS = tuple(mf.MEASURED) + tuple(f"{o}_{w}" for o in _CORNER_OUTPUTS for w in CORNER_NAMES)
 #: CSV columns (interface.md "missing_force": the first seven are the interface's)
 CSV_COLUMNS = ("t", "front_N", "front_sd_N", "rear_N", "rear_sd_N", "roll_Nm", "roll_sd_Nm",
                "front_deflection_m", "rear_deflection_m", "front_deflection_velocity_m_s",
@@ -75,7 +74,7 @@ def _per_axle(t: np.ndarray, t_sim: np.ndarray, corners: np.ndarray, combine) ->
     """(n, 2) front and rear of the per-corner series ``corners`` (n_steps, 4) at the times ``t``, its
     two corners combined by ``combine`` (mean of a deflection, sum of a force)."""
     return np.column_stack([combine(np.column_stack([np.interp(t, t_sim, corners[:, i]) for i in ij]), axis=1)
-                            for ij in _AXLE_CORNERS.values()])
+                            for ij in AXLE_CORNERS.values()])
 
 
 def estimate_drives(f, fit, cfg: dict | None = None) -> dict[str, DriveForce]:
@@ -146,7 +145,7 @@ def plot(d: DriveForce, path: Path, title: str) -> None:
     import matplotlib.pyplot as plt
     e, v = d.est, d.est.valid
     fig, ax = plt.subplots(3, 2, figsize=(11, 10))
-    for row, axle in enumerate(_AXLE_CORNERS):
+    for row, axle in enumerate(AXLE_CORNERS):
         for col, (x, label) in enumerate(((d.deflection[:, row] * 1e3, "deflection [mm] (+ bump)"),
                                          (d.velocity[:, row] * 1e3, "deflection velocity [mm/s]"))):
             a = ax[row, col]

@@ -35,7 +35,7 @@ from ...io.drive_data import TestDrive
 from ...io.integrity import require_live_imu
 from ...model import Model
 from ...model.layout import P_INDEX, U_INDEX
-from ...model.params import CORNER_NAMES, load_settings, load_vehicle
+from ...model.params import AXLE_CORNERS, CORNER_NAMES, load_settings, load_vehicle
 from ...model.road import RoadProfile
 from ..discrepancy.calibration import calibration_candidate, calibration_params
 from ..discrepancy.candidates import CALIBRATION, CandParam, Candidate
@@ -46,7 +46,6 @@ from ..discrepancy.locate import noise_sigma
 from . import protocol
 from ...model.params import DEFAULT_VEHICLE
 
-AXLE_WHEELS = {"front": (0, 1), "rear": (2, 3)}
 STATES = ("ok", "degraded", "empty")
 
 
@@ -247,7 +246,7 @@ def oil_identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
     o = st.offsets[1]
     C = cov[o:o + 4, o:o + 4]
     out = {}
-    for axle, (l, r) in AXLE_WHEELS.items():
+    for axle, (l, r) in AXLE_CORNERS.items():
         d = np.zeros(4)
         d[l], d[r] = 1.0, -1.0
         m = np.zeros(4)
@@ -295,7 +294,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     cal = nuisance_params(model, est["nuisance"], est.get("nuisance_range_scale"))
     ident = oil_identifiability(ev, cal, cfg)
     groups: list = []
-    for axle, (l, r) in AXLE_WHEELS.items():
+    for axle, (l, r) in AXLE_CORNERS.items():
         kind = ident[axle]["identifiable"]
         if kind == "wheel":
             groups += [(CORNER_NAMES[l], (l,)), (CORNER_NAMES[r], (r,))]
@@ -325,7 +324,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
         s = math.hypot(se[j], sd_m)
         by_group[name] = (float(x[j]), max(0.0, float(x[j] - 1.96 * s)), min(1.0, float(x[j] + 1.96 * s)), j)
     wheels, axles = {}, {}
-    for axle, (l, r) in AXLE_WHEELS.items():
+    for axle, (l, r) in AXLE_CORNERS.items():
         info = ident[axle]
         kind = info["identifiable"]
         if kind == "no":

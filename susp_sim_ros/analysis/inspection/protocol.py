@@ -15,12 +15,13 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from ...io.units import FACTORS
 from ...model.layout import U_INDEX
-from ...model.params import CORNER_NAMES
+from ...model.params import AXLE_CORNERS, CORNER_NAMES
 from ..discrepancy.engine import Evaluator, Structure
 
-KMH = 3.6  # km/h per m/s (human-facing text only)
-_AXLE_WHEELS = {"front": (0, 1), "rear": (2, 3)}
+KMH = 1.0 / FACTORS["km/h"]  # km/h per m/s (human-facing text only)
+CM = 1.0 / FACTORS["cm"]     # cm per m (human-facing text only)
 
 
 def crossings(ev: Evaluator, st: Structure, x: np.ndarray) -> list[dict]:
@@ -40,7 +41,7 @@ def crossings(ev: Evaluator, st: Structure, x: np.ndarray) -> list[dict]:
         res.append({"drive": c.name,
                     "speed_m_s": float(np.median(moving)) if moving.size else 0.0,
                     "bump_height_m": height,
-                    "peak_damper_velocity_m_s": {a: float(dv[:, list(w)].max()) for a, w in _AXLE_WHEELS.items()}})
+                    "peak_damper_velocity_m_s": {a: float(dv[:, list(w)].max()) for a, w in AXLE_CORNERS.items()}})
     return res
 
 
@@ -62,8 +63,8 @@ def warnings(seen: Sequence[Mapping], identifiable: Mapping[str, Mapping], proto
         h = s["bump_height_m"]
         if h is not None and not lo_h <= h <= hi_h:
             out.append({"drive": s["drive"], "quantity": "bump_height_m", "value": h, "protocol": [lo_h, hi_h],
-                        "reason": f"a {h * 100:.1f} cm bump, the inspection is validated for "
-                                  f"{lo_h * 100:.0f}-{hi_h * 100:.0f} cm: "
+                        "reason": f"a {h * CM:.1f} cm bump, the inspection is validated for "
+                                  f"{lo_h * CM:.0f}-{hi_h * CM:.0f} cm: "
                                   + ("a higher bump drives the dampers faster and may reach the stops"
                                      if h > hi_h else "a lower bump excites the dampers too little")})
     silent = [a for a, e in identifiable.items() if e.get("identifiable") == "no"]

@@ -4,10 +4,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
 
 from ...model.params import CORNER_NAMES
+from ...io.json_values import jsonable
 from ..discrepancy.data import SIGNAL_UNIT, SIGNALS
+from .protocol import CM, KMH
 
 
 def plot_fit(res, path: Path) -> list[str]:
@@ -73,7 +74,7 @@ def write_inspection_report(res, out: str | Path, cfg: dict, drives) -> dict:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     d = res.to_json()
-    (out / "inspection.json").write_text(json.dumps(d, indent=1, default=_jsonable))
+    (out / "inspection.json").write_text(json.dumps(d, indent=1, default=jsonable))
     pngs = plot_fit(res, out)
     iv = plot_intervals(res, out, cfg["states"])
     st = cfg["states"]
@@ -121,14 +122,14 @@ def _protocol_lines(p: dict) -> list[str]:
         return []
     v = p["validated_for"]
     out = ["", "## Test protocol", "",
-           f"Validated for crossings at {v['speed_m_s'][0] * 3.6:.0f}-{v['speed_m_s'][1] * 3.6:.0f} km/h over "
-           f"{v['bump_height_m'][0] * 100:.0f}-{v['bump_height_m'][1] * 100:.0f} cm bumps, both axles crossing.",
+           f"Validated for crossings at {v['speed_m_s'][0] * KMH:.0f}-{v['speed_m_s'][1] * KMH:.0f} km/h over "
+           f"{v['bump_height_m'][0] * CM:.0f}-{v['bump_height_m'][1] * CM:.0f} cm bumps, both axles crossing.",
            "",
            "| drive | speed [km/h] | bump height [cm] | peak damper velocity front / rear [m/s] |", "|---|---|---|---|"]
     for s in p["seen"]:
-        h = "-" if s["bump_height_m"] is None else f"{s['bump_height_m'] * 100:.1f}"
+        h = "-" if s["bump_height_m"] is None else f"{s['bump_height_m'] * CM:.1f}"
         pv = s["peak_damper_velocity_m_s"]
-        out.append(f"| {s['drive']} | {s['speed_m_s'] * 3.6:.1f} | {h} | {pv['front']:.2f} / {pv['rear']:.2f} |")
+        out.append(f"| {s['drive']} | {s['speed_m_s'] * KMH:.1f} | {h} | {pv['front']:.2f} / {pv['rear']:.2f} |")
     out.append("")
     if p["warnings"]:
         out += [f"- **outside the protocol**: {w['drive'] + ': ' if w['drive'] else ''}{w['reason']}"
@@ -139,10 +140,3 @@ def _protocol_lines(p: dict) -> list[str]:
         out.append("- every drive within the protocol")
     return out
 
-
-def _jsonable(x):
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return str(x)
