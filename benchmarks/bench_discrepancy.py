@@ -188,11 +188,13 @@ def _truth_values(car: TruthCar, fr: TruthFriction) -> dict[tuple[str, str], flo
 
 def _family_spec(form: GeneratorForm, seed: int) -> dict:
     """A case spec of the family form (verdicts: nothing hidden -> no discrepancy; physics only optional ->
-    either)."""
+    any but ``unmeasured_input``: the term named, or not named and the remainder judged against the
+    structure level, "nothing missing" within it, "unexplained" above it; whether a "nothing missing" is
+    honest is scored apart, ``nothing_missing_above_structure_level``)."""
     if form.expect:
         verdicts = ["missing_physics"]
     elif form.optional:
-        verdicts = ["missing_physics", "no_significant_discrepancy"]
+        verdicts = ["missing_physics", "no_significant_discrepancy", "unexplained_residual"]
     else:
         verdicts = ["no_significant_discrepancy"]
     return dict(base=form.base, seed=seed, expect=list(form.expect), optional=list(form.optional),

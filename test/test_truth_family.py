@@ -6,12 +6,15 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from truth_generators import family
 from truth_generators import independent_sim as ind
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_split_is_complete_disjoint_and_holds_out_every_effect():
@@ -172,3 +175,37 @@ def test_cars_beyond_the_priors_are_further_off_than_within():
         return np.abs(np.array(vals) - 1.0)
     assert spread(within).max() <= 0.15 + 1e-12 and spread(beyond).min() >= 0.15 - 1e-12
     assert {"unsprung_mass", "cg_height", "roll_centre"} <= set(beyond)
+
+
+def _structure_level_module():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("structure_level", ROOT / "benchmarks" / "structure_level.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_the_structure_level_is_an_upper_prediction_bound_of_development_runs_only():
+    """benchmarks/structure_level.py: the line above which "nothing missing" is not said, from
+    development structure-only runs only; above their median and their largest run (a 95 % bound for one
+    more run), below a wide margin; held-out forms refused."""
+    mod = _structure_level_module()
+    ratios = [1.13, 1.23, 1.13, 1.25, 1.20, 1.21, 1.13, 1.25, 1.20, 1.17, 1.18, 1.28]
+    rows = [{"effect": "none", "split": "development", "family_form": f"structure/f{k % 6}",
+             "heldout_after_over_noise": r} for k, r in enumerate(ratios)]
+    rows.append({"effect": "viscous", "split": "development", "family_form": "viscous/linear",
+                 "heldout_after_over_noise": 9.0})  # a physics case does not set the line
+    out = mod.structure_level(rows)
+    assert out["runs"] == 12 and max(ratios) < out["structure_level_over_noise"] < 1.4
+    logs = np.log(ratios)
+    assert out["structure_level_over_noise"] > np.exp(logs.mean() + 1.645 * logs.std(ddof=1))  # t, not z
+    with pytest.raises(SystemExit, match="held-out"):
+        mod.structure_level(rows + [dict(rows[0], split="held_out", family_form="structure/combined")])
+
+
+def test_the_recorded_structure_level_is_measured_on_development_forms():
+    """config/discrepancy.yaml names where its line comes from: the development split, a date, a commit."""
+    import yaml
+    e = yaml.safe_load((ROOT / "config" / "discrepancy.yaml").read_text())["verdict"]["structure_level_over_noise"]
+    src = e["source"]
+    assert "development" in src and "structure_level.py" in src and "2026-" in src

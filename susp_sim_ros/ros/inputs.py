@@ -8,10 +8,13 @@ and is then applied.
 
 :class:`InputHandler` is owned by :class:`~.node.SuspSimNode` (its ``inputs``): it creates the input
 subscriptions on the node and is given the core, the node's lock and the few node operations it needs
-(tick, step to a time, record, check for a divergence, note an applied damper command).
+(tick, step to a time, record, check for a divergence, note an applied damper command) and, optionally, a
+``judge(topic, t_ns, numbers)`` called with each applied message's numbers (:func:`message_numbers`) and
+the ROS time it took effect: the node's live input-integrity check (:mod:`susp_sim_ros.io.live_integrity`).
 """
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -37,6 +40,26 @@ DRAIN_PERIOD_S = 0.002  # sim time: how often the reorder queue is checked for d
 Payload = tuple[str, str, Any, Callable[[int], Any], bool]
 #: writes a message to the recording: (topic, message type, log time [ns], CDR data, latched)
 RecordFn = Callable[[str, str, int, Any, bool], None]
+#: judges an applied input message: (topic, ROS time [ns] it took effect, its numbers)
+JudgeFn = Callable[[str, int, Any], None]
+
+
+def message_numbers(topic: str, msgtype: str, msg: Any) -> Any:
+    """The numbers of an input message the integrity check judges: ``[data]`` of a ``Float64``; the data
+    after ``data_offset`` of a ``Float64MultiArray``, for ``/road/profile`` only when its layout is the
+    interface's [channel 3, sample N] with 3 N values, for the four-wheel arrays only when the layout (if
+    any) describes 4 values (else nothing: the core rejects the layout, which is no integrity kind)."""
+    if msgtype == M.FLOAT64:
+        return [msg.data]
+    off = int(msg.layout.data_offset)
+    data = msg.data
+    dims = layout_dims(msg)
+    if topic == "/road/profile":
+        if len(dims) != 2 or int(dims[0][1]) != 3 or len(data) - off != 3 * int(dims[1][1]):
+            return []
+    elif dims and math.prod(int(d[1]) for d in dims) != 4:  # [FL, FR, RL, RR] or nothing
+        return []
+    return data[off:]
 
 
 def _subscribe(node: Node, msg_type: Any, topic: str, callback: Callable[[Any, Any], None],
@@ -62,8 +85,10 @@ class InputHandler:
     def __init__(self, node: Node, core: SimCore, lock: threading.RLock, *, sim_time: bool,
                  reorder_window_s: float, tick: Callable[[], object], step_to: Callable[[int], None],
                  record: RecordFn, check_failure: Callable[[], None],
-                 command_applied: Callable[[int, int], None], refuse_shared: bool = False) -> None:
+                 command_applied: Callable[[int, int], None], refuse_shared: bool = False,
+                 judge: JudgeFn | None = None) -> None:
         self.node, self.core, self.lock, self.sim_time = node, core, lock, sim_time
+        self._judge = judge
         self._tick, self._step_to, self._record = tick, step_to, record
         self._check_failure, self._command_applied = check_failure, command_applied
         self._sim_now = 0
@@ -172,6 +197,8 @@ class InputHandler:
                 t = max(t, self.core.t_ns or 0)
             try:
                 apply(t)  # a rejection is counted and logged (rate-limited) by the core's on_reject
+                if self._judge is not None:  # the policy's findings (reported on /diagnostics)
+                    self._judge(topic, t, message_numbers(topic, msgtype, msg))
             except Exception as exc:  # a bug must not take the node down; counted, logged, tested for
                 self.handler_errors += 1
                 self.core.reject(topic, "handler_error", f"{topic}: internal error handling a message "

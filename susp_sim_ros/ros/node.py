@@ -10,7 +10,11 @@ time (``use_sim_time:=true``) every ``/clock`` message steps the core exactly as
 rate give the same outputs. Every input first steps the core to its time, then replaces the held value.
 
 Bad input never stops the node: a rejected message is not integrated, counted per cause on
-``/diagnostics`` and logged rate-limited (``REJECTION_LOG_INTERVAL_S``). When the divergence guard of the
+``/diagnostics`` and logged rate-limited (``REJECTION_LOG_INTERVAL_S``). Every applied input message is also
+judged by the input-integrity policy of the offline tools (``config/integrity.yaml``,
+:class:`~susp_sim_ros.io.live_integrity.LiveIntegrity`): each finding (non-finite or out-of-range value,
+unit mistake, stamp order, clock jump, gap) is a status of its own on ``/diagnostics`` (WARN, ERROR where
+the policy names an error) and logged rate-limited per topic and kind. When the divergence guard of the
 core trips, nothing more is published on ``/sim/...``; the node logs an error, publishes ERROR
 diagnostics, finalises the recording and (``on_divergence: exit``) exits with code 1.
 
@@ -32,6 +36,7 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 
 from ..io import messages as M
+from ..io.live_integrity import ERROR, FindingBoard, LiveFinding, LiveIntegrity
 from ..runtime.lockstep import simulated_metadata
 from ..model.vehicle import Model, check_oil
 from .ride_diagnostics import SemiActiveDiagnostics
@@ -42,7 +47,8 @@ from .parameters import DEFAULTS, RuntimeChange, RuntimeParameters, declare_para
 from .qos import OUTPUT_QOS
 from .recording import RecordingQueue, open_recording
 from .run import run_node, usage
-from .status import NODE_NAME, CoreSnapshot, log_shared_inputs, log_stale_changes, node_status
+from .status import (NODE_NAME, CoreSnapshot, integrity_statuses, log_shared_inputs, log_stale_changes,
+                     node_status)
 from .timing import TickThread, TimingStats, raise_priority
 
 REJECTION_LOG_INTERVAL_S = 10.0
@@ -73,6 +79,12 @@ class SuspSimNode(Node):
         self.rejection_log = RateLimitedLog(lambda text: self.get_logger().warning(text),
                                             REJECTION_LOG_INTERVAL_S)
         self.core.on_reject = self.rejection_log  # every rejection, once per cause and interval
+        # live input integrity: the offline policy table, message by message; its own rate-limited logs
+        self.integrity = LiveIntegrity()
+        self.findings = FindingBoard()
+        logger = self.get_logger()
+        self.integrity_log = RateLimitedLog(lambda text: logger.warning(text), REJECTION_LOG_INTERVAL_S)
+        self.integrity_error_log = RateLimitedLog(lambda text: logger.error(text), REJECTION_LOG_INTERVAL_S)
         warm_up(model)
         self.timing = TimingStats(self.core.period_ns)
         self.recorder: RecordingQueue | None = None
@@ -91,7 +103,7 @@ class SuspSimNode(Node):
                                    reorder_window_s=float(p["sim_reorder_window_s"]), tick=self.tick,
                                    step_to=self._step_to, record=self._record, check_failure=self._check_failure,
                                    command_applied=self.semiactive.command_applied,
-                                   refuse_shared=bool(p["refuse_shared_inputs"]))
+                                   refuse_shared=bool(p["refuse_shared_inputs"]), judge=self._judge_input)
         self.parameters = RuntimeParameters(self, lambda: (self.vehicle, self.variant), self._apply_change)
         self._stale: set[str] = set()
         self.shared_inputs: list[str] = []  # input topics more than one publisher feeds (last diagnostics)
@@ -193,6 +205,19 @@ class SuspSimNode(Node):
         if self.recorder is not None and self.on_divergence == "exit":
             self.recorder.close()
 
+    # -- input integrity ------------------------------------------------------------------------------
+    def _judge_input(self, topic: str, t_ns: int, numbers) -> None:
+        """An applied input message (under the lock): the policy's findings, reported."""
+        self._report_findings(self.integrity.check(topic, t_ns, numbers))
+
+    def _report_findings(self, findings: list[LiveFinding]) -> None:
+        """Keep findings for ``/diagnostics`` and log them, once per (topic, kind) and interval."""
+        if not findings:
+            return
+        self.findings.add(findings)
+        for f in findings:
+            (self.integrity_error_log if f.level >= ERROR else self.integrity_log)((f.topic, f.kind), f.line())
+
     # -- parameters -----------------------------------------------------------------------------------
     def _apply_change(self, change: RuntimeChange) -> None:
         """Apply a run-time parameter change validated by :class:`.parameters.RuntimeParameters`."""
@@ -204,19 +229,27 @@ class SuspSimNode(Node):
                 self.vehicle, self.variant = change.vehicle, change.variant
 
     # -- diagnostics ----------------------------------------------------------------------------------
-    def diagnostics(self) -> list[dict]:
-        """The three statuses (inputs, timing, model) of ``/diagnostics`` (:func:`.status.node_status`)."""
+    def diagnostics(self, *, mark: bool = False) -> list[dict]:
+        """The three statuses (inputs, timing, model) of ``/diagnostics`` (:func:`.status.node_status`),
+        then one per (input topic, integrity kind) found so far (:func:`.status.integrity_statuses`; an input
+        gap still open is found here, while the simulation runs). ``mark``: this is the report that goes out
+        (a finding's status is WARN/ERROR in the first report after it, OK with its figures later)."""
         t = self.now_ns()
         with self.lock:
             snap = CoreSnapshot.of(self.core, t)
+            if self.core.started and not self.core.diverged:
+                self._report_findings(self.integrity.check_gaps(t))
+            found = integrity_statuses(self.findings.entries(), self.integrity.open_gaps())
+            if mark:
+                self.findings.mark_reported()
         self._stale = log_stale_changes(self.get_logger(), self._stale, snap.stale, self.core.timeout_ns)
         self.shared_inputs = log_shared_inputs(self.get_logger(), self.shared_inputs, self.inputs.check_publishers(),
                                                self.inputs.publishers, self.inputs.refuse_shared)
-        return node_status(self, snap, time.monotonic() - self._wall0)
+        return node_status(self, snap, time.monotonic() - self._wall0) + found
 
     def publish_diagnostics(self) -> None:
         t = self.now_ns()
-        msg = diagnostic_array(t, self.diagnostics())
+        msg = diagnostic_array(t, self.diagnostics(mark=True))
         self.pub_diag.publish(msg)
         with self.lock:
             if self.recorder is not None:

@@ -1,10 +1,11 @@
-"""The node's ``/diagnostics`` statuses (inputs, timing, model) as plain dicts for
-:func:`~susp_sim_ros.io.messages.diagnostics_msg` (no rclpy)."""
+"""The node's ``/diagnostics`` statuses (inputs, timing, model, and one per live input-integrity finding
+kind and topic) as plain dicts for :func:`~susp_sim_ros.io.messages.diagnostics_msg` (no rclpy)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any
 
+from ..io.live_integrity import LiveFinding
 from ..runtime.sim_core import SimCore
 
 NODE_NAME = "susp_sim_node"
@@ -55,7 +56,8 @@ def node_status(node: Any, snap: CoreSnapshot, wall_s: float) -> list[dict]:
                          "queued_sim_events": len(node.inputs.orderer),
                          **{f"rejected_{k}": v for k, v in rej.items()}, "rejected_by_topic": snap.by_topic,
                          "last_rejection": snap.last_rejection, "accel_clamped": snap.accel_clamped,
-                         "time_jumps": snap.time_jumps, "handler_errors": node.inputs.handler_errors}}
+                         "time_jumps": snap.time_jumps, "handler_errors": node.inputs.handler_errors,
+                         "integrity_findings": node.findings.total}}
     timing = {"level": 1 if tm["deadline_misses"] else 0, "name": f"{NODE_NAME}: timing",
               "message": f"real-time factor {rtf:.3f}, {tm['deadline_misses']} deadline misses",
               "values": {"real_time_factor": f"{rtf:.6f}", "sim_time_s": f"{snap.sim_s:.6f}",
@@ -78,6 +80,26 @@ def node_status(node: Any, snap: CoreSnapshot, wall_s: float) -> list[dict]:
     with node.lock:  # semi-active damper and ride metrics: added values of the model status
         values.update(node.semiactive.values(node.core))
     return [inputs, timing, model]
+
+
+INTEGRITY_PREFIX = f"{NODE_NAME}: input integrity: "
+
+
+def integrity_statuses(entries: list[tuple[LiveFinding, int, int]], open_gaps: list[str]) -> list[dict]:
+    """One status per (input topic, kind) found so far (:meth:`~susp_sim_ros.io.live_integrity.FindingBoard.
+    entries`: latest finding, count, new since the last report), named ``"<node>: input integrity: TOPIC
+    KIND"``: at the finding's level (WARN, or ERROR for the policy's named errors) when there are new ones
+    since the last report or the gap is still open, else OK; its key/values name the topic, the kind, the
+    time, the value, what was expected and what the node did, with the counts."""
+    out = []
+    for f, count, new in entries:
+        active = new > 0 or (f.kind == "gap" and f.topic in open_gaps)
+        when = f"{f.t_ns * 1e-9:.3f} s"
+        message = (f"{f.kind}: {f.value} at {when}, expected {f.expected}" if active else
+                   f"no new {f.kind} since the last report (last {f.value} at {when}; {count} in all)")
+        out.append({"level": f.level if active else 0, "name": f"{INTEGRITY_PREFIX}{f.topic} {f.kind}",
+                    "message": message, "values": {**f.values(), "count": count, "new": new}})
+    return out
 
 
 def log_stale_changes(logger: Any, before: set[str], stale: list[str], timeout_ns: int) -> set[str]:

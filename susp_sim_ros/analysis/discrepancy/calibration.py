@@ -43,7 +43,7 @@ import numpy as np
 
 from ...model import Model
 from ...model.layout import P_INDEX
-from ...model.params import AXLES, FrictionVariant, VehicleParams
+from ...model.params import AXLES, FrictionVariant, VehicleParams, load_settings
 from .candidates import CALIBRATION, CandParam, Candidate, neutral_base
 
 INFORMED_SHRINK = 0.5   # posterior sd / prior sd at most this: informed
@@ -94,6 +94,21 @@ class CalParam:
         elif lo < 0 <= self.lo:
             lo = 0.0
         return lo, hi
+
+
+def reveal_for(p: CalParam, state: str) -> str:
+    """The measurement that pins calibration value ``p`` without the drives (what separates it from a
+    physics term that explains the same residual): a damper table on the damper rig in the oil state of
+    the vehicle state ``state`` that informs it (its friction ramp and force-velocity sinusoids,
+    ``config/rigs.yaml``), any other value measured directly."""
+    if p.scale:
+        rig = load_settings("rigs.yaml")
+        oil = "oil-empty" if "empty" in p.field else "intact"
+        v = rig["damper.sine_peak_velocities"]
+        return (f"the {oil} {p.where} damper (as in the {state} drives) on the damper rig: the friction ramp "
+                f"at {1000 * rig['damper.ramp_speed']:.0f} mm/s and sinusoids from {1000 * min(v):.0f} mm/s "
+                "(`susp rig damper`) show whether the damper itself is stronger than its measured curve")
+    return f"a measurement of {p.key}" + ("" if p.where == "all" else f" ({p.where})")
 
 
 def calibration_params(vp: VehicleParams, variant: FrictionVariant,
