@@ -346,14 +346,15 @@ def test_the_measurement_chain_is_decided_again_on_the_model_with_its_physics(mo
 
 
 def test_a_term_and_a_one_state_damper_value_compete_until_another_state_separates_them(tmp_path):
-    """Issue 24 item 4. Truth: extra viscous damping of 120 N s/m at the rear (+46 % of the oil-empty rear
-    damper's slope). Driven with the oil-empty rear dampers only, a stronger oil-empty rear damper and the
-    extra damping explain the same residual: the term is not named, not dropped in silence either, but
-    listed with the damper value it competes with and the rig test that tells them apart, and the verdict
-    says so. The intact car's drives separate them (the extra damping acts there too, the oil-empty
-    damper does not): the term is named."""
+    """Issue 24 item 4. Truth: extra viscous damping of 130 N s/m at the rear. With the rear dampers
+    oil-empty (the truth's empty slope 260 N s/m) that car's recordings are the same, sample for sample,
+    as those of a car whose oil-empty rear damper is 50 % stronger and has no extra damping. Driven that
+    way only, the term is not named, nor dropped in silence: it is listed with the damper value it
+    competes with and the rig test that tells them apart, and the verdict says so. The intact car's
+    drives separate them (the extra damping acts there too, the oil-empty damper does not): the term is
+    named."""
     from truth_generators.family import INTACT, REAR_EMPTY
-    hid = TruthHidden(extra_viscous=(0.0, 120.0))
+    hid = TruthHidden(extra_viscous=(0.0, 130.0))
     sensor = TruthSensor(imu_rate_hz=200, gyro_noise_deg_s=(0.05,) * 3, accel_noise_m_s2=(0.02,) * 3)
     drives = {"bump_rear_empty": (TruthManeuver.bump(), REAR_EMPTY),
               "sine_rear_empty": (TruthManeuver.sine(), REAR_EMPTY),

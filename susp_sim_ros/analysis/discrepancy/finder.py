@@ -289,8 +289,11 @@ class DiscrepancyFinder:
         """Terms the drives want clearly (criterion and share of the excess passed) but a later test
         refused (held-out drives, stability, recalibration), whose parameters move together with a
         calibration value that the drives of one vehicle state alone inform (posterior correlation at
-        least :data:`RIVAL_CORRELATION` in the term's joint fit): the calibration may have taken what the
-        term would explain, or the term would take what is a wrong value; the drives cannot say which.
+        least :data:`RIVAL_CORRELATION` in the term's joint fit) and whose effect on the drives that value
+        alone would reproduce only by moving more than :data:`SHIFT_SD` prior sd (least squares on its
+        Jacobian column; a smaller effect is the calibration's own uncertainty, not a rival hypothesis):
+        the calibration may have taken what the term would explain, or the term would take what is a
+        wrong value; the drives cannot say which.
         Listed in ``not_identifiable`` with ``competes_with`` and ``reveal_with``, never dropped in silence
         (a stronger oil-empty damper and extra damping of the one rear-empty car). Terms in ``final`` or
         already ``listed`` are skipped."""
@@ -309,8 +312,13 @@ class DiscrepancyFinder:
             sd = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
             rho = np.abs(cov / np.outer(sd, sd))
             one_state = self._one_state_values(f)
+            # the term's effect on the drives, and the shift of each value that alone would reproduce it
+            effect = f.jac[:, t0:t1] @ (f.x[t0:t1] - st.neutral()[t0:t1])
+            cols = f.jac[:, list(one_state)]
+            shift = dict(zip(one_state, (cols.T @ effect) / np.maximum(np.sum(cols * cols, axis=0), 1e-300)))
             rivals = sorted(((float(rho[t0:t1, j].max()), j) for j in one_state
-                             if rho[t0:t1, j].max() >= RIVAL_CORRELATION), reverse=True)
+                             if rho[t0:t1, j].max() >= RIVAL_CORRELATION
+                             and abs(shift[j]) >= SHIFT_SD * self.informed_[j - a].sd), reverse=True)
             if not rivals:
                 continue
             cand = BY_NAME[name]
@@ -325,7 +333,8 @@ class DiscrepancyFinder:
                        f"{100 * (before.rss - f.rss) / max(before.rss - before.n, 1e-12):.0f} % of the residual "
                        f"above noise, but {refused} refused it; "
                        + ", ".join(f"{p.field}:{p.where} (informed by the {one_state[j]} drives only, posterior "
-                                   f"correlation {r:.2f})" for p, (r, j) in zip(params, rivals))
+                                   f"correlation {r:.2f}; the term's effect is {shift[j] / p.sd:+.1f} prior sd "
+                                   "of it)" for p, (r, j) in zip(params, rivals))
                        + " moves with it: the drives cannot tell the term from that calibration value"})
         return out
 
