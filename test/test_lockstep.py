@@ -21,7 +21,7 @@ def test_maneuver_lockstep_equals_simulate(model_full, state):
     res = run_lockstep(d, model=model_full)
     ref = simulate(model_full, man.to_inputs(0.001), dt=0.001, road=man.road, oil=oil)
     n = min(len(res.t_ns), len(ref.t) // 10)
-    np.testing.assert_allclose(res.outputs[:n], ref.y[9::10][:n], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res.values[:n], ref.y[9::10][:n], rtol=0, atol=1e-12)
     assert res.metadata["damper_oil_level"] == ",".join(f"{x:g}" for x in oil)
 
 

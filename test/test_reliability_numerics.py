@@ -102,7 +102,7 @@ def test_bundled_drives_through_lockstep_at_every_step(drives, models):
                 r = run_lockstep(drive, model=model, step_s=dt)
                 n_runs += 1
                 assert r.healthy and not r.diverged and not r.rejections, (name, var, dt, r.diverged)
-                assert np.all(np.isfinite(r.outputs)) and np.all(np.abs(r.outputs) <= OUTPUT_ENVELOPE)
+                assert np.all(np.isfinite(r.values)) and np.all(np.abs(r.values) <= OUTPUT_ENVELOPE)
                 g = r.imu.gyro
                 assert np.abs(g).max() < 1.0 and np.abs(r["DEFL_FL"]).max() < 0.15 and r["F_Z_RL"].min() >= 0
                 if ref is None:
@@ -149,7 +149,7 @@ def test_guard_stops_lockstep_and_susp_sim_on_an_absurd_vehicle(tmp_path, capsys
     drive = maneuver_drive(bump_crossing(), rate_hz=100.0)
     r = run_lockstep(drive, vehicle=str(veh), variant="full", out_path=tmp_path / "a.mcap")
     assert not r.healthy and "diverged" in r.diverged
-    assert np.all(np.isfinite(r.outputs)) and np.all(np.abs(r.outputs) <= OUTPUT_ENVELOPE)
+    assert np.all(np.isfinite(r.values)) and np.all(np.abs(r.values) <= OUTPUT_ENVELOPE)
     from test_reliability_files import read_recording  # noqa: F401  (same reader)
     from _reliability_helpers import recorded_sim_numbers
     n, bad = recorded_sim_numbers(tmp_path / "a.mcap")

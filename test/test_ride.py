@@ -90,23 +90,23 @@ def ride(model_full):
 
 
 def _dtl(r):
-    return np.mean(list(r["dynamic_tyre_load_rms_rel"].values()))
+    return np.mean(list(r.metrics.dynamic_tyre_load_rms_rel.values()))
 
 
 def test_reference_controllers_on_a_class_c_road(ride):
     """The issue's "must show": skyhook improves comfort over passive, groundhook lowers the dynamic tyre
     load against skyhook, an oil-empty rear axle worsens road holding; passive Wk RMS plausible for a
     sedan on a class C road at 80 km/h."""
-    wk = {k: r["comfort_wk_rms_m_s2"] for k, r in ride.items()}
+    wk = {k: r.metrics.comfort_wk_rms_m_s2 for k, r in ride.items()}
     assert 0.2 < wk["passive"] < 2.0
     assert wk["skyhook"] < 0.85 * wk["passive"]
     assert _dtl(ride["groundhook"]) < 0.95 * _dtl(ride["skyhook"])
     assert _dtl(ride["rear_empty"]) > 1.1 * _dtl(ride["passive"])
     # the oil loss is at the rear: the rear wheels' tyre load varies more, the front's hardly changes
     for w in ("RL", "RR"):
-        dtl = {k: ride[k]["dynamic_tyre_load_rms_rel"][w] for k in ("rear_empty", "passive")}
+        dtl = {k: ride[k].metrics.dynamic_tyre_load_rms_rel[w] for k in ("rear_empty", "passive")}
         assert dtl["rear_empty"] > 1.2 * dtl["passive"]
-    assert ride["passive"]["mean_command"] is None and ride["skyhook"]["mean_command"] is not None
+    assert ride["passive"].mean_command is None and ride["skyhook"].mean_command is not None
 
 
 def test_ride_cli_prints_the_interface_keys(capsys):
@@ -138,8 +138,8 @@ def test_ride_monitor_streams_the_same_metrics_as_the_offline_ones(model_full):
     off = ride_metrics(ys, 100.0, **kw)
     v = mon.values()
     # the offline filter removes the mean first; the monitor subtracts gravity: equal to rounding here
-    assert v["comfort_wk_rms_m_s2"] == pytest.approx(off["comfort_wk_rms_m_s2"], rel=1e-3)
+    assert v.comfort_wk_rms_m_s2 == pytest.approx(off.comfort_wk_rms_m_s2, rel=1e-3)
     for w in ("FL", "RR"):
-        assert v["dynamic_tyre_load_rms_rel"][w] == pytest.approx(off["dynamic_tyre_load_rms_rel"][w], rel=1e-9)
-        assert v["suspension_travel_rms_m"][w] == pytest.approx(off["suspension_travel_rms_m"][w], rel=1e-9)
-    assert v["stop_contacts"] == off["stop_contacts"]
+        assert v.dynamic_tyre_load_rms_rel[w] == pytest.approx(off.dynamic_tyre_load_rms_rel[w], rel=1e-9)
+        assert v.suspension_travel_rms_m[w] == pytest.approx(off.suspension_travel_rms_m[w], rel=1e-9)
+    assert v.stop_contacts == off.stop_contacts

@@ -89,7 +89,7 @@ def test_validate_ride_equals_ride_metrics_on_the_same_samples(sims, capsys):
         y[f"F_Z_{w}"] = susp.values[keep, i, 6]
         y[f"DEFL_{w}"] = susp.values[keep, i, 0]
     vp = load_vehicle("passat_b8_like")
-    direct = ride_metrics(y, 100.0, **rr.vehicle_ride_args(vp))
+    direct = ride_metrics(y, 100.0, **rr.vehicle_ride_args(vp)).to_dict()
     sim = ride["simulated"]
     for k in ("comfort_wk_rms_m_s2", "vertical_acceleration_rms_m_s2", "pitch_acceleration_rms_rad_s2"):
         assert sim[k] == pytest.approx(direct[k], rel=1e-12)

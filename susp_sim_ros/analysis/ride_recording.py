@@ -86,7 +86,7 @@ def ride_of_series(imu_t_ns, gyro, accel, susp_t_ns, susp, span: tuple[int, int]
     if static_loads is None:
         static_loads, source = mean_fz, "mean tyre force of the recording (its vehicle could not be loaded)"
     out = ride_metrics(series, rate, gravity=gravity, static_loads=static_loads, bump_travel=bump_travel,
-                       rebound_travel=rebound_travel)
+                       rebound_travel=rebound_travel).to_dict()
     out["static_tyre_load_N"] = dict(zip(WHEELS, np.asarray(static_loads, float).tolist()))
     out["mean_tyre_load_N"] = dict(zip(WHEELS, mean_fz.tolist()))
     out["static_load_source"] = source

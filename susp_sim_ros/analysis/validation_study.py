@@ -148,7 +148,7 @@ def _add_ride(res: DriveResult, drive, sim, variant: str, vp) -> None:
     and, once per drive, the measured Wk comfort, over the time both IMUs cover."""
     span = va.overlap((int(drive.imu.t_ns[0]), int(drive.imu.t_ns[-1])), (int(sim.imu.t_ns[0]), int(sim.imu.t_ns[-1])))
     vargs = rr.vehicle_ride_args(vp)
-    susp = sim.outputs[:, SUSPENSION_COLUMNS].reshape(len(sim.t_ns), 4, -1)
+    susp = sim.values[:, SUSPENSION_COLUMNS].reshape(len(sim.t_ns), 4, -1)
     res.ride.setdefault("simulated", {})[variant] = rr.ride_of_series(
         sim.imu.t_ns, sim.imu.gyro, sim.imu.accel, sim.t_ns, susp, span, what=f"{res.path} {variant}", **vargs)
     if "measured" not in res.ride:

@@ -29,6 +29,7 @@ import math
 import os
 import sys
 import time
+from typing import Any
 
 from ..errors import RecordingError, SuspInputError
 from ..io import integrity
@@ -197,36 +198,49 @@ def _dry_run(args, rec, play, msgs) -> dict:
                        + (f"; file truncated: {rec.error}" if rec.truncated else "") + ")"}
 
 
-def _play_once(args, msgs, pubs, clock_pub, clock_type, clock_ns: int, progress, handshake) -> int:
-    """Play the recording once at ``args.rate``, one ``/clock`` per instant (if ``clock_pub``); returns the
-    number of messages published (``clock_type``: rosgraph_msgs' Clock, imported with rclpy by the
-    caller). ``handshake`` (publishers, deadline) on the first play: the clock
-    starts once every subscriber has acknowledged the first instant."""
+@dataclasses.dataclass(frozen=True)
+class _Player:
+    """What one play of a recording sends, where to and how fast."""
+
+    recording: str           #: the recording's path as given (for messages)
+    msgs: list               #: messages to play, in log-time order
+    pubs: dict               #: topic -> its publisher
+    clock_pub: Any           #: the ``/clock`` publisher, or None (``--no-clock``)
+    clock_type: type         #: rosgraph_msgs' Clock (imported with rclpy by the caller)
+    clock_ns: int            #: ``/clock`` ticks at least this often in recording time [ns]; 0: none
+    rate: float              #: playback speed over real time [-]
+
+
+def _play_once(player: _Player, progress, handshake) -> int:
+    """Play the recording once at ``player.rate``, one ``/clock`` per instant (if ``player.clock_pub``);
+    returns the number of messages published. ``handshake`` (publishers, deadline) on the first play: the
+    clock starts once every subscriber has acknowledged the first instant."""
+    msgs, rate, clock_pub = player.msgs, player.rate, player.clock_pub
     t0, t1 = msgs[0].log_time_ns, msgs[-1].log_time_ns
     played = 0
     start = time.monotonic()
     last_shown = t0
     t_sent = None
-    for t, m in _timeline(msgs, t0, t1, clock_ns):
+    for t, m in _timeline(msgs, t0, t1, player.clock_ns):
         if handshake is not None and t_sent is not None and t != t_sent:
             # the first instant is out: the clock starts once every subscriber has it
             everything, deadline = handshake
             handshake = None
             if not _delivered(everything, max(deadline - time.monotonic(), HANDSHAKE_MIN_S)):
-                print(f"susp replay: warning: the first messages of {args.recording} were not "
+                print(f"susp replay: warning: the first messages of {player.recording} were not "
                       "acknowledged by every subscriber; a slow subscriber may miss the start",
                       file=sys.stderr)
-            start = time.monotonic() - (t_sent - t0) * 1e-9 / args.rate
-        wait = start + (t - t0) * 1e-9 / args.rate - time.monotonic()
+            start = time.monotonic() - (t_sent - t0) * 1e-9 / rate
+        wait = start + (t - t0) * 1e-9 / rate - time.monotonic()
         if wait > 0:
             time.sleep(wait)
         if clock_pub is not None and t != t_sent:  # one /clock per instant
             t_sent = t
-            c = clock_type()
+            c = player.clock_type()
             c.clock.sec, c.clock.nanosec = divmod(t, 1_000_000_000)
             clock_pub.publish(c)
         if m is not None:
-            pubs[m.topic].publish(m.data)
+            player.pubs[m.topic].publish(m.data)
             played += 1
         if progress is not None and t - last_shown >= 100_000_000:
             progress.update(round((t - last_shown) * 1e-9, 2))
@@ -271,12 +285,12 @@ def run(args) -> dict:
                                  bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
     played = loops = 0
     clock_ns = int(round(args.clock_period * 1e9)) if clock_pub is not None else 0
+    player = _Player(args.recording, msgs, pubs, clock_pub, Clock, clock_ns, args.rate)
     wall0 = time.monotonic()
     interrupted = False
     try:
         while True:
-            played += _play_once(args, msgs, pubs, clock_pub, Clock, clock_ns, progress,
-                                 (everything, deadline) if handshake else None)
+            played += _play_once(player, progress, (everything, deadline) if handshake else None)
             handshake = False
             loops += 1
             if not args.loop or (args.loops and loops >= args.loops):

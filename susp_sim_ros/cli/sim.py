@@ -129,11 +129,12 @@ def run_ride_cli(args) -> dict:
     res = run_ride(model, spec, controller=args.controller, oil=oil, step_s=args.step)
     out = {"maneuver": f"iso8608:{cls}", "road_class": cls, "speed_kmh": args.speed, "duration_s": args.duration,
            "seed": args.seed, "controller": args.controller, "state": state, "variant": model.variant.name,
-           "vehicle": model.vehicle.name, "damper_oil_level": [float(x) for x in oil], **res}
-    dtl = sum(res["dynamic_tyre_load_rms_rel"].values()) / 4
+           "vehicle": model.vehicle.name, "damper_oil_level": [float(x) for x in oil], **res.to_dict()}
+    m = res.metrics
+    dtl = sum(m.dynamic_tyre_load_rms_rel.values()) / 4
     out["summary"] = (f"iso8608:{cls} at {args.speed:g} km/h, {args.duration:g} s, seed {args.seed}, "
                       f"{args.controller} ({state}, {model.variant.name}): Wk RMS "
-                      f"{res['comfort_wk_rms_m_s2']:.3f} m/s^2, dynamic tyre load RMS {dtl:.3f} (mean of wheels), "
-                      f"travel RMS {1000 * max(res['suspension_travel_rms_m'].values()):.1f} mm (max wheel), "
-                      f"stop contacts {sum(res['stop_contacts'].values())}")
+                      f"{m.comfort_wk_rms_m_s2:.3f} m/s^2, dynamic tyre load RMS {dtl:.3f} (mean of wheels), "
+                      f"travel RMS {1000 * max(m.suspension_travel_rms_m.values()):.1f} mm (max wheel), "
+                      f"stop contacts {sum(m.stop_contacts.values())}")
     return out

@@ -20,7 +20,7 @@ from ..model.iso8608 import CLASSES, faded_road
 from ..model.layout import OUTPUT_LABELS
 from ..model.semiactive import number, semiactive_config
 from ..model.vehicle import INTACT, Model, Stepper
-from ..control.ride_metrics import ride_metrics
+from ..control.ride_metrics import RideMetrics, ride_metrics
 from .controllers import load_controller_params, make_controller, measurement_from_outputs
 
 _INDEX = {k: i for i, k in enumerate(OUTPUT_LABELS)}
@@ -34,6 +34,22 @@ class RideSpec:
     seed: int = 0
 
 
+@dataclass(frozen=True)
+class RideRun:
+    """A ride run's result: its :class:`~.ride_metrics.RideMetrics` over the metrics window and how the
+    run went; :meth:`to_dict` gives the JSON keys (the metrics', then these), in this order."""
+
+    metrics: RideMetrics
+    t_start_s: float                         #: start of the metrics window [s]
+    samples: int                             #: samples in the metrics window [-]
+    mean_command: dict[str, float] | None    #: mean valve command per wheel [-]; None when passive
+
+    def to_dict(self) -> dict:
+        """The JSON object."""
+        return {**self.metrics.to_dict(), "t_start_s": self.t_start_s, "samples": self.samples,
+                "mean_command": None if self.mean_command is None else dict(self.mean_command)}
+
+
 def parse_road(text: str) -> str:
     """``iso8608:C`` -> ``"C"`` (classes A-H)."""
     kind, _, cls = str(text).partition(":")
@@ -43,9 +59,9 @@ def parse_road(text: str) -> str:
 
 
 def run_ride(model: Model, spec: RideSpec, *, controller: str = "passive", oil: Sequence[float] | np.ndarray = INTACT,
-             step_s: float = 0.001, config: str | Path | None = None) -> dict:
-    """Drive ``spec`` with ``controller``; returns the ride metrics plus ``t_start_s`` (metrics window
-    start), ``samples`` and ``mean_command`` {WHEEL: float} (None when passive)."""
+             step_s: float = 0.001, config: str | Path | None = None) -> RideRun:
+    """Drive ``spec`` with ``controller`` (``step_s`` [s]); returns the ride metrics with the metrics
+    window start, its samples and the mean command per wheel (None when passive)."""
     if not (np.isfinite(spec.speed) and 1.0 <= spec.speed <= 70.0):
         raise SuspInputError(f"--speed: expected 3.6-252 km/h, got {spec.speed * 3.6:g} km/h")
     path, cfg = semiactive_config(config)
@@ -86,9 +102,7 @@ def run_ride(model: Model, spec: RideSpec, *, controller: str = "passive", oil: 
         ys[f"F_Z_{w}"] = Y[k0:, _INDEX[f"F_Z_{w}"]]
         ys[f"DEFL_{w}"] = Y[k0:, _INDEX[f"DEFL_{w}"]]
     corner = lambda pair: [pair[a] for a in (0, 0, 1, 1)]  # noqa: E731
-    out = ride_metrics(ys, 1.0 / step_s, gravity=vp.gravity, static_loads=vp.static_wheel_loads(),
-                       bump_travel=corner(vp.bump_stop_travel), rebound_travel=corner(vp.rebound_stop_travel))
-    out["t_start_s"] = t_start
-    out["samples"] = int(Y.shape[0] - k0)
-    out["mean_command"] = (dict(zip(("FL", "FR", "RL", "RR"), np.mean(cmds, axis=0).tolist())) if cmds else None)
-    return out
+    metrics = ride_metrics(ys, 1.0 / step_s, gravity=vp.gravity, static_loads=vp.static_wheel_loads(),
+                           bump_travel=corner(vp.bump_stop_travel), rebound_travel=corner(vp.rebound_stop_travel))
+    mean_command = dict(zip(("FL", "FR", "RL", "RR"), np.mean(cmds, axis=0).tolist())) if cmds else None
+    return RideRun(metrics, t_start, int(Y.shape[0] - k0), mean_command)

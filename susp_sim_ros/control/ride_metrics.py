@@ -15,6 +15,8 @@ body-fixed point does not have).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy import signal
 
@@ -98,27 +100,68 @@ def stop_contacts(defl: np.ndarray, bump_travel: float, rebound_travel: float) -
     return n
 
 
+@dataclass(frozen=True)
+class RideMetrics:
+    """The interface's ride metrics of one series; :meth:`to_dict` gives its JSON keys, in this order.
+    Per-wheel values are dicts keyed FL, FR, RL, RR."""
+
+    comfort_wk_rms_m_s2: float                   #: ISO 2631-1 Wk-weighted RMS vertical acceleration [m/s^2]
+    vertical_acceleration_rms_m_s2: float        #: RMS vertical acceleration, mean removed [m/s^2]
+    pitch_acceleration_rms_rad_s2: float         #: RMS pitch acceleration [rad/s^2]
+    roll_acceleration_rms_rad_s2: float          #: RMS roll acceleration [rad/s^2]
+    dynamic_tyre_load_rms_rel: dict[str, float]  #: RMS tyre load change over the static load [-]
+    suspension_travel_rms_m: dict[str, float]    #: RMS suspension deflection [m]
+    stop_contacts: dict[str, int]                #: entries into the bump or rebound stop [-]
+
+    def to_dict(self) -> dict:
+        """The JSON object (per-wheel dicts copied)."""
+        return {"comfort_wk_rms_m_s2": self.comfort_wk_rms_m_s2,
+                "vertical_acceleration_rms_m_s2": self.vertical_acceleration_rms_m_s2,
+                "pitch_acceleration_rms_rad_s2": self.pitch_acceleration_rms_rad_s2,
+                "roll_acceleration_rms_rad_s2": self.roll_acceleration_rms_rad_s2,
+                "dynamic_tyre_load_rms_rel": dict(self.dynamic_tyre_load_rms_rel),
+                "suspension_travel_rms_m": dict(self.suspension_travel_rms_m),
+                "stop_contacts": dict(self.stop_contacts)}
+
+
 def ride_metrics(y: dict[str, np.ndarray], fs: float, *, gravity: float, static_loads,
-                 bump_travel, rebound_travel) -> dict:
+                 bump_travel, rebound_travel) -> RideMetrics:
     """The interface's ride metrics from output series ``y`` (OUTPUT_LABELS keys: AZ_SF, ROLL_RATE,
     PITCH_RATE, F_Z_*, DEFL_*) sampled at ``fs`` [Hz]. ``static_loads`` [N], ``bump_travel`` and
     ``rebound_travel`` [m] per wheel FL, FR, RL, RR."""
     tyre_load: dict[str, float] = {}
     travel: dict[str, float] = {}
     stops: dict[str, int] = {}
-    out = {
-        "comfort_wk_rms_m_s2": comfort_wk_rms(y["AZ_SF"], fs, gravity),
-        "vertical_acceleration_rms_m_s2": rms(np.asarray(y["AZ_SF"]) - np.mean(y["AZ_SF"])),
-        "pitch_acceleration_rms_rad_s2": rms(np.gradient(np.asarray(y["PITCH_RATE"]), 1.0 / fs)),
-        "roll_acceleration_rms_rad_s2": rms(np.gradient(np.asarray(y["ROLL_RATE"]), 1.0 / fs)),
-        "dynamic_tyre_load_rms_rel": tyre_load, "suspension_travel_rms_m": travel, "stop_contacts": stops,
-    }
     for i, w in enumerate(WHEELS):
         fz0 = float(static_loads[i])
         tyre_load[w] = rms((np.asarray(y[f"F_Z_{w}"]) - fz0) / fz0)
         travel[w] = rms(y[f"DEFL_{w}"])
         stops[w] = stop_contacts(y[f"DEFL_{w}"], bump_travel[i], rebound_travel[i])
-    return out
+    return RideMetrics(
+        comfort_wk_rms_m_s2=comfort_wk_rms(y["AZ_SF"], fs, gravity),
+        vertical_acceleration_rms_m_s2=rms(np.asarray(y["AZ_SF"]) - np.mean(y["AZ_SF"])),
+        pitch_acceleration_rms_rad_s2=rms(np.gradient(np.asarray(y["PITCH_RATE"]), 1.0 / fs)),
+        roll_acceleration_rms_rad_s2=rms(np.gradient(np.asarray(y["ROLL_RATE"]), 1.0 / fs)),
+        dynamic_tyre_load_rms_rel=tyre_load, suspension_travel_rms_m=travel, stop_contacts=stops)
+
+
+@dataclass(frozen=True)
+class RunningRideMetrics:
+    """:class:`RideMonitor`'s metrics since its start or last reset; :meth:`to_dict` gives the keys.
+    Per-wheel values are dicts keyed FL, FR, RL, RR."""
+
+    comfort_wk_rms_m_s2: float                   #: Wk-weighted RMS vertical acceleration [m/s^2]
+    dynamic_tyre_load_rms_rel: dict[str, float]  #: RMS tyre load change over the static load [-]
+    suspension_travel_rms_m: dict[str, float]    #: RMS suspension deflection [m]
+    stop_contacts: dict[str, int]                #: entries into the bump or rebound stop [-]
+    samples: int                                 #: samples fed [-]
+
+    def to_dict(self) -> dict:
+        """The values as a dict (per-wheel dicts copied)."""
+        return {"comfort_wk_rms_m_s2": self.comfort_wk_rms_m_s2,
+                "dynamic_tyre_load_rms_rel": dict(self.dynamic_tyre_load_rms_rel),
+                "suspension_travel_rms_m": dict(self.suspension_travel_rms_m),
+                "stop_contacts": dict(self.stop_contacts), "samples": self.samples}
 
 
 class RideMonitor:
@@ -164,14 +207,15 @@ class RideMonitor:
             self._inside[k] = inside[-1]
         self.n += Y.shape[0]
 
-    def values(self) -> dict:
+    def values(self) -> RunningRideMetrics:
         n = max(self.n, 1)
-        return {"comfort_wk_rms_m_s2": float(np.sqrt(self.sum_wk2 / n)),
-                "dynamic_tyre_load_rms_rel": dict(zip(WHEELS, np.sqrt(self.sum_dtl2 / n).tolist())),
-                "suspension_travel_rms_m": dict(zip(WHEELS, np.sqrt(self.sum_d2 / n).tolist())),
-                "stop_contacts": dict(zip(WHEELS, self.contacts.tolist())), "samples": self.n}
+        return RunningRideMetrics(
+            comfort_wk_rms_m_s2=float(np.sqrt(self.sum_wk2 / n)),
+            dynamic_tyre_load_rms_rel=dict(zip(WHEELS, np.sqrt(self.sum_dtl2 / n).tolist())),
+            suspension_travel_rms_m=dict(zip(WHEELS, np.sqrt(self.sum_d2 / n).tolist())),
+            stop_contacts=dict(zip(WHEELS, self.contacts.tolist())), samples=self.n)
 
 
-__all__ = ["RideMonitor", "WK_TABLE", "WK_ACCURACY_DB", "comfort_wk_rms", "wk_accurate_to_hz", "wk_analog",
-           "wk_response", "wk_sos", "wk_weighted", "ride_metrics", "rms",
+__all__ = ["RideMetrics", "RideMonitor", "RunningRideMetrics", "WK_TABLE", "WK_ACCURACY_DB", "comfort_wk_rms",
+           "wk_accurate_to_hz", "wk_analog", "wk_response", "wk_sos", "wk_weighted", "ride_metrics", "rms",
            "stop_contacts"]

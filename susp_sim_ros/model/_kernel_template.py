@@ -28,6 +28,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from susp_sim_ros.model.inline_math import TINY, expm1_nonpos, tanh
+from susp_sim_ros.model.friction_scaling import velocity_scaling_factor
 from susp_sim_ros.model.layout import (C_INDEX, N_CTX, N_GRID, N_P_FIXED, N_S_FIXED, N_Y, P_GRID,
                                        P_H_EMPTY, P_H_HARD, P_H_INTACT, P_H_SOFT, P_INDEX, P_SEMI_ACTIVE,
                                        P_VALVE_TAU, S_INDEX, U_INDEX, Y_INDEX)
@@ -251,8 +252,7 @@ def fill_context(p, dv, i, c, d, dd, fx, fy, fz, v):
     c[i, _C_FY] = fy
     c[i, _C_FZ] = fz
     c[i, _C_V] = v
-    excess = abs(dd) - p[_SV_REF]
-    sv = 1.0 - (p[_SV_INF] - 1.0) * expm1_nonpos(-max(excess, 0.0) * dv[_D_INV_VS])
+    sv = velocity_scaling_factor(dd, p[_SV_REF], p[_SV_INF], dv[_D_INV_VS])
     c[i, _C_SV] = sv if p[_USE_V] > 0.5 else 1.0
     sh = 1.0 + p[_SH_X + i] * abs(fx) + p[_SH_Y + i] * abs(fy)
     c[i, _C_SH] = sh if p[_USE_H] > 0.5 else 1.0

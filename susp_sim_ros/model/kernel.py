@@ -76,7 +76,7 @@ def _terms_block(terms: tuple[PhysicsTerm, ...], layout: KernelLayout) -> str:
 def _dependency_digest(terms: tuple[PhysicsTerm, ...]) -> str:
     """Hash of every source file the kernel compiles in. Numba's cache does not notice a change in a
     function imported from another file, so a change there must change the kernel's own file."""
-    files = {Path(__file__).with_name(f) for f in ("layout.py", "terms.py", "inline_math.py")}
+    files = {Path(__file__).with_name(f) for f in ("layout.py", "terms.py", "inline_math.py", "friction_scaling.py")}
     for t in terms:
         for fn in (t.force, t.update):
             src = inspect.getsourcefile(fn.py_func)

@@ -17,6 +17,7 @@ from types import ModuleType
 import numpy as np
 
 from ..errors import SuspInputError
+from .friction_scaling import velocity_scaling_array
 from .kernel import load_kernel
 from .layout import (DAMPER_GRID, N_GRID, N_U, OUTPUT_LABELS, P_GRID, P_H_EMPTY, P_H_HARD,
                      P_H_INTACT, P_H_SOFT, P_INDEX, P_SEMI_ACTIVE, P_VALVE_TAU, S_INDEX, U_INDEX,
@@ -42,9 +43,13 @@ def _extrap_interp(x: np.ndarray, xp: Sequence[float] | np.ndarray, fp: Sequence
 
 
 def velocity_scaling(vp: VehicleParams, v_abs: np.ndarray) -> np.ndarray:
-    """s_v(|v|) of the damper friction (model-spec 1): 1 at the reference speed, rising to a plateau."""
-    sv = 1.0 + (vp.sv_plateau - 1.0) * (1.0 - np.exp(-(np.abs(v_abs) - vp.sv_reference) / vp.sv_speed))
-    return np.maximum(sv, 1.0)
+    """s_v(|v|) [-] of the damper friction (model-spec 1) at the damper velocities ``v_abs`` [m/s] (any
+    shape; their magnitude counts): 1 up to the reference speed, rising to a plateau. The kernel's
+    formula, :func:`~.friction_scaling.velocity_scaling_factor`."""
+    v = np.asarray(v_abs, float)
+    sv = velocity_scaling_array(np.ascontiguousarray(v.ravel()), float(vp.sv_reference), float(vp.sv_plateau),
+                                1.0 / float(vp.sv_speed))
+    return sv.reshape(v.shape)
 
 
 def hydraulic_curves(vp: VehicleParams) -> tuple[np.ndarray, np.ndarray]:

@@ -19,7 +19,7 @@ class SemiActiveDiagnostics:
     """Semi-active damper and ride values of the model status on ``/diagnostics`` (issue 15): the damper
     mode and command, command-to-force latency (from a command's DDS source timestamp to the publication of the first
     ``/sim`` sample computed with it, wall clock; the valve lag comes on top) and the running ride
-    metrics (:class:`~susp_sim_ros.analysis.ride.RideMonitor`) over the published samples. Samples are
+    metrics (:class:`~susp_sim_ros.control.ride_metrics.RideMonitor`) over the published samples. Samples are
     only queued on the publishing path; the metrics are computed when the diagnostics are built."""
 
     def __init__(self, model: Model, period_ns: int):
@@ -63,9 +63,9 @@ class SemiActiveDiagnostics:
                   "command_latency_p99_ms": f"{np.percentile(lat, 99):.3f}" if lat.size else "",
                   "command_latency_max_ms": f"{lat.max():.3f}" if lat.size else "",
                   "commands_applied": int(lat.size),
-                  "comfort_wk_rms_m_s2": f"{v['comfort_wk_rms_m_s2']:.6f}",
-                  **{f"dynamic_tyre_load_rms_rel_{w}": f"{x:.6f}" for w, x in v["dynamic_tyre_load_rms_rel"].items()},
-                  **{f"suspension_travel_rms_m_{w}": f"{x:.6f}" for w, x in v["suspension_travel_rms_m"].items()},
-                  **{f"stop_contacts_{w}": x for w, x in v["stop_contacts"].items()},
-                  "ride_samples": v["samples"]}
+                  "comfort_wk_rms_m_s2": f"{v.comfort_wk_rms_m_s2:.6f}",
+                  **{f"dynamic_tyre_load_rms_rel_{w}": f"{x:.6f}" for w, x in v.dynamic_tyre_load_rms_rel.items()},
+                  **{f"suspension_travel_rms_m_{w}": f"{x:.6f}" for w, x in v.suspension_travel_rms_m.items()},
+                  **{f"stop_contacts_{w}": x for w, x in v.stop_contacts.items()},
+                  "ride_samples": v.samples}
         return values

@@ -78,10 +78,6 @@ class LockstepRun:
         return self.response.values
 
     @property
-    def outputs(self) -> np.ndarray:
-        return self.response.values
-
-    @property
     def labels(self) -> tuple[str, ...]:
         return self.response.labels
 

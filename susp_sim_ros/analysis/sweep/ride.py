@@ -113,16 +113,17 @@ def ride_task(data: Mapping, run_id: int, run: Mapping) -> dict:
                 model = _cache[("ride_model", run["variant"])] = Model(DEFAULT_VEHICLE, run["variant"])
         oil = tuple(float(x) for x in run["oil"].split(","))
         spec = RideSpec(run["road_class"], data["speed_kmh"] / 3.6, data["duration_s"], data["seed"])
-        m = run_ride(model, spec, controller=run["controller"], oil=oil, step_s=data["step_s"])
-        dtl = m["dynamic_tyre_load_rms_rel"]
-        row.update({"comfort_wk_rms_m_s2": m["comfort_wk_rms_m_s2"],
+        r = run_ride(model, spec, controller=run["controller"], oil=oil, step_s=data["step_s"])
+        m = r.metrics
+        dtl = m.dynamic_tyre_load_rms_rel
+        row.update({"comfort_wk_rms_m_s2": m.comfort_wk_rms_m_s2,
                     "dynamic_tyre_load_rms_rel_mean": float(np.mean(list(dtl.values()))),
                     **{f"dynamic_tyre_load_rms_rel_{w}": dtl[w] for w in WHEELS},
-                    **{f"suspension_travel_rms_m_{w}": m["suspension_travel_rms_m"][w] for w in WHEELS},
-                    "stop_contacts": int(sum(m["stop_contacts"].values())),
-                    "pitch_acceleration_rms_rad_s2": m["pitch_acceleration_rms_rad_s2"],
-                    "roll_acceleration_rms_rad_s2": m["roll_acceleration_rms_rad_s2"],
-                    "mean_command": float(np.mean(list(m["mean_command"].values()))) if m["mean_command"] else ""})
+                    **{f"suspension_travel_rms_m_{w}": m.suspension_travel_rms_m[w] for w in WHEELS},
+                    "stop_contacts": int(sum(m.stop_contacts.values())),
+                    "pitch_acceleration_rms_rad_s2": m.pitch_acceleration_rms_rad_s2,
+                    "roll_acceleration_rms_rad_s2": m.roll_acceleration_rms_rad_s2,
+                    "mean_command": float(np.mean(list(r.mean_command.values()))) if r.mean_command else ""})
     except (SuspInputError, ValueError, RuntimeError) as exc:
         row["error"] = f"{type(exc).__name__}: {exc}"
     return row
