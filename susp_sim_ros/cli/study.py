@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from ..analysis.sweep import drives_study, load_study, make_executor, run_study
 from ..errors import SuspInputError
+from ..model.paper import VARIANTS
 
 
 def add_arguments(p) -> None:
@@ -20,7 +21,7 @@ def add_arguments(p) -> None:
     p.add_argument("--drives", metavar="DIR", help="batch validation over every *.mcap in DIR instead")
     p.add_argument("--diagnose", action="store_true",
                    help="with --drives: also run the discrepancy finder on each drive (against the first variant)")
-    p.add_argument("--variants", default="full,no_horizontal,no_velocity,dahl_only",
+    p.add_argument("--variants", default=",".join(VARIANTS),
                    help="friction variants of --drives (comma-separated)")
     p.add_argument("--out", required=True, metavar="DIR", help="result directory (table, plots, chunks)")
     p.add_argument("--scheduler", default="local",

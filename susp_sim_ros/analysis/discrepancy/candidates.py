@@ -50,6 +50,10 @@ class CandParam:
     step: float
     meaning: str = ""
     prior_sd: float | None = None  # a normal prior around ``neutral`` (calibration parameters only)
+    #: the lowest value the physics the term stands for can take (None: ``lower``). The fit may go below
+    #: it (a term then stands in for a weaker model element), but a term there is no rival physical
+    #: explanation of a calibration value (finder: calibration against physics)
+    physical_lower: float | None = None
 
 
 @dataclass(frozen=True)
@@ -94,6 +98,16 @@ class Candidate:
 
     def neutral(self) -> np.ndarray:
         return np.array([p.neutral for p in self.params], float)
+
+    def physical(self, x: np.ndarray) -> bool:
+        """Whether the term's effect at the parameter values ``x`` is one the physics it stands for can
+        have: its dominant parameter (furthest from neutral, in steps) respects its
+        :attr:`CandParam.physical_lower` (a small value of the other axle's may sit on either side)."""
+        if not self.params:
+            return True
+        k = int(np.argmax([abs(x[j] - p.neutral) / p.step for j, p in enumerate(self.params)]))
+        p = self.params[k]
+        return bool(x[k] >= (p.lower if p.physical_lower is None else p.physical_lower))
 
     def effect_in_interval(self, lo: np.ndarray, hi: np.ndarray) -> bool:
         """Whether the 95 % intervals ``[lo, hi]`` of the parameters all hold "no effect" (every
@@ -305,8 +319,12 @@ LIBRARY: tuple[Candidate, ...] = (
               term_params=_gas_params),
     Candidate("extra_viscous_damping", PHYSICS,
               "additional linear damping c*v in parallel with the damper (bushings, residual oil)",
-              (CandParam("c_front", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, front"),
-               CandParam("c_rear", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, rear")),
+              # a passive element in parallel adds damping, never removes it: c >= 0 as physics (the fit may
+              # go below, standing in for a damper weaker than its curve, which the calibration then owns)
+              (CandParam("c_front", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, front",
+                         physical_lower=0.0),
+               CandParam("c_rear", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, rear",
+                         physical_lower=0.0)),
               _term_axles("extra_viscous_damping", "c"), ("front", "rear"), "any drive with body motion",
               "any", "susp_sim_ros.model.extra_terms", term_params=_viscous_params),
     Candidate("mass_error", PARAMETER, "sprung mass differs from the parameter set (loading, tolerance)",

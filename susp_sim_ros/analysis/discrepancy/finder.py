@@ -296,12 +296,14 @@ class DiscrepancyFinder:
         wrong value; the drives cannot say which.
         Listed in ``not_identifiable`` with ``competes_with`` and ``reveal_with``, never dropped in silence
         (a stronger oil-empty damper and extra damping of the one rear-empty car). Terms in ``final`` or
-        already ``listed`` are skipped."""
+        already ``listed``, and terms fitted where their physics cannot be (:meth:`Candidate.physical`:
+        negative extra damping is a weaker damper, the calibration's business), are skipped."""
         out: list[dict] = []
         seen = set(final.structure.names) | {c["name"] for c in listed}
         for before, o, f, checks in sorted(self.refused_, key=lambda t: t[2].bic):
             name = o.add[0]
-            if name in seen or CALIBRATION not in f.structure.names or f.jac is None:
+            if name in seen or CALIBRATION not in f.structure.names or f.jac is None \
+                    or not BY_NAME[name].physical(f.structure.part(f.x, name)):
                 continue
             seen.add(name)
             st = f.structure
@@ -378,6 +380,8 @@ class DiscrepancyFinder:
         trials.sort(key=lambda t: t[0])
         competing: list[dict] = []
         for crit, name, f in trials:
+            if not BY_NAME[name].physical(f.structure.part(f.x, name)):
+                continue  # no physical rival: the term stands in for a weaker model element
             entry = {"step": len(path), "shift_test": name, "held_at_prior": rivals,
                      "criterion_with_shifts": crit_shift, "criterion_without_shifts": crit_held,
                      "criterion_term_without_shifts": crit}
