@@ -285,6 +285,17 @@ class DiscrepancyFinder:
             return {j: next(iter(rows_of)) for j in cal}
         return {j: s for s, rows in rows_of.items() for j in _informed_only_by(fit, rows) if j in cal}
 
+    @staticmethod
+    def _competing_entry(name: str, rivals: list[str], reveals: Sequence[str], why: str) -> dict:
+        """A ``not_identifiable`` entry of physics term ``name`` competing with the calibration values
+        ``rivals`` (``PARAM:where``): the measurements that pin them (``reveals``, once each), then the
+        term's own maneuver."""
+        cand = BY_NAME[name]
+        reveal = "; ".join(dict.fromkeys(reveals))
+        return {"name": name, "competes_with": rivals,
+                "reveal_with": f"{reveal}; then {cand.reveal_with}" if cand.reveal_with else reveal,
+                "why": f"{cand.meaning} {why}"}
+
     def _refused_competition(self, final: FitResult, listed: list[dict]) -> list[dict]:
         """Terms the drives want clearly (criterion and share of the excess passed) but a later test
         refused (held-out drives, stability, recalibration), whose parameters move together with a
@@ -323,21 +334,19 @@ class DiscrepancyFinder:
                              and abs(shift[j]) >= SHIFT_SD * self.informed_[j - a].sd), reverse=True)
             if not rivals:
                 continue
-            cand = BY_NAME[name]
             params = [self.informed_[j - a] for _, j in rivals]
-            reveal = "; ".join(dict.fromkeys(reveal_for(p, one_state[j]) for p, (_, j) in zip(params, rivals)))
             refused = ("held-out drives" if not checks.get("passed", True) else
                        "a recalibration of the ranged vehicle values explaining as much")
-            out.append({
-                "name": name, "competes_with": [f"{p.field}:{p.where}" for p in params],
-                "reveal_with": f"{reveal}; then {cand.reveal_with}" if cand.reveal_with else reveal,
-                "why": f"{cand.meaning} lowers the criterion by {before.bic - f.bic:.0f} and explains "
-                       f"{100 * (before.rss - f.rss) / max(before.rss - before.n, 1e-12):.0f} % of the residual "
-                       f"above noise, but {refused} refused it; "
-                       + ", ".join(f"{p.field}:{p.where} (informed by the {one_state[j]} drives only, posterior "
-                                   f"correlation {r:.2f}; the term's effect is {shift[j] / p.sd:+.1f} prior sd "
-                                   "of it)" for p, (r, j) in zip(params, rivals))
-                       + " moves with it: the drives cannot tell the term from that calibration value"})
+            out.append(self._competing_entry(
+                name, [f"{p.field}:{p.where}" for p in params],
+                [reveal_for(p, one_state[j]) for p, (_, j) in zip(params, rivals)],
+                f"lowers the criterion by {before.bic - f.bic:.0f} and explains "
+                f"{100 * (before.rss - f.rss) / max(before.rss - before.n, 1e-12):.0f} % of the residual above "
+                f"noise, but {refused} refused it; "
+                + ", ".join(f"{p.field}:{p.where} (informed by the {one_state[j]} drives only, posterior "
+                            f"correlation {r:.2f}; the term's effect is {shift[j] / p.sd:+.1f} prior sd of it)"
+                            for p, (r, j) in zip(params, rivals))
+                + " moves with it: the drives cannot tell the term from that calibration value"))
         return out
 
     def _shift_competition(self, ev: Evaluator, cur: FitResult, testable: list[str], path: list,
@@ -352,8 +361,8 @@ class DiscrepancyFinder:
         worse leaves the shifts standing; any other competes with them: it is listed in
         ``not_identifiable`` with ``competes_with`` (the shifted values, ``PARAM:where``) and
         ``reveal_with`` (the rig test of each value, then the term's own maneuver), never absorbed
-        silently. Returns the (possibly extended)
-        fit and the competing entries; the decision is recorded in ``path``."""
+        silently. Returns the (possibly extended) fit and the competing entries; the decision is
+        recorded in ``path``."""
         shifts = self._one_state_shifts(cur)
         self.shifts_ = [{"param": f"{p.field}:{p.where}", "state": s, "value": float(cur.x[j]),
                          "prior": p.prior, "shift_in_prior_sd": z} for j, p, s, z in shifts]
@@ -370,7 +379,8 @@ class DiscrepancyFinder:
         held = fit_structure(ev, cur.structure, x0, allidx, max_nfev=TRIAL_NFEV, fixed=idx)
         crit_shift, crit_held = cur.bic + pen, held.bic - len(idx) * lne
         rivals = sorted({f"{p.field}:{p.where}" for _, p, *_ in shifts})
-        reveal = "; ".join(dict.fromkeys(reveal_for(p, s) for _, p, s, _ in shifts))
+        reveals = [reveal_for(p, s) for _, p, s, _ in shifts]
+        moved = ", ".join(f"{d['param']} {d['value']:.3g} (prior {d['prior']:.3g})" for d in self.shifts_)
         trials = []
         for name in cands:
             st = cur.structure.with_(name)
@@ -382,11 +392,11 @@ class DiscrepancyFinder:
         for crit, name, f in trials:
             if not BY_NAME[name].physical(f.structure.part(f.x, name)):
                 continue  # no physical rival: the term stands in for a weaker model element
+            if crit_held - crit < MIN_DELTA_BIC or crit > crit_shift + MIN_DELTA_BIC:
+                continue  # the term does not do what the shifts do, or the shifts explain clearly more
             entry = {"step": len(path), "shift_test": name, "held_at_prior": rivals,
                      "criterion_with_shifts": crit_shift, "criterion_without_shifts": crit_held,
                      "criterion_term_without_shifts": crit}
-            if crit_held - crit < MIN_DELTA_BIC or crit > crit_shift + MIN_DELTA_BIC:
-                continue  # the term does not do what the shifts do, or the shifts explain clearly more
             # better on equal terms but failing on held-out drives, or within the margin: undecided
             checks = self._heldout_check(ev, cur, f) if crit <= crit_shift - MIN_DELTA_BIC else {}
             entry.update(checks)
@@ -401,13 +411,9 @@ class DiscrepancyFinder:
                 return f, []  # the final joint polish frees the held values again
             path.append({**entry, "accepted": False,
                          "why": "explains the drives as well as the calibration shifts: not identifiable"})
-            cand = BY_NAME[name]
-            moved = ", ".join(f"{d['param']} {d['value']:.3g} (prior {d['prior']:.3g})" for d in self.shifts_)
-            competing.append({
-                "name": name, "competes_with": rivals,
-                "reveal_with": f"{reveal}; then {cand.reveal_with}" if cand.reveal_with else reveal,
-                "why": f"{cand.meaning} explains the drives as well as the calibration moving {moved} beyond "
-                       "one prior sd on the drives of one vehicle state only: the drives cannot tell them apart"})
+            competing.append(self._competing_entry(
+                name, rivals, reveals, f"explains the drives as well as the calibration moving {moved} beyond "
+                "one prior sd on the drives of one vehicle state only: the drives cannot tell them apart"))
         return cur, competing
 
     def _finish(self, ev: Evaluator, cur: FitResult) -> None:
