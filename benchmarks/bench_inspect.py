@@ -35,7 +35,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from susp_sim_ros.analysis import synthetic  # noqa: E402
 from susp_sim_ros.analysis.inspection import inspect_drives  # noqa: E402
+from susp_sim_ros.model.maneuvers import STATES, vehicle_state  # noqa: E402
 from truth_generators import independent_sim as ind  # noqa: E402
 
 PERTURB = 0.10
@@ -67,8 +69,6 @@ def truth_drive(k: int, out: Path, own: bool = False) -> tuple[Path, tuple]:
     height = float(rng.uniform(0.04, 0.08))
     path = out / f"truth_{k:03d}.mcap"
     if own:  # the paper's bump crossing and states only (8 km/h, 6 cm), seeds vary noise and bias
-        from susp_sim_ros.analysis import synthetic
-        from susp_sim_ros.model.maneuvers import STATES, vehicle_state
         state = STATES[k % 3]
         oil = vehicle_state(state)
         drive = synthetic.generate_drive("bump_crossing", state, seed=k)

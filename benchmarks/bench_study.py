@@ -45,11 +45,12 @@ from pathlib import Path
 
 import numba
 import numpy as np
+import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from susp_sim_ros.analysis.sweep import InProcessExecutor, load_study, make_executor, run_study  # noqa: E402
+from susp_sim_ros.analysis.sweep import InProcessExecutor, load_study, make_executor, run_study, study_from_dict  # noqa: E402
 from susp_sim_ros.analysis.sweep import runner, tasks  # noqa: E402
 from susp_sim_ros.analysis.sweep import store as store_mod  # noqa: E402
 from susp_sim_ros.analysis.sweep.runner import plan_tasks  # noqa: E402
@@ -125,8 +126,6 @@ def _variant(path: str, oil_levels: int | None, chunk_size: int | None):
     """The study at ``path``, with ``oil_levels`` per axle and ``chunk_size`` overridden; plots off."""
     spec = load_study(path)
     if oil_levels or chunk_size:
-        import yaml
-        from susp_sim_ros.analysis.sweep import study_from_dict
         raw = yaml.safe_load(Path(path).read_text())
         if oil_levels:
             for k in ("oil_front", "oil_rear"):

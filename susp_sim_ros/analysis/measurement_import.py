@@ -254,57 +254,77 @@ def _ns(t: np.ndarray) -> np.ndarray:
     return np.round(t * 1e9).astype(np.int64)
 
 
+def _resolve_channel_map(mdf, path, channel_map: str | os.PathLike | dict | None) -> tuple[dict, str]:
+    """The channel map to read ``mdf`` with, and how the import notes name it: the CSV column names
+    when none is given, else the map (a file or an already loaded mapping)."""
+    if channel_map is None:
+        return _default_channel_map(set(mdf.channels_db), path), "channel names as the CSV columns"
+    cm = channel_map if isinstance(channel_map, dict) else load_channel_map(channel_map)
+    return cm, Path(channel_map).name if not isinstance(channel_map, dict) else "channel map"
+
+
+def _imu_in_body_axes(mdf, path, cm: dict, conv: list) -> tuple[np.ndarray, np.ndarray, np.ndarray, list, bool]:
+    """The IMU channels in SI units on the gyro_x times, rotated from the sensor's into the body axes:
+    (times [s], gyro [rad/s], specific force [m/s^2], the axes interpolated onto the gyro_x times,
+    whether any accelerometer channel is mapped; a missing axis is 0). Unit conversions go to ``conv``."""
+    axes = {}
+    for ax in _IMU_AXES:
+        if ax in cm["imu"]:
+            axes[ax] = _signal(mdf, path, cm["imu"][ax])
+            conv.append(axes[ax][2])
+    t_imu = axes["gyro_x"][0]
+    resampled = []
+    cols = []
+    for ax in _IMU_AXES:
+        if ax not in axes:
+            cols.append(np.zeros_like(t_imu))
+            continue
+        t, v, _ = axes[ax]
+        if t.shape != t_imu.shape or not np.array_equal(t, t_imu):
+            v = np.interp(t_imu, t, v)
+            resampled.append(ax)
+        cols.append(v)
+    sensor = np.column_stack(cols)
+    rot = cm["imu"]["frame"][0]
+    gyro, accel = sensor[:, :3], sensor[:, 3:]
+    if not np.array_equal(rot, np.eye(3)):
+        gyro, accel = gyro @ np.asarray(rot).T, accel @ np.asarray(rot).T
+    return t_imu, gyro, accel, resampled, "accel_x" in axes
+
+
+def _wheel_heights(mdf, path, cm: dict, conv: list) -> Series | None:
+    """The road height under each wheel [m] (FL, FR, RL, RR) on the first wheel's times, when the map
+    names them; unit conversions go to ``conv``."""
+    if not cm.get("wheel_heights"):
+        return None
+    sigs = [_signal(mdf, path, cm["wheel_heights"][w]) for w in _WHEELS]
+    tw = sigs[0][0]
+    conv += [s[2] for s in sigs]
+    return Series(_ns(tw), np.column_stack([s[1] if np.array_equal(s[0], tw) else np.interp(tw, s[0], s[1])
+                                            for s in sigs]))
+
+
 def mdf_to_drive(path: str | os.PathLike, channel_map: str | os.PathLike | dict | None = None, *,
                  vehicle: str = DEFAULT_VEHICLE, maneuver: str = "", damper_oil_level: str = "1,1,1,1",
                  source: str = "measured", notes: str = ""):
-    """A :class:`~susp_sim_ros.io.drive.TestDrive` from an ASAM MDF4 file (nothing written)."""
+    """A :class:`~susp_sim_ros.io.drive.TestDrive` from an ASAM MDF4 file (nothing written); the
+    conversions (units, IMU frame) are recorded in its metadata."""
     parse_oil(damper_oil_level, "damper_oil_level")
     mdf = _open_mdf(path)
     try:
-        if channel_map is None:
-            cm = _default_channel_map(set(mdf.channels_db), path)
-            map_name = "channel names as the CSV columns"
-        else:
-            cm = channel_map if isinstance(channel_map, dict) else load_channel_map(channel_map)
-            map_name = Path(channel_map).name if not isinstance(channel_map, dict) else "channel map"
-        conv = []
+        cm, map_name = _resolve_channel_map(mdf, path, channel_map)
+        conv: list = []
         ts, vs, d = _signal(mdf, path, cm["speed"])
         conv.append(d)
         tst, vst, d = _signal(mdf, path, cm["steering_wheel_angle"])
         conv.append(d)
-        axes = {}
-        for ax in _IMU_AXES:
-            if ax in cm["imu"]:
-                axes[ax] = _signal(mdf, path, cm["imu"][ax])
-                conv.append(axes[ax][2])
-        t_imu = axes["gyro_x"][0]
-        resampled = []
-        cols = []
-        for ax in _IMU_AXES:
-            if ax not in axes:
-                cols.append(np.zeros_like(t_imu))
-                continue
-            t, v, _ = axes[ax]
-            if t.shape != t_imu.shape or not np.array_equal(t, t_imu):
-                v = np.interp(t_imu, t, v)
-                resampled.append(ax)
-            cols.append(v)
-        sensor = np.column_stack(cols)
-        rot, frame = cm["imu"]["frame"]
-        gyro, accel = sensor[:, :3], sensor[:, 3:]
-        if not np.array_equal(rot, np.eye(3)):
-            gyro, accel = gyro @ np.asarray(rot).T, accel @ np.asarray(rot).T
-        wh = None
-        if cm.get("wheel_heights"):
-            sigs = [_signal(mdf, path, cm["wheel_heights"][w]) for w in _WHEELS]
-            tw = sigs[0][0]
-            wh = Series(_ns(tw), np.column_stack([s[1] if np.array_equal(s[0], tw) else np.interp(tw, s[0], s[1])
-                                                  for s in sigs]))
-            conv += [s[2] for s in sigs]
+        t_imu, gyro, accel, resampled, has_accel = _imu_in_body_axes(mdf, path, cm, conv)
+        wh = _wheel_heights(mdf, path, cm, conv)
     finally:
         mdf.close()
+    rot, frame = cm["imu"]["frame"]
     note_parts = [f"imported from {Path(path).name} (ASAM MDF4, {map_name})"]
-    if "accel_x" not in axes:
+    if not has_accel:
         note_parts.append("no accelerometer channels: linear_acceleration written as 0")
     if resampled:
         note_parts.append(f"IMU channels {', '.join(resampled)} interpolated onto the gyro_x times")

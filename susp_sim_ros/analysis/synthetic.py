@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -166,37 +167,33 @@ def _lowpass(y: np.ndarray, dt: float, f_c: float) -> np.ndarray:
     return out
 
 
-def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
-                   hidden: HiddenPhysics | None = None, imu: ImuSpec | None = None,
-                   t0_ns: int = 1_000_000_000):
-    """One synthetic test drive (:class:`~susp_sim_ros.io.drive.TestDrive`) of a paper maneuver
-    (``bump_crossing``/``sine_steer``) in a vehicle state (``intact``/``front_empty``/``rear_empty``).
-
-    The random stream of a drive depends on ``seed``, the maneuver and the state only, so every drive
-    is reproducible on its own.
-    """
-    hidden = hidden or HiddenPhysics.reference()
-    imu = imu or ImuSpec.reference()
-
-    if maneuver not in MANEUVERS or state not in STATES:
-        raise ValueError(f"maneuver must be one of {MANEUVERS} and state one of {STATES}, got "
-                         f"{maneuver!r}, {state!r}")
-    rng = np.random.Generator(np.random.PCG64(
+def _drive_rng(seed: int, maneuver: str, state: str) -> np.random.Generator:
+    """The drive's own random stream: it depends on ``seed``, the maneuver and the state only."""
+    return np.random.Generator(np.random.PCG64(
         np.random.SeedSequence([int(seed), MANEUVERS.index(maneuver), STATES.index(state)])))
-    model = Model(synthetic_vehicle(hidden), synthetic_variant(hidden))
-    man = paper_maneuver(maneuver, model.vehicle.wheelbase)
-    oil = vehicle_state(state)
+
+
+def _sensed_truth(model: Model, man, oil: Sequence[float], hidden: HiddenPhysics,
+                  imu: ImuSpec, label: str) -> tuple[np.ndarray, np.ndarray]:
+    """The reference simulation's IMU outputs as the sensor sees them: (t [s] from rest at 0, the six
+    IMU signals (rad/s, m/s^2) after the sensor's bandwidth), one row per simulation step plus rest."""
     dt = hidden.step_s
     res = simulate(model, man.to_inputs(dt), dt=dt, road=man.road, oil=oil,
                    outputs=list(IMU_OUTPUTS))
     if not res.ok:
-        raise RuntimeError(f"synthetic {maneuver}/{state}: the reference simulation diverged")
+        raise RuntimeError(f"synthetic {label}: the reference simulation diverged")
     # truth at t = 0 (rest) and after every step; the IMU sees it through its bandwidth
     t_true = np.concatenate([[0.0], res.t])
     y_true = np.vstack([np.array([[0.0, 0.0, 0.0, 0.0, 0.0, model.vehicle.gravity]]), res.y])
-    y_sensor = _lowpass(y_true, dt, imu.bandwidth_hz)
-    # IMU sample times: 200 Hz with jitter, strictly inside the simulated span
-    n_imu = int(math.floor(man.duration * imu.rate_hz))
+    return t_true, _lowpass(y_true, dt, imu.bandwidth_hz)
+
+
+def _imu_samples(t_true: np.ndarray, y_sensor: np.ndarray, duration_s: float, imu: ImuSpec,
+                 rng: np.random.Generator, t0_ns: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The recorded IMU: (sample times [ns], gyro [rad/s], accel [m/s^2], this drive's gyro bias
+    [rad/s]) at the IMU rate with jitter, strictly inside the simulated span, with bias and noise.
+    Draws from ``rng`` in a fixed order (jitter, gyro bias, accel bias, gyro noise, accel noise)."""
+    n_imu = int(math.floor(duration_s * imu.rate_hz))
     t_imu: np.ndarray = np.arange(1, n_imu + 1) / imu.rate_hz + rng.normal(0.0, imu.jitter_s, n_imu)
     t_imu = np.clip(t_imu, 0.0, t_true[-1])
     t_imu_ns = t0_ns + np.round(t_imu * 1e9).astype(np.int64)
@@ -207,16 +204,25 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
     accel_bias = rng.normal(0.0, imu.accel_bias_m_s2, 3)
     gyro = meas[:, :3] + gyro_bias + np.radians(rng.normal(0.0, imu.gyro_noise_deg_s, (n_imu, 3)))
     accel = meas[:, 3:] + accel_bias + rng.normal(0.0, imu.accel_noise_m_s2, (n_imu, 3))
-    # recorded inputs at the input rate from t0; steering-angle sensor resolution
+    return t_imu_ns, gyro, accel, gyro_bias
+
+
+def _recorded_inputs(man, imu: ImuSpec, t0_ns: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The recorded inputs at the input rate from ``t0_ns``: (times [ns], speed [m/s], steering-wheel
+    angle [rad] at the steering-angle sensor's resolution)."""
     n_in = int(round(man.duration * imu.input_rate_hz)) + 1
     k = np.arange(n_in)
     t_in = k / imu.input_rate_hz
     t_in_ns = t0_ns + np.round(k * (1e9 / imu.input_rate_hz)).astype(np.int64)
     res_rad = math.radians(imu.steering_resolution_deg)
     steer = np.round(man.steering(t_in) / res_rad) * res_rad
-    speed = man.speed_at(t_in)
-    fe, re_ = hidden.amplitude_extra
-    meta = {
+    return t_in_ns, man.speed_at(t_in), steer
+
+
+def _drive_metadata(maneuver: str, state: str, oil: Sequence[float], seed: int, hidden: HiddenPhysics,
+                    imu: ImuSpec, gyro_bias: np.ndarray) -> dict[str, str]:
+    """The drive's ``test_drive`` metadata: what it is, how it was made and what the IMU adds."""
+    return {
         "vehicle": DEFAULT_VEHICLE,
         "maneuver": MANEUVER_LABEL[maneuver],
         "damper_oil_level": ",".join(f"{x:g}" for x in oil),
@@ -236,6 +242,31 @@ def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
                   f"{int(seed)}) from the passat_b8_like model with the full friction model plus hidden "
                   f"physics the default model lacks: {hidden.describe()}"),
     }
+
+
+def generate_drive(maneuver: str, state: str, *, seed: int = DEFAULT_SEED,
+                   hidden: HiddenPhysics | None = None, imu: ImuSpec | None = None,
+                   t0_ns: int = 1_000_000_000):
+    """One synthetic test drive (:class:`~susp_sim_ros.io.drive.TestDrive`) of a paper maneuver
+    (``bump_crossing``/``sine_steer``) in a vehicle state (``intact``/``front_empty``/``rear_empty``).
+
+    The random stream of a drive depends on ``seed``, the maneuver and the state only, so every drive
+    is reproducible on its own.
+    """
+    hidden = hidden or HiddenPhysics.reference()
+    imu = imu or ImuSpec.reference()
+
+    if maneuver not in MANEUVERS or state not in STATES:
+        raise ValueError(f"maneuver must be one of {MANEUVERS} and state one of {STATES}, got "
+                         f"{maneuver!r}, {state!r}")
+    rng = _drive_rng(seed, maneuver, state)
+    model = Model(synthetic_vehicle(hidden), synthetic_variant(hidden))
+    man = paper_maneuver(maneuver, model.vehicle.wheelbase)
+    oil = vehicle_state(state)
+    t_true, y_sensor = _sensed_truth(model, man, oil, hidden, imu, f"{maneuver}/{state}")
+    t_imu_ns, gyro, accel, gyro_bias = _imu_samples(t_true, y_sensor, man.duration, imu, rng, t0_ns)
+    t_in_ns, speed, steer = _recorded_inputs(man, imu, t0_ns)
+    meta = _drive_metadata(maneuver, state, oil, seed, hidden, imu, gyro_bias)
     return TestDrive(meta, Series(t_in_ns, speed), Series(t_in_ns.copy(), steer),
                      man.road if len(man.road) >= 2 else None, None,
                      ImuSeries(t_imu_ns, gyro, accel), {})

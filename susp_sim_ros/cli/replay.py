@@ -250,9 +250,37 @@ def _play_once(player: _Player, progress, handshake) -> int:
     return played
 
 
-def run(args) -> dict:
-    rec, play, msgs = plan(args)
+def _publishers(node, rec, play, clock_type: type, with_clock: bool) -> tuple[dict, Any]:
+    """A publisher per topic to play, with the QoS the node subscribes with (transient-local for a
+    latched topic such as the road profile), and the ``/clock`` publisher (None without)."""
+    # function-level: ros.qos imports rclpy; `susp --help` and `--dry-run` must not (optional ROS dependency)
+    from ..ros.qos import INPUT_QOS, LATCHED_QOS  # the profiles the node subscribes with
+
     topics = rec.topics()
+    pubs = {}
+    for topic in sorted(play):
+        qos = LATCHED_QOS if rec.latched(topic) else INPUT_QOS
+        pubs[topic] = node.create_publisher(_msg_class(topics[topic], topic), topic, qos)
+    clock_pub = node.create_publisher(clock_type, "/clock", 100) if with_clock else None
+    return pubs, clock_pub
+
+
+def _await_subscribers(everything: list, wait_s: float) -> tuple[float, bool]:
+    """Wait up to ``wait_s`` [s] until every publisher has a subscriber, so nothing early is lost to
+    discovery; returns (the deadline on the monotonic clock [s], whether any subscriber matched)."""
+    deadline = time.monotonic() + wait_s
+    while time.monotonic() < deadline and not all(p.get_subscription_count() for p in everything):
+        time.sleep(0.02)
+    handshake = any(p.get_subscription_count() for p in everything)
+    if handshake:
+        time.sleep(0.2)  # matched: give the subscribers' side of discovery a moment
+    return deadline, handshake
+
+
+def run(args) -> dict:
+    """Play the recording onto its topics (with ``/clock``), in real time times ``--rate``; with
+    ``--dry-run`` only say what would be played (no rclpy)."""
+    rec, play, msgs = plan(args)
     t0, t1 = msgs[0].log_time_ns, msgs[-1].log_time_ns
     if args.dry_run:
         return _dry_run(args, rec, play, msgs)
@@ -261,24 +289,11 @@ def run(args) -> dict:
     from rclpy.executors import ExternalShutdownException
     from rosgraph_msgs.msg import Clock
 
-    # function-level: ros.qos imports rclpy; `susp --help` and `--dry-run` must not (optional ROS dependency)
-    from ..ros.qos import INPUT_QOS, LATCHED_QOS  # the profiles the node subscribes with
-
     rclpy.init(args=["--ros-args"])
     node = rclpy.create_node("susp_replay")
-    pubs = {}
-    for topic in sorted(play):
-        qos = LATCHED_QOS if rec.latched(topic) else INPUT_QOS
-        pubs[topic] = node.create_publisher(_msg_class(topics[topic], topic), topic, qos)
-    clock_pub = None if args.no_clock else node.create_publisher(Clock, "/clock", 100)
-    # wait until every topic (and /clock) has a subscriber, so nothing early is lost to discovery
+    pubs, clock_pub = _publishers(node, rec, play, Clock, with_clock=not args.no_clock)
     everything = list(pubs.values()) + ([clock_pub] if clock_pub is not None else [])
-    deadline = time.monotonic() + args.wait_subscribers
-    while time.monotonic() < deadline and not all(p.get_subscription_count() for p in everything):
-        time.sleep(0.02)
-    handshake = any(p.get_subscription_count() for p in everything)
-    if handshake:
-        time.sleep(0.2)  # matched: give the subscribers' side of discovery a moment
+    deadline, handshake = _await_subscribers(everything, args.wait_subscribers)
     progress = None
     if not args.no_progress:
         progress = make_progress(total=round((t1 - t0) * 1e-9, 2), unit="s", desc="replay",

@@ -22,7 +22,7 @@ from ..io.topic_map import add_topic_map_argument
 from ..runtime.lockstep import maneuver_drive, run_lockstep
 from ..model import Model
 from ..model.maneuvers import STATES, paper_maneuver, vehicle_state
-from ..model.paper import DEFAULT_MANEUVER, MANEUVER_CHOICES, maneuver_kind
+from ..model.paper import DEFAULT_MANEUVER, INTACT, MANEUVER_CHOICES, maneuver_kind
 from ..runtime.sim_core import DivergenceError
 from ..model.params import DEFAULT_VEHICLE
 
@@ -34,7 +34,7 @@ def add_arguments(p) -> None:
     p.add_argument("--drive", metavar="X.MCAP", help="recorded test drive to run in lockstep (MCAP file, rosbag2 "
                    "directory or .db3 file)")
     p.add_argument("--state", choices=STATES, default=None,
-                   help="vehicle state (damper oil levels); default: intact for a maneuver, the drive's "
+                   help=f"vehicle state (damper oil levels); default: {INTACT} for a maneuver, the drive's "
                         "damper_oil_level metadata for --drive")
     p.add_argument("--oil", metavar="FL,FR,RL,RR", help="damper oil levels, overrides --state")
     p.add_argument("--variant", default="full", help="friction variant name or YAML path")
@@ -68,7 +68,7 @@ def run(args) -> dict:
     elif args.state:
         oil, state = vehicle_state(args.state), args.state
     else:
-        oil, state = None, ("from_metadata" if args.drive else "intact")
+        oil, state = None, ("from_metadata" if args.drive else INTACT)
     if not (np.isfinite(args.step) and 0 < args.step <= 0.01):
         raise SuspInputError(f"--step: expected a step in (0, 0.01] s, got {args.step}")
     if args.drive:
@@ -76,7 +76,7 @@ def run(args) -> dict:
         name = drive.metadata.get("maneuver", "") or str(args.drive)
     else:
         man = paper_maneuver(args.maneuver or DEFAULT_MANEUVER, model.vehicle.wheelbase)
-        oil = oil if oil is not None else vehicle_state("intact")
+        oil = oil if oil is not None else vehicle_state(INTACT)
         drive = maneuver_drive(man, oil, rate_hz=1.0 / args.step, vehicle=model.vehicle.name)
         name = man.name
     res = run_lockstep(drive, vehicle=args.config, variant=args.variant, oil=oil, step_s=args.step,
@@ -123,7 +123,7 @@ def run_ride_cli(args) -> dict:
     if args.oil:
         oil, state = parse_oil(args.oil, "--oil"), "custom"
     else:
-        state = args.state or "intact"
+        state = args.state or INTACT
         oil = vehicle_state(state)
     spec = RideSpec(cls, args.speed / 3.6, args.duration, args.seed)
     res = run_ride(model, spec, controller=args.controller, oil=oil, step_s=args.step)

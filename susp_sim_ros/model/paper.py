@@ -118,7 +118,9 @@ def classify_maneuver(text: str | None) -> str | None:
     return None
 
 
-STATES = ("intact", "front_empty", "rear_empty")
+#: the paper's vehicle states (``config/maneuvers.yaml`` ``states``: the oil levels of each,
+#: :func:`~susp_sim_ros.model.maneuvers.vehicle_state`); code that means one of them names its constant
+STATES = (INTACT, FRONT_EMPTY, REAR_EMPTY) = ("intact", "front_empty", "rear_empty")
 VARIANTS = ("full", "no_horizontal", "no_velocity", "dahl_only")
 #: the paper's name of each variant (Table 5: models 1 to 4)
 VARIANT_LABEL = {"full": "Model 1 full", "no_horizontal": "Model 2 no horizontal",

@@ -122,44 +122,45 @@ class Model:
         ``semi_active``: the damper follows the valve command input (``U[:, CMD]``, [0, 1] per corner)
         through the soft/hard curves of :attr:`dampers` and the valve lag; otherwise (default) the
         passive curve, and the semi-active block of ``P`` stays zero (the passive vector is unchanged)."""
-        vp, var = self.vehicle, self.variant
         oil = check_oil(oil)
         P = np.zeros(self.layout.n_p)
+        self._put_body(P)
+        self._put_corners(P, oil)
+        self._put_damper_curves(P)
+        self._put_friction_terms(P)
+        if semi_active:
+            set_semi_active(self, P, True)
+        return P
 
-        def put(name, value):
+    def _put_body(self, P: np.ndarray) -> None:
+        """The whole-car slots of ``P`` (SI units as the vehicle file gives them): gravity, masses and
+        inertias, geometry, tyre and stop rates, drive and brake shares, the variant's scaling switches
+        and the velocity scaling's constants."""
+        vp, var = self.vehicle, self.variant
+        for name, value in (
+                ("G", vp.gravity), ("M_S", vp.sprung_mass), ("M_TOT", vp.total_mass),
+                ("IXX", vp.roll_inertia), ("IYY", vp.pitch_inertia), ("IZZ", vp.yaw_inertia),
+                ("A", vp.a), ("B", vp.b), ("H_CG", vp.cg_height),
+                ("H_RC", 0.5 * sum(vp.roll_centre_height)), ("H_PC", vp.pitch_centre_height),
+                ("STEER_RATIO", vp.steering_ratio), ("MU", vp.mu), ("RELAX_LEN", vp.relaxation_length),
+                ("V_FADE", vp.slip_fade_speed), ("KT", vp.tyre_stiffness), ("CT", vp.tyre_damping),
+                ("K_STOP", vp.stop_rate), ("STOP_EP", vp.stop_progression),
+                ("DRIVE_FRONT", vp.drive_front_share), ("BRAKE_FRONT", vp.brake_front_share),
+                ("USE_V", float(var.velocity_scaling)), ("USE_OIL", float(var.oil_scaling)),
+                ("USE_H", float(var.horizontal_scaling)),
+                ("SV_REF", vp.sv_reference), ("SV_INF", vp.sv_plateau), ("SV_VS", vp.sv_speed)):
             P[P_INDEX[name]] = value
+
+    def _put_corners(self, P: np.ndarray, oil: np.ndarray) -> None:
+        """The per-corner slots of ``P`` (FL, FR, RL, RR): wheel positions [m], per-axle values spread
+        to their corners, static wheel loads [N], the oil levels ``oil`` [-] and the friction scalings'
+        oil-empty ratio and horizontal-force coefficients."""
+        vp = self.vehicle
 
         def corners(name, pair):
             k = P_INDEX[name]
             P[k:k + 4] = [pair[a] for a in CORNER_AXLE]
 
-        put("G", vp.gravity)
-        put("M_S", vp.sprung_mass)
-        put("M_TOT", vp.total_mass)
-        put("IXX", vp.roll_inertia)
-        put("IYY", vp.pitch_inertia)
-        put("IZZ", vp.yaw_inertia)
-        put("A", vp.a)
-        put("B", vp.b)
-        put("H_CG", vp.cg_height)
-        put("H_RC", 0.5 * sum(vp.roll_centre_height))
-        put("H_PC", vp.pitch_centre_height)
-        put("STEER_RATIO", vp.steering_ratio)
-        put("MU", vp.mu)
-        put("RELAX_LEN", vp.relaxation_length)
-        put("V_FADE", vp.slip_fade_speed)
-        put("KT", vp.tyre_stiffness)
-        put("CT", vp.tyre_damping)
-        put("K_STOP", vp.stop_rate)
-        put("STOP_EP", vp.stop_progression)
-        put("DRIVE_FRONT", vp.drive_front_share)
-        put("BRAKE_FRONT", vp.brake_front_share)
-        put("USE_V", float(var.velocity_scaling))
-        put("USE_OIL", float(var.oil_scaling))
-        put("USE_H", float(var.horizontal_scaling))
-        put("SV_REF", vp.sv_reference)
-        put("SV_INF", vp.sv_plateau)
-        put("SV_VS", vp.sv_speed)
         P[P_INDEX["X_I"]:P_INDEX["X_I"] + 4] = [vp.a, vp.a, -vp.b, -vp.b]
         tf, tr = vp.track
         P[P_INDEX["Y_I"]:P_INDEX["Y_I"] + 4] = [tf / 2, -tf / 2, tr / 2, -tr / 2]
@@ -177,21 +178,26 @@ class Model:
                                                            vp.damper_friction_intact)))
         corners("SH_X", vp.sh_longitudinal)
         corners("SH_Y", vp.sh_lateral)
+
+    def _put_damper_curves(self, P: np.ndarray) -> None:
+        """The passive damper's velocity grid [m/s] and its hydraulic curves [N], intact and oil-empty,
+        per corner (the measured curves less the damper friction, :func:`hydraulic_curves`)."""
         P[P_GRID:P_GRID + N_GRID] = DAMPER_GRID
-        h_int, h_emp = hydraulic_curves(vp)
+        h_int, h_emp = hydraulic_curves(self.vehicle)
         for i, a in enumerate(CORNER_AXLE):
             P[P_H_INTACT + i * N_GRID:P_H_INTACT + (i + 1) * N_GRID] = h_int[a]
             P[P_H_EMPTY + i * N_GRID:P_H_EMPTY + (i + 1) * N_GRID] = h_emp[a]
-        # built-in friction terms, then the variant's extra terms
+
+    def _put_friction_terms(self, P: np.ndarray) -> None:
+        """The physics terms' blocks of ``P``: the built-in axle and damper friction (levels [N], Dahl
+        stiffness [N/m]), then the variant's extra terms."""
+        vp = self.vehicle
         self._put_term(P, AXLE_FRICTION, {"level": _corners(vp.axle_friction),
                                           "sigma": (vp.dahl_stiffness,) * 4})
         self._put_term(P, DAMPER_FRICTION, {"level": _corners(vp.damper_friction_intact),
                                             "sigma": (vp.dahl_stiffness,) * 4})
         for setting in self.variant.terms:
             self._put_term(P, setting.term, setting.values)
-        if semi_active:
-            set_semi_active(self, P, True)
-        return P
 
     def _put_term(self, P: np.ndarray, term: PhysicsTerm, values) -> None:
         k = self.terms.index(term)

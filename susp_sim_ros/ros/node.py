@@ -27,6 +27,8 @@ import sys
 import threading
 import time
 
+import numpy as np
+
 from rclpy.node import Node
 from rclpy.serialization import serialize_message
 
@@ -65,39 +67,12 @@ class SuspSimNode(Node):
         super().__init__(NODE_NAME, **kwargs)
         p = declare_parameters(self)
         self.sim_time = bool(self.get_parameter("use_sim_time").value)
-        oil = check_oil(p["damper_oil_level"], "parameter damper_oil_level")
-        self.vehicle, self.variant = str(p["vehicle"]), str(p["friction_variant"])
-        model = Model(self.vehicle, self.variant)
-        self.on_divergence = str(p["on_divergence"])
-        self.core = SimCore(model, step_s=float(p["step_s"]), publish_rate_hz=float(p["publish_rate_hz"]),
-                            oil=oil, input_timeout_s=float(p["input_timeout_s"]),
-                            max_time_jump_s=float(p["max_time_jump_s"]))
-        self.lock = threading.RLock()
-        self.failure = ""  # the last divergence (set when the divergence guard stopped the simulation)
-        self.divergences = self.tick_errors = 0
-        self._failure_key: tuple | None = None
-        self.rejection_log = RateLimitedLog(lambda text: self.get_logger().warning(text),
-                                            REJECTION_LOG_INTERVAL_S)
-        self.core.on_reject = self.rejection_log  # every rejection, once per cause and interval
-        # live input integrity: the offline policy table, message by message; its own rate-limited logs
-        self.integrity = LiveIntegrity()
-        self.findings = FindingBoard()
-        logger = self.get_logger()
-        self.integrity_log = RateLimitedLog(lambda text: logger.warning(text), REJECTION_LOG_INTERVAL_S)
-        self.integrity_error_log = RateLimitedLog(lambda text: logger.error(text), REJECTION_LOG_INTERVAL_S)
+        model, oil = self._init_core(p)
+        self._init_guards_and_logs()
         warm_up(model)
         self.timing = TimingStats(self.core.period_ns)
-        self.recorder: RecordingQueue | None = None
-        if p["record_path"]:
-            meta = simulated_metadata({"maneuver": "live", "node": NODE_NAME}, model.vehicle.name,
-                                      model.variant.name, oil)
-            self.recorder = open_recording(p["record_path"], meta, bool(p["record_overwrite"]),
-                                           float(p["record_flush_interval_s"]), self.get_logger().error)
-        self._imu, self._odom, self._susp = Imu(), Odometry(), Float64MultiArray()
-        self.pub_imu = self.create_publisher(Imu, SIM_IMU, OUTPUT_QOS)
-        self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
-        self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
-        self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
+        self.recorder: RecordingQueue | None = self._open_recording(p, model, oil)
+        self._init_publishers()
         self.semiactive = SemiActiveDiagnostics(model, self.core.period_ns)
         self.inputs = InputHandler(self, self.core, self.lock, sim_time=self.sim_time,
                                    reorder_window_s=float(p["sim_reorder_window_s"]), tick=self.tick,
@@ -111,20 +86,69 @@ class SuspSimNode(Node):
         self.published = 0
         self._ticker: TickThread | None = None
         if start_thread and not self.sim_time:
-            note = raise_priority(int(p["realtime_priority"]))
-            if note:
-                self.get_logger().info(note)
-            self._ticker = TickThread(priority=int(p["realtime_priority"]), begin=self._begin_wall_time,
-                                      next_tick_ns=lambda: self.core.next_tick_ns, tick=self.tick,
-                                      ok=self.context.ok, on_error=self._on_tick_error,
-                                      log=lambda text: self.get_logger().info(text))
-            self._ticker.start()
+            self._start_ticker(int(p["realtime_priority"]))
         self.create_timer(1.0 / float(p["diagnostics_rate_hz"]), self.publish_diagnostics)
         self.get_logger().info(
             f"{NODE_NAME}: vehicle {self.vehicle}, variant {self.variant}, oil {oil.tolist()}, "
             f"step {self.core.step_ns * 1e-9} s, publish {1e9 / self.core.period_ns:g} Hz, "
             f"{'sim' if self.sim_time else 'wall'} time"
             + (f", recording to {p['record_path']}" if self.recorder else ""))
+
+    def _init_core(self, p: dict) -> tuple[Model, np.ndarray]:
+        """The model the parameters name and the :class:`SimCore` stepping it (step and publish period
+        from ``step_s`` [s] and ``publish_rate_hz`` [Hz]); returns the model and the oil levels [-]."""
+        oil = check_oil(p["damper_oil_level"], "parameter damper_oil_level")
+        self.vehicle, self.variant = str(p["vehicle"]), str(p["friction_variant"])
+        model = Model(self.vehicle, self.variant)
+        self.on_divergence = str(p["on_divergence"])
+        self.core = SimCore(model, step_s=float(p["step_s"]), publish_rate_hz=float(p["publish_rate_hz"]),
+                            oil=oil, input_timeout_s=float(p["input_timeout_s"]),
+                            max_time_jump_s=float(p["max_time_jump_s"]))
+        return model, oil
+
+    def _init_guards_and_logs(self) -> None:
+        """The lock, the divergence guard's state, and the rate-limited logs of rejected inputs and of
+        the live input-integrity findings (the offline policy table, message by message)."""
+        self.lock = threading.RLock()
+        self.failure = ""  # the last divergence (set when the divergence guard stopped the simulation)
+        self.divergences = self.tick_errors = 0
+        self._failure_key: tuple | None = None
+        logger = self.get_logger()
+        self.rejection_log = RateLimitedLog(lambda text: logger.warning(text), REJECTION_LOG_INTERVAL_S)
+        self.core.on_reject = self.rejection_log  # every rejection, once per cause and interval
+        self.integrity = LiveIntegrity()
+        self.findings = FindingBoard()
+        self.integrity_log = RateLimitedLog(lambda text: logger.warning(text), REJECTION_LOG_INTERVAL_S)
+        self.integrity_error_log = RateLimitedLog(lambda text: logger.error(text), REJECTION_LOG_INTERVAL_S)
+
+    def _open_recording(self, p: dict, model: Model, oil: np.ndarray) -> RecordingQueue | None:
+        """The recording of ``record_path`` (None when empty), flushed every ``record_flush_interval_s``."""
+        if not p["record_path"]:
+            return None
+        meta = simulated_metadata({"maneuver": "live", "node": NODE_NAME}, model.vehicle.name,
+                                  model.variant.name, oil)
+        return open_recording(p["record_path"], meta, bool(p["record_overwrite"]),
+                              float(p["record_flush_interval_s"]), self.get_logger().error)
+
+    def _init_publishers(self) -> None:
+        """The ``/sim`` publishers, ``/diagnostics``, and the messages reused on every publish tick."""
+        self._imu, self._odom, self._susp = Imu(), Odometry(), Float64MultiArray()
+        self.pub_imu = self.create_publisher(Imu, SIM_IMU, OUTPUT_QOS)
+        self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
+        self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
+        self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
+
+    def _start_ticker(self, priority: int) -> None:
+        """Wall time: the tick thread publishing at fixed deadlines, at SCHED_FIFO ``priority`` when
+        permitted (0 = off; the fallback is logged)."""
+        note = raise_priority(priority)
+        if note:
+            self.get_logger().info(note)
+        self._ticker = TickThread(priority=priority, begin=self._begin_wall_time,
+                                  next_tick_ns=lambda: self.core.next_tick_ns, tick=self.tick,
+                                  ok=self.context.ok, on_error=self._on_tick_error,
+                                  log=lambda text: self.get_logger().info(text))
+        self._ticker.start()
 
     # -- time -----------------------------------------------------------------------------------------
     def now_ns(self) -> int:

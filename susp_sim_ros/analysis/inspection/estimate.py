@@ -283,16 +283,10 @@ def oil_identifiability(ev: Evaluator, cal, cfg: dict) -> dict:
     return out
 
 
-def inspect_drives(paths: Sequence[str | Path], config: str | None = None, variant: str = "full",
-                   cfg: dict | None = None, topic_map=None) -> Inspection:
-    """Estimate each damper's oil level with a 95 % interval from the drives ``paths``."""
-    t_start = time.perf_counter()
-    cfg = load_config() if cfg is None else cfg
-    est = cfg["estimator"]
-    notes: list = []
-    model, ev, noise = prepare(paths, config, variant, cfg, topic_map, notes)
-    cal = nuisance_params(model, est["nuisance"], est.get("nuisance_range_scale"))
-    ident = oil_identifiability(ev, cal, cfg)
+def _oil_groups(ident: dict) -> list[tuple[str, tuple[int, ...]]]:
+    """The oil-level parameters to fit, as (name, corners): one per wheel where the drives tell left
+    from right (``wheel``), one per axle where they pin only the mean (``axle``), none where not even
+    that (``no``)."""
     groups: list = []
     for axle, (l, r) in AXLE_CORNERS.items():
         kind = ident[axle]["identifiable"]
@@ -300,6 +294,13 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
             groups += [(CORNER_NAMES[l], (l,)), (CORNER_NAMES[r], (r,))]
         elif kind == "axle":
             groups.append((axle, (l, r)))
+    return groups
+
+
+def _fit_oil(model: Model, ev: Evaluator, cal, groups: list, est: dict) -> tuple[Structure, FitResult, np.ndarray]:
+    """The maximum a posteriori fit of nuisances, oil ``groups`` [-, 0..1] and sensor bias, and its
+    covariance (with the ``consider`` parameters' share when configured); without any oil group the
+    nuisances alone, one evaluation (nothing to estimate, the fit only supplies the structure)."""
     if groups:
         st = Structure([calibration_candidate(model, cal), oil_candidate(groups, est["oil_prior_sd"]), "sensor_bias"])
         fit = fit_structure(ev, st, max_nfev=int(est["max_nfev"]))
@@ -309,20 +310,38 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     cov = fit.covariance()
     if groups and est.get("consider"):
         cov = cov + oil_consider_covariance(ev, fit, cal, nuisance_params(model, est["consider"]))
-    se = np.sqrt(np.clip(np.diag(cov), 0, None))
+    return st, fit, cov
+
+
+def _check_protocol(ev: Evaluator, fit: FitResult, ident: dict, cfg: dict, model: Model,
+                    notes: list) -> tuple[list, list, float]:
+    """The crossings the drives made against the test protocol: (seen, warnings, model-form sd [-] of
+    the oil levels, widened outside the protocol); the warnings and damper-curve notes go to ``notes``."""
     seen = protocol.crossings(ev, fit.structure, fit.x)
     found = protocol.warnings(seen, ident, cfg["protocol"])
     # outside the protocol the model-form error is larger than where the inspection was validated
-    sd_m = float(est["model_form_sd"]) * protocol.model_form_factor(found, cfg["protocol"])
+    sd_m = float(cfg["estimator"]["model_form_sd"]) * protocol.model_form_factor(found, cfg["protocol"])
     notes += [f"outside the test protocol: {w['drive'] + ': ' if w['drive'] else ''}{w['reason']}" for w in found]
     notes += protocol.curve_notes(seen, model.vehicle.damper_velocity)
-    x = fit.x
-    oil_off: int = st.offsets[1] if groups else 0     # unused without groups
+    return seen, found, sd_m
+
+
+def _group_intervals(groups: list, oil_off: int, x: np.ndarray, se: np.ndarray, sd_m: float) -> dict:
+    """{group: (oil level, 95 % low, 95 % high, parameter index)}: the fitted level [-] with the
+    posterior sd ``se`` and the model-form sd ``sd_m`` combined, clipped to [0, 1]."""
     by_group = {}
     for g, (name, _wheels) in enumerate(groups):
         j = oil_off + g
         s = math.hypot(se[j], sd_m)
         by_group[name] = (float(x[j]), max(0.0, float(x[j] - 1.96 * s)), min(1.0, float(x[j] + 1.96 * s)), j)
+    return by_group
+
+
+def _wheel_and_axle_levels(ident: dict, by_group: dict, x: np.ndarray, cov: np.ndarray, sd_m: float,
+                           states_cfg: dict) -> tuple[dict, dict]:
+    """The report's entries per wheel and per axle: oil level [-], 95 % interval, state and what the
+    drives can tell. A wheel of an ``axle`` group carries the axle's figures; an axle of two ``wheel``
+    groups the mean of its wheels (with their covariance)."""
     wheels, axles = {}, {}
     for axle, (l, r) in AXLE_CORNERS.items():
         info = ident[axle]
@@ -336,23 +355,49 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
         if kind == "axle":
             v, lo, hi, _ = by_group[axle]
             for w in (l, r):
-                wheels[CORNER_NAMES[w]] = {"oil_level": v, "ci95": [lo, hi], "state": state_of(lo, hi, cfg["states"]),
+                wheels[CORNER_NAMES[w]] = {"oil_level": v, "ci95": [lo, hi], "state": state_of(lo, hi, states_cfg),
                                            "identifiable": "axle", "why": info["why"]}
         else:
             for w in (l, r):
                 v, lo, hi, _ = by_group[CORNER_NAMES[w]]
-                wheels[CORNER_NAMES[w]] = {"oil_level": v, "ci95": [lo, hi], "state": state_of(lo, hi, cfg["states"]),
+                wheels[CORNER_NAMES[w]] = {"oil_level": v, "ci95": [lo, hi], "state": state_of(lo, hi, states_cfg),
                                            "identifiable": "wheel", "why": info["why"]}
             jl, jr = by_group[CORNER_NAMES[l]][3], by_group[CORNER_NAMES[r]][3]
             v = 0.5 * (x[jl] + x[jr])
             s = math.hypot(0.5 * math.sqrt(max(cov[jl, jl] + cov[jr, jr] + 2 * cov[jl, jr], 0.0)), sd_m)
             lo, hi = max(0.0, v - 1.96 * s), min(1.0, v + 1.96 * s)
-        axles[axle] = {"oil_level": v, "ci95": [lo, hi], "state": state_of(lo, hi, cfg["states"]),
+        axles[axle] = {"oil_level": v, "ci95": [lo, hi], "state": state_of(lo, hi, states_cfg),
                        "identifiable": kind, "why": info["why"]}
-    nuis = []
-    for k, p in enumerate(cal):
-        nuis.append({"param": p.name, "unit": p.unit, "prior": p.prior, "prior_range": [p.lo, p.hi],
-                     "value": float(x[k]), "ci95": [float(x[k] - 1.96 * se[k]), float(x[k] + 1.96 * se[k])]})
+    return wheels, axles
+
+
+def _nuisance_entries(cal, x: np.ndarray, se: np.ndarray) -> list[dict]:
+    """The fitted nuisance parameters (in their own units) with prior, prior range and 95 % interval."""
+    return [{"param": p.name, "unit": p.unit, "prior": p.prior, "prior_range": [p.lo, p.hi],
+             "value": float(x[k]), "ci95": [float(x[k] - 1.96 * se[k]), float(x[k] + 1.96 * se[k])]}
+            for k, p in enumerate(cal)]
+
+
+def inspect_drives(paths: Sequence[str | Path], config: str | None = None, variant: str = "full",
+                   cfg: dict | None = None, topic_map=None) -> Inspection:
+    """Estimate each damper's oil level with a 95 % interval from the drives ``paths``: what the drives
+    can tell (:func:`oil_identifiability`), the fit of oil levels and nuisances, the test protocol, and
+    the levels per wheel and axle."""
+    t_start = time.perf_counter()
+    cfg = load_config() if cfg is None else cfg
+    est = cfg["estimator"]
+    notes: list = []
+    model, ev, noise = prepare(paths, config, variant, cfg, topic_map, notes)
+    cal = nuisance_params(model, est["nuisance"], est.get("nuisance_range_scale"))
+    ident = oil_identifiability(ev, cal, cfg)
+    groups = _oil_groups(ident)
+    st, fit, cov = _fit_oil(model, ev, cal, groups, est)
+    se = np.sqrt(np.clip(np.diag(cov), 0, None))
+    seen, found, sd_m = _check_protocol(ev, fit, ident, cfg, model, notes)
+    oil_off: int = st.offsets[1] if groups else 0     # unused without groups
+    by_group = _group_intervals(groups, oil_off, fit.x, se, sd_m)
+    wheels, axles = _wheel_and_axle_levels(ident, by_group, fit.x, cov, sd_m, cfg["states"])
+    nuis = _nuisance_entries(cal, fit.x, se)
     if not fit.success and fit.nfev < int(est["max_nfev"]):
         notes.append(f"fit did not converge: {fit.message}")
     res = Inspection(wheels, axles, nuis, fit, ev, ident, 0.0, noise, model.vehicle.name, notes,

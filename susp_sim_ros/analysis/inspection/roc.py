@@ -48,9 +48,11 @@ from ...model.rigs import eusama_bench, eusama_plate_motion
 from ..discrepancy.data import prepare_case
 from .estimate import evaluator_for, load_config, nuisance_params, one_step_estimate
 
-STATES = ("intact", "one_empty", "one_half", "several")
+# The detection study's oil groups of a car (``roc.states``: the share of cars in each). Not the vehicle
+# states of the registry (``model/paper.py`` ``STATES``: the paper's three oil configurations of one car).
+OIL_GROUPS = (INTACT_CAR, ONE_EMPTY, ONE_HALF, SEVERAL) = ("intact", "one_empty", "one_half", "several")
 METHODS = ("eusama", "phase_shift", "decay_ratio", "model_based")
-SEVERITIES = {"one_empty": "one damper oil-empty", "one_half": "one damper at half oil",
+SEVERITIES = {ONE_EMPTY: "one damper oil-empty", ONE_HALF: "one damper at half oil",
               "any": "any oil loss (one or more dampers)"}
 ROC_KEYS = {"seed", "cars", "states", "variation", "speed_kmh", "bump_height", "gyro_noise_deg_s",
             "accel_noise_m_s2", "imu_rate_hz", "truth_variant", "estimator_variants", "bootstrap",
@@ -58,10 +60,8 @@ ROC_KEYS = {"seed", "cars", "states", "variation", "speed_kmh", "bump_height", "
 
 
 # ---- the study description ------------------------------------------------------------------------------
-def roc_spec(data: dict, source: str, name: str):
-    """A validated ``kind: roc`` study (:class:`~susp_sim_ros.analysis.sweep.spec.StudySpec`)."""
-    # function-level: breaks the cycle inspection.roc <-> sweep (sweep/kinds.py imports roc_spec)
-    from ..sweep.spec import Chunk, StudySpec, _load
+def _roc_mapping(data: dict, source: str) -> dict:
+    """The study's ``roc:`` mapping, checked for unknown keys."""
     roc = data.get("roc")
     if not isinstance(roc, dict):
         raise ConfigError(f"{source}: roc: a roc study needs a 'roc:' mapping (see config/studies/inspection_roc.yaml)")
@@ -69,30 +69,45 @@ def roc_spec(data: dict, source: str, name: str):
     if unknown:
         raise ConfigError(f"{source}: roc: unknown key(s) {', '.join(sorted(unknown))}; "
                           f"known: {', '.join(sorted(ROC_KEYS))}")
+    return roc
 
-    def num(key, positive=True):
-        v = roc.get(key)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or (positive and v <= 0):
-            raise ConfigError(f"{source}: roc.{key}: expected a positive number, got {v!r}")
-        return v
 
-    def rng_pair(key):
-        v = roc.get(key)
-        if (not isinstance(v, list) or len(v) != 2 or not all(isinstance(x, (int, float)) for x in v)
-                or not 0 < v[0] <= v[1]):
-            raise ConfigError(f"{source}: roc.{key}: expected [lo, hi] with 0 < lo <= hi, got {v!r}")
-        return [float(v[0]), float(v[1])]
+def _positive(roc: Mapping, source: str, key: str):
+    """``roc[key]``, a finite positive number (ConfigError naming the key otherwise)."""
+    v = roc.get(key)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+        raise ConfigError(f"{source}: roc.{key}: expected a positive number, got {v!r}")
+    return v
 
-    cars = int(num("cars"))
+
+def _range_pair(roc: Mapping, source: str, key: str) -> list[float]:
+    """``roc[key]`` as ``[lo, hi]`` with 0 < lo <= hi (a range the cars are drawn from uniformly)."""
+    v = roc.get(key)
+    if (not isinstance(v, list) or len(v) != 2 or not all(isinstance(x, (int, float)) for x in v)
+            or not 0 < v[0] <= v[1]):
+        raise ConfigError(f"{source}: roc.{key}: expected [lo, hi] with 0 < lo <= hi, got {v!r}")
+    return [float(v[0]), float(v[1])]
+
+
+def _group_shares(roc: Mapping, source: str) -> dict[str, float]:
+    """``roc.states``: the share [-] of cars in each oil group of :data:`OIL_GROUPS` (intact and
+    one damper oil-empty required), adding up to 1."""
     states = roc.get("states")
-    if not isinstance(states, dict) or set(states) - set(STATES) or "intact" not in states or "one_empty" not in states:
-        raise ConfigError(f"{source}: roc.states: expected shares of {', '.join(STATES)} (intact and one_empty "
+    if (not isinstance(states, dict) or set(states) - set(OIL_GROUPS) or INTACT_CAR not in states
+            or ONE_EMPTY not in states):
+        raise ConfigError(f"{source}: roc.states: expected shares of {', '.join(OIL_GROUPS)} (intact and one_empty "
                           f"required), got {states!r}")
     shares = {k: float(v) for k, v in states.items()}
     if any(v < 0 for v in shares.values()) or not math.isclose(sum(shares.values()), 1.0, abs_tol=1e-6):
         raise ConfigError(f"{source}: roc.states: shares must be >= 0 and add up to 1, got {shares}")
-    vehicle = roc.get("vehicle", DEFAULT_VEHICLE)
-    vp = _load(source, "roc.vehicle", load_vehicle, vehicle)
+    return shares
+
+
+def _models(roc: Mapping, source: str, vehicle: str, load) -> tuple[list, str, list]:
+    """The car model's choices, each loaded once to check it: (varied vehicle parameters, each with a
+    documented range; the truth's variant; the estimators' variants). ``load`` is the sweep's loader
+    that turns a load error into a ConfigError naming the key."""
+    vp = load(source, "roc.vehicle", load_vehicle, vehicle)
     variation = roc.get("variation") or []
     if not isinstance(variation, list) or any(v not in vp.priors for v in variation):
         raise ConfigError(f"{source}: roc.variation: expected vehicle parameters with a documented range in "
@@ -102,18 +117,40 @@ def roc_spec(data: dict, source: str, name: str):
     if not isinstance(ests, list) or not ests:
         raise ConfigError(f"{source}: roc.estimator_variants: expected a non-empty list of variants")
     for i, v in enumerate([truth, *ests]):
-        _load(source, f"roc.variants[{i}]", load_variant, v)
+        load(source, f"roc.variants[{i}]", load_variant, v)
+    return variation, truth, ests
+
+
+def _chunk_size(data: Mapping, source: str) -> int:
+    """``chunk_size``: cars per chunk (one task), a positive integer (default 20)."""
     chunk = data.get("chunk_size", 20)
     if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
         raise ConfigError(f"{source}: chunk_size: expected a positive integer, got {chunk!r}")
+    return chunk
+
+
+def roc_spec(data: dict, source: str, name: str):
+    """A validated ``kind: roc`` study (:class:`~susp_sim_ros.analysis.sweep.spec.StudySpec`): the
+    ``roc:`` settings checked and normalised (speeds in km/h, bump heights in m, gyro noise in deg/s,
+    accelerometer noise in m/s^2, IMU rate in Hz), one run per car, ``chunk_size`` cars per chunk."""
+    # function-level: breaks the cycle inspection.roc <-> sweep (sweep/kinds.py imports roc_spec)
+    from ..sweep.spec import Chunk, StudySpec, _load
+    roc = _roc_mapping(data, source)
+    cars = int(_positive(roc, source, "cars"))
+    shares = _group_shares(roc, source)
+    vehicle = roc.get("vehicle", DEFAULT_VEHICLE)
+    variation, truth, ests = _models(roc, source, vehicle, _load)
+    chunk = _chunk_size(data, source)
     several = roc.get("several_oil", [0.0, 0.5])
     generator = str(roc.get("truth_generator", "model"))
     truth_generator(generator, f"{source}: roc.truth_generator")
     norm = {"name": name, "kind": "roc", "description": str(data.get("description", "")), "vehicle": vehicle,
             "chunk_size": chunk, "results": "csv",
-            "roc": {"seed": int(num("seed")), "cars": cars, "states": shares, "variation": list(variation),
-                    "speed_kmh": rng_pair("speed_kmh"), "bump_height": rng_pair("bump_height"),
-                    "gyro_noise_deg_s": rng_pair("gyro_noise_deg_s"),
+            "roc": {"seed": int(_positive(roc, source, "seed")), "cars": cars, "states": shares,
+                    "variation": list(variation),
+                    "speed_kmh": _range_pair(roc, source, "speed_kmh"),
+                    "bump_height": _range_pair(roc, source, "bump_height"),
+                    "gyro_noise_deg_s": _range_pair(roc, source, "gyro_noise_deg_s"),
                     "accel_noise_m_s2": float(roc.get("accel_noise_m_s2", 0.02)),
                     "imu_rate_hz": float(roc.get("imu_rate_hz", 200.0)), "truth_variant": truth,
                     "estimator_variants": list(ests), "bootstrap": int(roc.get("bootstrap", 1000)),
@@ -133,11 +170,11 @@ def car_draw(roc: Mapping, vp, i: int) -> dict:
     names = list(roc["states"])
     state = names[int(rng.choice(len(names), p=[roc["states"][n] for n in names]))]
     oil = [1.0] * 4
-    if state == "one_empty":
+    if state == ONE_EMPTY:
         oil[int(rng.integers(4))] = 0.0
-    elif state == "one_half":
+    elif state == ONE_HALF:
         oil[int(rng.integers(4))] = 0.5
-    elif state == "several":
+    elif state == SEVERAL:
         lo, hi = roc["several_oil"]
         for w in rng.choice(4, size=int(rng.integers(2, 5)), replace=False):
             oil[int(w)] = float(rng.uniform(lo, hi))
@@ -337,16 +374,16 @@ def finish_roc(spec, store, plot: bool) -> dict:
     methods = list(METHODS) + [f"model_based_{v}" for v in roc["estimator_variants"][1:]]
     stat = {m: np.array([r[m] for r in good], float) for m in methods}
     state = np.array([r["state"] for r in good])
-    neg = state == "intact"
-    groups = {"one_empty": state == "one_empty", "one_half": state == "one_half", "any": state != "intact"}
+    neg = state == INTACT_CAR
+    groups = {ONE_EMPTY: state == ONE_EMPTY, ONE_HALF: state == ONE_HALF, "any": state != INTACT_CAR}
     by_sev: dict = {}
     for sev, pos in groups.items():
         if pos.sum() < 2 or neg.sum() < 2:
             continue
         by_sev[sev] = {m: roc_summary(stat[m][neg], stat[m][pos], roc["bootstrap"], roc["specificity"],
                                       roc["seed"] + k) for k, m in enumerate(methods)}
-    result = {"roc": by_sev.get("one_empty", {}), "roc_by_severity": by_sev,
-              "roc_positive_class": SEVERITIES["one_empty"], "cars_ok": len(good), "cars_failed": len(failed),
+    result = {"roc": by_sev.get(ONE_EMPTY, {}), "roc_by_severity": by_sev,
+              "roc_positive_class": SEVERITIES[ONE_EMPTY], "cars_ok": len(good), "cars_failed": len(failed),
               "failures": failed[:10], "table": str(out / "cars.csv"), "plots": []}
     if plot and by_sev:
         result["plots"].append(str(plot_roc(stat, neg, groups, by_sev, methods, out / f"{spec.name}.png")))
@@ -357,7 +394,7 @@ def plot_roc(stat, neg, groups, by_sev, methods, path: Path) -> Path:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    sevs = [s for s in ("one_empty", "one_half", "any") if s in by_sev]
+    sevs = [s for s in (ONE_EMPTY, ONE_HALF, "any") if s in by_sev]
     fig, axes = plt.subplots(1, len(sevs), figsize=(4.6 * len(sevs), 4.4), squeeze=False)
     for ax, sev in zip(axes[0], sevs):
         pos = groups[sev]

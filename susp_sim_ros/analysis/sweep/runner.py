@@ -11,6 +11,7 @@ tasks on the scheduler.
 from __future__ import annotations
 
 import csv
+import json
 import logging
 import math
 import os
@@ -150,35 +151,26 @@ def make_executor(scheduler: str | None = None, workers: int | None = None,
 
 
 # ---- running -------------------------------------------------------------------------------------------
-def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: bool = False,
-              plot: bool = True, on_chunk: Callable[[int], None] | None = None) -> dict:
-    """Run (or resume) ``spec`` into ``out``; returns the JSON-ready result.
-
-    ``on_chunk(cid)`` is called after each chunk is stored (tests interrupt a study from it)."""
-    t_start = time.perf_counter()
-    store = ResultStore(spec, out, fresh=fresh)
-    resumed = sorted(store.done)
-    todo = [c for c in spec.chunks if c.id not in store.done]
-    todo_tasks: list[tuple[tuple[int, ...], tuple]]     # (chunk ids, arguments of ``fn``) per task
-    fn: Callable[..., list[dict]]
+def _study_tasks(spec: StudySpec, todo: list,
+                 executor) -> tuple[Callable[..., list[dict]], list[tuple[tuple[int, ...], tuple]]]:
+    """The task function of the study's kind and its tasks still to run: (chunk ids, arguments of the
+    function) per task; a sweep groups consecutive chunks into tasks (:func:`plan_tasks`), every other
+    kind runs one chunk per task."""
     if spec.kind == "sweep":
-        todo_tasks = [(tuple(c.id for c in t), (spec.data, spec.hash, [c.runs for c in t]))
-                      for t in plan_tasks(todo, getattr(executor, "threads_total", 1))]
-        fn = tasks.sweep_task
-    elif spec.kind == "ride":
-        todo_tasks = [((c.id,), (spec.data, c.id, spec.runs[c.id])) for c in todo]
-        fn = _ride_task
-    elif spec.kind == "roc":  # damper-inspection detection study (issue 14): one task per chunk of cars
-        todo_tasks = [((c.id,), (spec.data, list(c.runs))) for c in todo]
-        fn = roc_task
-    else:
-        todo_tasks = [((c.id,), (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
-                      for c in todo]
-        fn = _drive_task
-    t_compute, cpu_compute = time.perf_counter(), time.process_time()
-    done_tasks = executor.map(fn, todo_tasks)        # on a cluster: submitted, on their way while we go on
-    store.begin_session()
-    done_runs = sum(len(spec.chunks[c].runs) for c in resumed)
+        return tasks.sweep_task, [(tuple(c.id for c in t), (spec.data, spec.hash, [c.runs for c in t]))
+                                  for t in plan_tasks(todo, getattr(executor, "threads_total", 1))]
+    if spec.kind == "ride":
+        return _ride_task, [((c.id,), (spec.data, c.id, spec.runs[c.id])) for c in todo]
+    if spec.kind == "roc":  # damper-inspection detection study (issue 14): one task per chunk of cars
+        return roc_task, [((c.id,), (spec.data, list(c.runs))) for c in todo]
+    return _drive_task, [((c.id,), (spec.runs[c.id]["file"], spec.data["variants"], spec.data["diagnose"]))
+                         for c in todo]
+
+
+def _store_results(spec: StudySpec, store: ResultStore, done_tasks, done_runs: int, t_start: float, *,
+                   progress: bool, on_chunk: Callable[[int], None] | None) -> list[int]:
+    """Write each chunk to ``store`` as its task returns, with a progress bar; the ids of the chunks
+    computed in this session. The session is closed in the store even when interrupted."""
     unit = {"drives": "drive", "roc": "car"}.get(spec.kind, "run")
     bar = make_progress(total=spec.n_runs, initial=done_runs, desc=spec.name, unit=unit, enabled=progress,
                         smoothing=0.1)
@@ -195,6 +187,34 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
         bar.close()
         store.finish_session(chunks_computed=len(computed),
                              elapsed_s=round(time.perf_counter() - t_start, 3))
+    return computed
+
+
+def _finish(spec: StudySpec, store: ResultStore, plot: bool) -> dict:
+    """The kind's own results from the complete store (tables, figures, summary figures)."""
+    if spec.kind == "sweep":
+        return _finish_sweep(spec, store, plot)
+    if spec.kind == "ride":
+        return finish_ride(spec, store, plot)
+    if spec.kind == "roc":
+        return finish_roc(spec, store, plot)
+    return _finish_drives(spec, store, plot)
+
+
+def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: bool = False,
+              plot: bool = True, on_chunk: Callable[[int], None] | None = None) -> dict:
+    """Run (or resume) ``spec`` into ``out``; returns the JSON-ready result (times in s).
+
+    ``on_chunk(cid)`` is called after each chunk is stored (tests interrupt a study from it)."""
+    t_start = time.perf_counter()
+    store = ResultStore(spec, out, fresh=fresh)
+    resumed = sorted(store.done)
+    fn, todo_tasks = _study_tasks(spec, [c for c in spec.chunks if c.id not in store.done], executor)
+    t_compute, cpu_compute = time.perf_counter(), time.process_time()
+    done_tasks = executor.map(fn, todo_tasks)        # on a cluster: submitted, on their way while we go on
+    store.begin_session()
+    done_runs = sum(len(spec.chunks[c].runs) for c in resumed)
+    computed = _store_results(spec, store, done_tasks, done_runs, t_start, progress=progress, on_chunk=on_chunk)
     compute_s, cpu_s = time.perf_counter() - t_compute, time.process_time() - cpu_compute
     missing = set(range(len(spec.chunks))) - store.done
     if missing:
@@ -205,16 +225,8 @@ def run_study(spec: StudySpec, out, executor, *, progress: bool = True, fresh: b
               "n_runs": spec.n_runs, "n_chunks": len(spec.chunks), "chunks_resumed": len(resumed),
               "chunks_computed": len(computed), "runs_computed": new_runs,
               "compute_s": compute_s, "cpu_s": cpu_s, "runs_per_s": new_runs / compute_s if compute_s > 0 else math.nan}
-    if spec.kind == "sweep":
-        result.update(_finish_sweep(spec, store, plot))
-    elif spec.kind == "ride":
-        result.update(finish_ride(spec, store, plot))
-    elif spec.kind == "roc":
-        result.update(finish_roc(spec, store, plot))
-    else:
-        result.update(_finish_drives(spec, store, plot))
+    result.update(_finish(spec, store, plot))
     result["elapsed_s"] = time.perf_counter() - t_start
-    import json
     (store.out / "summary.json").write_text(json.dumps(result, indent=1, default=str))
     result["summary"] = summary_text(result)
     return result
