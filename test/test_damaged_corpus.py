@@ -159,6 +159,17 @@ def spike(d: TestDrive, where: float) -> tuple[TestDrive, list[Span]]:
         Span("spike", "/vehicle/speed", int(d.speed.t_ns[k]), int(d.speed.t_ns[k]))]
 
 
+def road_spike(d: TestDrive, where: float) -> tuple[TestDrive, list[Span]]:
+    """One road-profile sample 0.5 m up at 20-80 % of the profile (the bump crossing's): dropped, the
+    profile joined over it (the road is one message: the finding is at the recording's first message)."""
+    from susp_sim_ros.model.road import RoadProfile
+    r = d.road
+    k = int((0.2 + 0.6 * where) * (len(r.s) - 1))
+    zl = r.zl.copy()
+    zl[k] += 0.5
+    return dataclasses.replace(d, road=RoadProfile(r.s, zl, r.zr)), [Span("spike", ROAD_PROFILE, _t0(d), _t0(d))]
+
+
 def out_of_range(d: TestDrive, where: float) -> tuple[TestDrive, list[Span]]:
     """Twenty speed messages (0.2 s) at -0.5 m/s, a speed the node rejects, at 75-85 % of the drive: dropped."""
     v = d.speed.values.copy()
@@ -226,6 +237,7 @@ DAMAGES = {
     "duplicate_stamp": Damage("duplicate_stamp", duplicate_stamp),
     "rate_change": Damage("rate_change", rate_change),
     "spike": Damage("spike", spike),
+    "road_spike": Damage("spike", road_spike, drives=("bump",)),
     "dead_sensor": Damage("dead_sensor", dead_sensor, refused_by=("inspect",)),
     "dead_accel": Damage("dead_sensor", dead_accel, refused_by=("inspect",)),
     "saturated_sensor": Damage("saturated_sensor", saturated_sensor),
@@ -447,3 +459,64 @@ def test_validate_leaves_out_the_damaged_span_and_axis(corpus):
     res = _run(["validate", "--measured", dead, "--simulated", sim])[1]
     for w, ms in res["rmse_deg_s"].items():
         assert set(ms) == {"pitch_rate", "yaw_rate"}, w
+
+
+# ---- a span excluded gives the same metrics as the drive cut there ----------------------------------------
+def _imu_only(d: TestDrive, keep: np.ndarray) -> TestDrive:
+    return _imu(d, d.imu.t_ns[keep], d.imu.gyro[keep], d.imu.accel[keep])
+
+
+def test_an_imu_gap_to_the_end_gives_the_metrics_of_the_drive_cut_there(corpus):
+    """The IMU falls silent 2.5 s into the sine steer and sends one last message at the end of the drive: the
+    gap [a, end] is excluded, and ``validate`` gives per window and signal the RMSE (to the printed digit) and
+    the sample count of the measured drive truncated at a (every series cut there)."""
+    d, sim = corpus["sine"]
+    imu = d.imu
+    k = int(np.searchsorted(imu.t_ns, imu.t_ns[0] + int(2.5 * NS)))
+    a = int(imu.t_ns[k])
+    keep = (imu.t_ns <= a) | (np.arange(len(imu)) == len(imu) - 1)
+    holed = corpus["dir"] / "sine_gap_to_end.mcap"
+    write_drive(holed, _imu_only(d, keep), overwrite=True)
+    cut = corpus["dir"] / "sine_cut_at_gap.mcap"
+    write_drive(cut, _cut(d, (a - d.t0_ns) / NS), overwrite=True)
+    res = _run(["validate", "--measured", holed, "--simulated", sim])[1]
+    base = _run(["validate", "--measured", cut, "--simulated", sim])[1]
+    (gap,) = [f for f in res["input_findings"] if f["kind"] == "gap"]
+    t0 = _t0(d)
+    assert gap["from_s"] == pytest.approx((a - t0) / NS, abs=2e-6)
+    assert gap["to_s"] == pytest.approx((int(imu.t_ns[-1]) - t0) / NS, abs=2e-6)
+    assert base["input_findings"] == []
+    assert set(res["rmse_deg_s"]) == set(base["rmse_deg_s"]) == {"whole", "steering"}
+    for w, ms in base["rmse_deg_s"].items():
+        assert set(res["rmse_deg_s"][w]) == set(ms)
+        for sig, rmse in ms.items():
+            assert f"{res['rmse_deg_s'][w][sig]:.3f}" == f"{rmse:.3f}", (w, sig)
+            assert res["windows"][w]["signals"][sig]["n"] == base["windows"][w]["signals"][sig]["n"], (w, sig)
+
+
+@settings(max_examples=4, deadline=None)
+@given(start=st.floats(0.2, 0.6), length_s=st.floats(0.2, 1.0))
+def test_an_imu_gap_in_the_middle_sums_the_squared_errors_of_the_two_pieces(corpus, start, length_s):
+    """A gap in the middle of the IMU record: per window and signal, the squared errors ``validate`` sums
+    over the holed drive are those of the piece before the gap plus those of the piece after it (the IMU
+    record cut at each side; inputs whole so that the windows are the same): nothing is compared across
+    the hole, nothing is lost beside it."""
+    d, sim = corpus["sine"]
+    imu = d.imu
+    k = int(start * (len(imu) - 1))
+    a = int(imu.t_ns[k])
+    b = int(imu.t_ns[np.searchsorted(imu.t_ns, a + int(length_s * NS), side="right")])
+    runs = {}
+    for name, keep in (("holed", (imu.t_ns <= a) | (imu.t_ns >= b)), ("before", imu.t_ns <= a),
+                       ("after", imu.t_ns >= b)):
+        path = corpus["dir"] / f"sine_middle_{name}.mcap"
+        write_drive(path, _imu_only(d, keep), overwrite=True)
+        runs[name] = _run(["validate", "--measured", path, "--simulated", sim])[1]
+    assert [f["kind"] for f in runs["holed"]["input_findings"]] == ["gap"]
+    for w, ms in runs["holed"]["windows"].items():
+        for sig, m in ms["signals"].items():
+            pieces = [runs[p]["windows"][w]["signals"][sig] for p in ("before", "after")
+                      if w in runs[p]["windows"] and sig in runs[p]["windows"][w]["signals"]]
+            assert m["n"] == sum(p["n"] for p in pieces), (w, sig)
+            sse = m["n"] * m["rmse_deg_s"] ** 2
+            assert sse == pytest.approx(sum(p["n"] * p["rmse_deg_s"] ** 2 for p in pieces), rel=1e-9), (w, sig)

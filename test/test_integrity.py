@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -479,3 +480,141 @@ def test_discrepancy_finder_refuses_a_dead_gyro_or_a_saturated_primary_signal(bu
     with pytest.raises(IntegrityError, match=r"saturated_sensor pitch_rate .*need the maneuver's primary signal "
                                              r"pitch_rate within the sensor range"):
         _case(tmp_path / "clipped.mcap", with_imu(bump, imu.t_ns, g, imu.accel))
+
+
+# ---- a vehicle without a parameter set ------------------------------------------------------------------
+def test_unknown_vehicle_is_bad_metadata_where_the_vehicle_is_taken_from_the_drive(sine, copies, tmp_path):
+    """A ``vehicle`` the commands have no parameters for is a ``bad_metadata`` finding (kept: the reference
+    car's parameters are used, said so) where a command takes the vehicle from the drive (``validate``);
+    the generic check finds nothing wrong with the drive itself (a drive of another car is not damaged)."""
+    from susp_sim_ros.io.integrity import drive_vehicle
+    from susp_sim_ros.model.params import DEFAULT_VEHICLE
+    meta = {**sine.metadata, "vehicle": "independent"}
+    other_car = dataclasses.replace(sine, metadata=meta, extra={})
+    assert check_drive_integrity(other_car, "veh.mcap").findings == []
+    assert drive_vehicle(other_car, "veh.mcap") == DEFAULT_VEHICLE
+    (f,) = other_car.extra["input_findings"]
+    assert (f["kind"], f["topic"], f["action"]) == ("bad_metadata", "test_drive", "kept")
+    assert "vehicle 'independent'" in f["detail"] and f"reference car {DEFAULT_VEHICLE} is used" in f["detail"]
+    assert f["from_s"] == 0.0 and f["to_s"] == pytest.approx(sine.duration_s, abs=1e-6)
+    for known in (DEFAULT_VEHICLE, "", None):
+        ok = dataclasses.replace(sine, metadata={**sine.metadata, "vehicle": known}, extra={})
+        assert drive_vehicle(ok, "ok") == DEFAULT_VEHICLE or known == sine.metadata["vehicle"]
+        assert "input_findings" not in ok.extra, known
+    path = tmp_path / "independent.mcap"
+    write_drive(path, dataclasses.replace(sine, metadata=meta))
+    rc, out, err = _json_or_named_error(["validate", "--measured", path, "--simulated", copies["sim"]])
+    assert rc == 0 and [x["kind"] for x in out["input_findings"]] == ["bad_metadata"]
+    assert "'independent'" in err and f"input: {path} test_drive bad_metadata" in err
+    clean = _json_or_named_error(["validate", "--measured", SINE, "--simulated", copies["sim"]])[1]
+    assert out["rmse_deg_s"] == clean["rmse_deg_s"]  # the reference car's wheelbase: same windows, same figures
+
+
+# ---- road-profile spikes --------------------------------------------------------------------------------
+def _road(drive: TestDrive, zl, zr=None):
+    from susp_sim_ros.model.road import RoadProfile
+    r = drive.road
+    return dataclasses.replace(drive, road=RoadProfile(r.s, np.asarray(zl, float),
+                                                       np.asarray(r.zr if zr is None else zr, float)))
+
+
+@settings(max_examples=15, deadline=None)
+@given(at=st.floats(0.0, 1.0), height=st.floats(0.3, 0.9), right=st.booleans())
+def test_a_single_sample_road_spike_is_dropped_and_the_profile_joined_over_it(bump, at, height, right):
+    r = bump.road
+    k = int(at * (len(r.s) - 1))
+    z = (r.zr if right else r.zl).copy()
+    z[k] += height
+    d = _road(bump, r.zl, z) if right else _road(bump, z)
+    res = check_drive_integrity(d, "road.mcap")
+    (f,) = res.findings
+    assert (f.kind, f.topic, f.action) == ("spike", "/road/profile", "excluded")
+    assert f"s = {r.s[k]:.4g}-{r.s[k]:.4g} m" in f.detail
+    out = res.drive.road
+    keep = np.arange(len(r.s)) != k
+    assert np.array_equal(out.s, r.s[keep]) and np.array_equal(out.zl, r.zl[keep])
+    assert np.array_equal(out.zr, r.zr[keep])
+
+
+@settings(max_examples=15, deadline=None)
+@given(height=st.floats(0.005, 0.15), samples=st.integers(11, 300), spacing=st.sampled_from([0.01, 0.02, 0.05]),
+       step=st.floats(-0.15, 0.15))
+def test_a_smooth_bump_or_a_kerb_on_the_road_is_no_spike(bump, height, samples, spacing, step):
+    """A smooth (cosine) bump of a few mm up to 15 cm that the profile resolves (at least ``spikes.window``
+    samples across it, at the spacings of real road profiles), followed by a kerb (a step) of up to 15 cm:
+    the road, not a spike."""
+    from susp_sim_ros.model.road import RoadProfile
+    length = samples * spacing
+    s = np.arange(0.0, length + 2.0, spacing)
+    z = (np.where(s < length, 0.5 * height * (1 - np.cos(2 * np.pi * s / length)), 0.0)
+         + np.where(s > length + 1.0, step, 0.0))
+    res = check_drive_integrity(dataclasses.replace(bump, road=RoadProfile(s, z, z)), "bump.mcap")
+    assert res.findings == [] and np.array_equal(res.drive.road.zl, z)
+
+
+def test_road_spike_goes_through_every_reader_as_a_finding(bump, tmp_path):
+    z = bump.road.zl.copy()
+    z[25] += 0.5
+    path = tmp_path / "road_spike.mcap"
+    write_drive(path, _road(bump, z))
+    d = read_drive(path)
+    assert [f["kind"] for f in d.extra["input_findings"]] == ["spike"] and len(d.road.s) == len(bump.road.s) - 1
+
+
+# ---- the discrepancy finder: excluded spans and unusable axes --------------------------------------------
+def _gap_case(bump, tmp_path):
+    """A bump crossing with 0.3 s of IMU missing in the middle of its bump window, as the finder prepares it."""
+    imu = bump.imu
+    k = len(imu) // 3
+    keep = (imu.t_ns <= imu.t_ns[k]) | (imu.t_ns > imu.t_ns[k] + int(0.3 * NS))
+    d = with_imu(bump, imu.t_ns[keep], imu.gyro[keep], imu.accel[keep])
+    return _case(tmp_path / "gap.mcap", d), d, (int(imu.t_ns[k]), int(imu.t_ns[keep][np.searchsorted(
+        imu.t_ns[keep], imu.t_ns[k], side="right")]))
+
+
+def test_discrepancy_finder_compares_measured_samples_only_never_across_a_gap(bump, tmp_path):
+    """The finder compares at the measured IMU stamps: nothing inside an excluded span, the measured values
+    as recorded (not resampled), the span kept so that no search window reaches across it."""
+    from susp_sim_ros.analysis.discrepancy.locate import locate
+    case, d, (a, b) = _gap_case(bump, tmp_path)
+    assert case.grid_ns[0] < a < b < case.grid_ns[-1]  # the gap is inside the compared window
+    assert not np.any((case.grid_ns > a) & (case.grid_ns < b)) and {a, b} <= set(case.grid_ns.tolist())
+    idx = np.searchsorted(d.imu.t_ns, case.grid_ns)
+    assert np.array_equal(d.imu.t_ns[idx], case.grid_ns)
+    cols = [list(("roll_rate", "pitch_rate", "yaw_rate", "accel_x", "accel_y", "accel_z")).index(s)
+            for s in case.signals]
+    meas = np.column_stack([np.degrees(d.imu.gyro), d.imu.accel])[idx][:, cols]
+    assert np.array_equal(case.y_meas, meas)
+    ha, hb = ((a - case.t0_ns) / NS, (b - case.t0_ns) / NS)
+    assert np.allclose(case.holes_s, [(ha, hb)], rtol=0, atol=1e-9)
+    # a residual far above noise everywhere: the windows found stop at the gap and start again after it
+    e = np.full((case.grid_ns.size, len(case.signals)), 10.0)
+    found = locate([case], [e], [np.ones(len(case.signals))])
+    assert found and all(w["end_s"] <= ha + 1e-9 or w["start_s"] >= hb - 1e-9 for w in found)
+    assert {w["start_s"] >= hb - 1e-9 for w in found} == {True, False}
+
+
+def test_noise_floor_leaves_a_dead_axis_of_one_drive_out_of_the_pool(bump, sine, tmp_path):
+    """Pooled over drives, a gyro axis dead on one of them (``unusable_signals``) is the other drive's floor
+    alone: not dragged towards 0, no division by zero; the dead drive's own figure is NaN."""
+    import warnings
+    from susp_sim_ros.analysis.discrepancy.data import as_cases
+    from susp_sim_ros.analysis.discrepancy.locate import noise_floor
+    wb = load_vehicle().wheelbase
+    g = bump.imu.gyro.copy()
+    g[:, 0] = 0.0  # roll gyro dead on the bump crossing
+    dead = check_drive_integrity(with_imu(bump, bump.imu.t_ns, g, bump.imu.accel), "dead.mcap").drive
+    assert dead.extra["unusable_signals"] == ["roll_rate"]
+    live = check_drive_integrity(sine, "sine.mcap").drive
+    cases = as_cases([live, dead], wheelbase=wb)
+    sims = [np.zeros((c.n_steps, 6)) for c in cases]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        both = noise_floor(cases, sims)
+        alone = noise_floor(cases[:1], sims[:1])
+    name_dead = cases[1].name
+    assert math.isnan(both["per_drive"][name_dead]["roll_rate"])
+    assert both["noise_floors"]["roll_rate"] == pytest.approx(alone["noise_floors"]["roll_rate"], rel=1e-12)
+    assert both["noise_floors"]["roll_rate"] > 0
+    # the live axes of the dead drive still count
+    assert both["noise_floors"]["pitch_rate"] != pytest.approx(alone["noise_floors"]["pitch_rate"], rel=1e-6)

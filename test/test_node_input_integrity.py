@@ -280,3 +280,50 @@ def test_node_reports_live_findings_on_diagnostics(driver):
     jump = _integrity(node)[f"{SPEED} clock_jump"]
     assert jump["level"] == WARN and float(jump["values"]["from_s"]) == pytest.approx((t - period) / NS)
     assert core.restarts == 1 and node.inputs.handler_errors == 0
+
+
+# ---- a unit mistake needs evidence, as offline -------------------------------------------------------------
+def _steering_drive(values: np.ndarray) -> TestDrive:
+    n = values.size
+    return TestDrive({}, _constant(n, 10.0), Series(T0 + np.arange(n, dtype=np.int64) * 10_000_000, values))
+
+
+@settings(max_examples=60, deadline=None)
+@given(amp=st.floats(0.02, 2.0), freq=st.floats(0.1, 0.6), phase=st.floats(0.0, 6.28), at=st.integers(12, 280),
+       outlier=st.floats(STEER_MAX * 1.001, STEER_MAX * 180 / math.pi), sign=st.sampled_from([-1.0, 1.0]),
+       noise=st.floats(0.0, 0.01), seed=st.integers(0, 2**16))
+def test_one_outlier_in_radians_is_a_spike_not_a_unit_mistake_live_and_offline(amp, freq, phase, at, outlier, sign,
+                                                                              noise, seed):
+    """A steering angle recorded in radians (a plausible sine steer at 100 Hz) with one message beyond
+    ``limits.steering_max`` that would fit as degrees: offline the sample is a ``spike`` (dropped before the
+    unit is judged), live it is a ``spike`` too (the node rejects it), never ``implausible_unit``. The same
+    steering recorded in degrees is a unit mistake for both once it passes the limit. Steering rates up to
+    7.5 rad/s (a quick driver; the spike floor assumes at most about 15 rad/s)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(300) / 100.0
+    rad = amp * np.sin(2 * np.pi * freq * t + phase) + noise * rng.standard_normal(t.size)
+    v = rad.copy()
+    v[at] = sign * outlier
+    found, error = _offline_kinds(_steering_drive(v))
+    assert error is None and "spike" in found and "implausible_unit" not in found, (found, error)
+    live = LiveIntegrity(POLICY)
+    kinds = [f.kind for k, x in enumerate(v) for f in live.check(STEERING, T0 + k * 10_000_000, [float(x)])]
+    assert "implausible_unit" not in kinds and kinds.count("spike") == 1, kinds
+    # in degrees: the offline check refuses it, the live check says so as soon as the limit is passed
+    deg = np.degrees(rad)
+    if np.max(np.abs(deg)) > STEER_MAX * 1.001:
+        assert _offline_kinds(_steering_drive(deg))[1] == "implausible_unit"
+        live = LiveIntegrity(POLICY)
+        kinds = [f.kind for k, x in enumerate(deg) for f in live.check(STEERING, T0 + k * 10_000_000, [float(x)])]
+        assert "spike" not in kinds and "implausible_unit" in kinds, kinds
+
+
+def test_a_speed_outlier_after_a_steady_drive_is_a_spike_and_km_h_stays_a_unit_mistake():
+    live = LiveIntegrity(POLICY)
+    for k in range(20):
+        assert live.check(SPEED, T0 + k * 10_000_000, [12.0 + 0.01 * (k % 3)]) == []
+    (f,) = live.check(SPEED, T0 + 20 * 10_000_000, [100.0])
+    assert (f.kind, f.level, f.action) == ("spike", WARN, "excluded") and "no unit mistake" in f.expected
+    kmh = LiveIntegrity(POLICY)  # the same drive in km/h: in line with its messages, beyond the limit
+    found = [f.kind for k in range(40) for f in kmh.check(SPEED, T0 + k * 10_000_000, [3.6 * (12.0 + 0.5 * k)])]
+    assert found and set(found) == {"implausible_unit"}

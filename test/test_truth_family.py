@@ -166,6 +166,15 @@ def test_make_case_writes_six_labelled_reproducible_drives():
     assert oils == ["1,1,1,1", "0,0,1,1", "1,1,0,0"] * 2
 
 
+def test_generator_drives_of_another_car_give_no_input_finding():
+    """Undamaged drives of the family (another car, another integrator, every assumed item varied) pass the
+    input-integrity check without a finding (issue 28): a drive of another car is not a damaged drive."""
+    from susp_sim_ros.io.integrity import check_drive_integrity
+    for name in ("structure/car_beyond_priors", "structure/combined"):
+        for lbl, d in family.make_case(family.FORMS[name], seed=1):
+            assert check_drive_integrity(d, f"{name}:{lbl}").findings == [], (name, lbl)
+
+
 def test_cars_beyond_the_priors_are_further_off_than_within():
     within = family.FORMS["structure/car_within_priors"].car(1).factors
     beyond = family.FORMS["structure/car_beyond_priors"].car(1).factors

@@ -127,3 +127,83 @@ def test_junk_missing_topic_and_no_overlap_are_exit_2(tmp_path, capsys):
     assert "no time overlap" in capsys.readouterr().err
     assert main(["validate", "--study", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 2
     assert main(["validate"]) == 2
+
+
+def test_study_reports_input_findings_and_names_a_refused_drive(tmp_path, capsys):
+    """A copy of bags/ with one drive holed (2 s of IMU missing), one dead on its table signal (roll gyro of a
+    sine steer) and one naming a vehicle without parameters: the study runs (exit 0), its report and JSON
+    carry every input finding, the dead drive is named as refused (left out of the tables), the holed drive
+    is compared without the gap and the unknown vehicle simulated as the reference car."""
+    import dataclasses
+    import shutil
+
+    from susp_sim_ros.io.drive import ImuSeries, drive_from_recording, write_drive
+    from susp_sim_ros.io.reader import read_recording
+    from susp_sim_ros.model.params import DEFAULT_VEHICLE
+    bags = tmp_path / "bags"
+    bags.mkdir()
+    for p in BAGS.glob("*.mcap"):
+        shutil.copy(p, bags / p.name)
+
+    def damage(name, change):
+        d = drive_from_recording(read_recording(BAGS / name))
+        write_drive(bags / name, change(d), overwrite=True)
+
+    def hole(d):
+        keep = (d.imu.t_ns < d.imu.t_ns[600]) | (d.imu.t_ns > d.imu.t_ns[600] + 2 * va.NS)
+        return dataclasses.replace(d, imu=ImuSeries(d.imu.t_ns[keep], d.imu.gyro[keep], d.imu.accel[keep]))
+
+    def dead_roll(d):
+        g = d.imu.gyro.copy()
+        g[:, 0] = 0.0
+        return dataclasses.replace(d, imu=ImuSeries(d.imu.t_ns, g, d.imu.accel))
+
+    damage("sine_steer_intact.mcap", hole)
+    damage("sine_steer_rear_empty.mcap", dead_roll)
+    damage("bump_crossing_intact.mcap", lambda d: dataclasses.replace(d, metadata={**d.metadata,
+                                                                                    "vehicle": "independent"}))
+    out = tmp_path / "out"
+    rc = main(["validate", "--study", str(bags), "--out", str(out), "--json", "--no-plots", "--no-progress"])
+    cap = capsys.readouterr()
+    assert rc == 0, cap.err
+    res = json.loads(cap.out)
+    saved = json.loads((out / "study.json").read_text())
+    kinds = {(Path(f["file"]).name, f["kind"]) for f in saved["input_findings"]}
+    assert kinds == {("sine_steer_intact.mcap", "gap"), ("sine_steer_rear_empty.mcap", "dead_sensor"),
+                     ("bump_crossing_intact.mcap", "bad_metadata")}
+    assert {(Path(f["file"]).name, f["kind"]) for f in res["input_findings"]} == kinds
+    (refused,) = saved["refused_drives"]
+    assert Path(refused["file"]).name == "sine_steer_rear_empty.mcap" and "dead_sensor roll_rate" in refused["error"]
+    assert "rear_empty" not in saved["tables"]["sine_steer"] and "intact" in saved["tables"]["sine_steer"]
+    by_name = {Path(d["file"]).name: d for d in saved["drives"]}
+    assert "sine_steer_rear_empty.mcap" not in by_name
+    assert by_name["bump_crossing_intact.mcap"]["vehicle"] == DEFAULT_VEHICLE
+    assert [f["kind"] for f in by_name["sine_steer_intact.mcap"]["input_findings"]] == ["gap"]
+    report = (out / "report.md").read_text()
+    section = report[report.index("## Input findings"):]
+    for name, kind in kinds:
+        assert f"{name} " in section and f" {kind} " in section, (name, kind)
+    assert "refused, left out of the tables" in section and "sine_steer_rear_empty.mcap" in section
+    assert "refused" in cap.err
+    # the holed drive is compared without its gap: fewer samples than the intact one, none interpolated
+    clean = validation_study.run_validation_study(BAGS, tmp_path / "clean", progress=False, plots=False)
+    intact = {Path(d["file"]).name: d for d in clean["drives"]}["sine_steer_intact.mcap"]
+    holed = by_name["sine_steer_intact.mcap"]
+    n = holed["validation"]["full"]["windows"]["steering"]["signals"]["roll_rate"]["n"]
+    assert n < intact["validation"]["full"]["windows"]["steering"]["signals"]["roll_rate"]["n"] - 150
+    assert "## Input findings" not in (tmp_path / "clean" / "report.md").read_text()
+    assert clean["input_findings"] == [] and clean["refused_drives"] == []
+
+
+def test_study_refusing_every_drive_is_a_named_error(tmp_path, capsys):
+    import dataclasses
+
+    from susp_sim_ros.io.drive import drive_from_recording, write_drive
+    from susp_sim_ros.io.reader import read_recording
+    bags = tmp_path / "bags"
+    bags.mkdir()
+    d = drive_from_recording(read_recording(BAGS / "bump_crossing_intact.mcap"))
+    write_drive(bags / "noroad.mcap", dataclasses.replace(d, road=None))
+    rc = main(["validate", "--study", str(bags), "--out", str(tmp_path / "o"), "--no-plots", "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "refused every drive" in err and "missing_topic" in err and "noroad.mcap" in err

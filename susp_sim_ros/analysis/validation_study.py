@@ -10,7 +10,14 @@ node replaying the drive), validate each simulation against the measured IMU
 - overlay plots, measured vs each variant, one PNG per maneuver and state;
 - a Markdown report (``report.md``) and the full result as JSON (``study.json``);
 - per drive, the ride and road-holding metrics (:mod:`.ride_recording`) of each variant's simulation and
-  the measured Wk comfort over the same time (``drives[].ride``, a table in the report).
+  the measured Wk comfort over the same time (``drives[].ride``, a table in the report);
+- the input findings of every drive read (:mod:`susp_sim_ros.io.integrity`, issue 28): ``input_findings``
+  in ``study.json`` (and per drive, ``drives[].input_findings``) and an ``## Input findings`` section in the
+  report. A drive the check refuses (nothing sound left, or the table signal of its maneuver dead) is left
+  out of the tables and named, with the check's error, in ``refused_drives`` and in that section; the study
+  stops with that error only when it refuses every drive. IMU gaps are left out of every comparison
+  (``exclude``), dead gyro axes get no metric, and a drive whose ``vehicle`` has no parameter set is
+  simulated as the reference car (a ``bad_metadata`` finding).
 
 The maneuver of a drive comes from its ``test_drive`` metadata (``maneuver`` starting with a name or
 alias of the maneuver registry, :func:`~susp_sim_ros.model.paper.classify_maneuver`: ``bump_crossing``
@@ -25,6 +32,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,6 +42,7 @@ import numpy as np
 
 from ..errors import RecordingError, SuspInputError
 from ..io.drive import TestDrive, read_drive
+from ..io.integrity import IntegrityError, drive_vehicle, markdown, require_live_imu
 from ..io.messages import SUSPENSION_COLUMNS
 from ..model import Model
 from ..model.maneuvers import vehicle_state
@@ -42,7 +51,6 @@ from ..model.paper import (HEADLINE_MANEUVER, MANEUVERS, STATES, VARIANT_LABEL, 
 from ..progress import progress as make_progress
 from ..runtime.lockstep import run_lockstep
 from . import validation as va
-from ..model.params import DEFAULT_VEHICLE
 from . import ride_recording as rr
 from .synthetic import SOURCE
 
@@ -83,6 +91,7 @@ class DriveResult:
     sims: dict = field(default_factory=dict, repr=False)
     plot: str | None = None
     ride: dict = field(default_factory=dict)  # {"measured": {...}, "simulated": {variant: {...}}}
+    input_findings: list = field(default_factory=list)  # io/integrity.py findings of the drive
 
     def rmse(self, variant: str) -> float:
         return self.results[variant].rmse_deg_s(self.window, self.signal)
@@ -92,7 +101,7 @@ class DriveResult:
                 "source": self.source, "signal": self.signal, "window": self.window,
                 "rmse_deg_s": {v: self.rmse(v) for v in self.results},
                 "validation": {v: r.as_dict() for v, r in self.results.items()}, "plot": self.plot,
-                "ride": self.ride}
+                "ride": self.ride, "input_findings": [dict(f) for f in self.input_findings]}
 
 
 def _find_drives(folder: Path) -> list[Path]:
@@ -112,8 +121,16 @@ def simulate_and_validate(path: str | Path, drive, variants: Sequence[str], mode
         raise RecordingError(f"{path}: no measured IMU samples on /imu/data: nothing to validate against")
     meta = drive.metadata
     maneuver = classify_maneuver(meta.get("maneuver", ""))
-    vehicle = meta.get("vehicle") or DEFAULT_VEHICLE
+    vehicle = drive_vehicle(drive, path)  # the reference car for a vehicle without parameters (bad_metadata)
     signal = va.MANEUVER_SIGNAL.get(maneuver or "", "pitch_rate")
+    # input integrity (io/integrity.py): the table signal must be live; other dead gyro axes get no metric,
+    # IMU gaps are left out of every comparison (never interpolated across)
+    require_live_imu(drive, path, "the validation study", signals=(signal,),
+                     need=f"the table signal {signal} of the drive's maneuver live")
+    dead = set(drive.extra.get("unusable_signals", ()))
+    signals = [x for x in va.RATE_SIGNALS if x not in dead]
+    imu_topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
+    exclude = _imu_gaps(drive)
     wheelbase = _model(models, vehicle, variants[0]).vehicle.wheelbase
     windows = va.analysis_windows(drive, wheelbase)
     window = va.MANEUVER_WINDOW.get(maneuver or "", "whole")
@@ -121,7 +138,8 @@ def simulate_and_validate(path: str | Path, drive, variants: Sequence[str], mode
         window = "whole"
     state = classify_state(drive.oil_levels()) if drive.oil_known else "unknown (simulated intact)"
     res = DriveResult(str(path), maneuver, state, vehicle,
-                      meta.get("source", ""), signal, window, drive=drive)
+                      meta.get("source", ""), signal, window, drive=drive,
+                      input_findings=list(drive.extra.get("input_findings", ())))
     for v in variants:
         sim = run_lockstep(drive, vehicle=vehicle, variant=v, model=_model(models, vehicle, v))
         if not sim.healthy or len(sim.imu) < 2:
@@ -129,12 +147,19 @@ def simulate_and_validate(path: str | Path, drive, variants: Sequence[str], mode
                                  f"(rejected inputs: {sim.rejections or 'none'})")
         try:
             r = va.validate(drive.imu.t_ns, drive.imu.gyro, sim.imu.t_ns, sim.imu.gyro, windows=windows,
-                            names=(f"{path} /imu/data", f"{v} simulation"))
+                            signals=signals, names=(f"{path} {imu_topic}", f"{v} simulation"), exclude=exclude)
         except RecordingError as exc:
             raise RecordingError(f"{path}: {exc}") from None
         if window not in r.metrics:
+            why = r.skipped.get(window, "")
+            if exclude:  # the damage left nothing of the window: the check's refusal, named
+                t0 = drive.t0_ns
+                gaps = ", ".join(f"{(a - t0) / va.NS:.3f}-{(b - t0) / va.NS:.3f} s" for a, b in exclude)
+                raise IntegrityError(f"{path}: topic {imu_topic}: gap {gaps} (log time from the recording's "
+                                     f"first message): the {window} window has too few IMU samples outside the "
+                                     f"gaps ({why}); expected IMU samples over the window")
             raise RecordingError(f"{path}: analysis window {window!r} has no overlap with the {v} "
-                                 f"simulation: {r.skipped.get(window, '')}")
+                                 f"simulation: {why}")
         res.results[v] = r
         res.sims[v] = sim.imu
         _add_ride(res, drive, sim, v, _model(models, vehicle, v).vehicle)
@@ -154,6 +179,12 @@ def _add_ride(res: DriveResult, drive, sim, variant: str, vp) -> None:
     if "measured" not in res.ride:
         res.ride["measured"] = rr.comfort_of_series(drive.imu.t_ns, drive.imu.accel, span, gravity=vargs["gravity"],
                                                     what=f"{res.path} /imu/data")
+
+
+def _imu_gaps(drive) -> list:
+    """The excluded spans [ns] of the drive's measured IMU (gaps, io/integrity.py)."""
+    topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
+    return list(drive.extra.get("excluded_spans", {}).get(topic, ()))
 
 
 def _model(models: dict, vehicle: str, variant: str):
@@ -203,6 +234,8 @@ def plot_drive(d: DriveResult, path: Path) -> None:
                                          (int(sim.t_ns[0]), int(sim.t_ns[-1]))), 100.0)
         err = va.resample(sim.t_ns, np.degrees(sim.gyro[:, ax_i]), grid) - \
             va.resample(imu.t_ns, np.degrees(imu.gyro[:, ax_i]), grid)
+        for a, b in _imu_gaps(d.drive):  # not drawn across an IMU gap (left out of every comparison)
+            err[(grid > a) & (grid < b)] = np.nan
         ax_e.plot((grid - t0) * 1e-9, err, color=COLORS.get(v), lw=1.0)
     w = d.results[next(iter(d.results))].windows[d.window]
     for a in (ax, ax_e):
@@ -371,12 +404,25 @@ def _report_plots(drives: Sequence[DriveResult]) -> list[str]:
     return lines
 
 
+def _report_inputs(findings: Sequence[dict], refused: Sequence[dict]) -> list[str]:
+    """The ``## Input findings`` section: one line per finding of every drive read (io/integrity.py), one per
+    drive the check refused (left out of the tables); nothing when there are neither."""
+    text = markdown(list(findings))
+    if not text and not refused:
+        return []
+    lines = text.rstrip("\n").split("\n") if text else ["", "## Input findings", ""]
+    lines += [f"- refused, left out of the tables: {r['error']}" for r in refused]
+    return lines
+
+
 def write_validation_report(path: Path, drives: Sequence[DriveResult], tab: dict, found: dict, elapsed_s: float,
-                 variants: Sequence[str] = VARIANTS) -> None:
-    """The study's Markdown report at ``path``: tables, findings, windows, agreement, ride, plots."""
+                 variants: Sequence[str] = VARIANTS, *, input_findings: Sequence[dict] = (),
+                 refused: Sequence[dict] = ()) -> None:
+    """The study's Markdown report at ``path``: tables, findings, windows, agreement, ride, plots, and the
+    input findings (with the drives refused)."""
     lines = (_report_header(drives, elapsed_s, variants) + _report_tables(tab, found, variants)
              + _report_findings(drives, tab, found) + _report_windows_and_agreement(drives)
-             + _report_ride(drives) + _report_plots(drives))
+             + _report_ride(drives) + _report_plots(drives) + _report_inputs(input_findings, refused))
     path.write_text("\n".join(lines) + "\n")
 
 
@@ -397,13 +443,25 @@ def run_validation_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS,
     bar = make_progress(total=len(paths) * len(variants), desc="study", unit="run", enabled=progress)
     models: dict = {}
     results: list[DriveResult] = []
+    refused: list[dict] = []
+    inputs: list[dict] = []  # the input findings of every drive read
     try:
         for p in paths:
             bar.set_postfix_str(p.name)
-            drive = read_drive(p, topic_map=topic_map)
-            results.append(simulate_and_validate(p, drive, variants, models, bar))
+            try:
+                drive = read_drive(p, topic_map=topic_map)
+                try:
+                    results.append(simulate_and_validate(p, drive, variants, models, bar))
+                finally:  # the check's findings and those of the study's own reading (the drive's vehicle)
+                    inputs += [dict(f) for f in drive.extra.get("input_findings", ())]
+            except IntegrityError as exc:  # nothing sound left of this drive: named, the others go on
+                refused.append({"file": str(p), "error": str(exc)})
+                print(f"study: {p}: refused, left out of the tables: {exc}", file=sys.stderr)
     finally:
         bar.close()
+    if refused and not results:
+        raise IntegrityError(f"--study {folder}: the input integrity check refused every drive: "
+                             + "; ".join(r["error"] for r in refused))
     if plots:
         for d in results:
             name = f"{d.maneuver}_{d.state}" if d.maneuver else Path(d.path).stem
@@ -415,13 +473,15 @@ def run_validation_study(folder, out_dir, *, variants: Sequence[str] = VARIANTS,
     found = findings(tab, variants)
     elapsed = time.perf_counter() - t_start
     report = out / "report.md"
-    write_validation_report(report, results, tab, found, elapsed, variants)
+    write_validation_report(report, results, tab, found, elapsed, variants, input_findings=inputs,
+                            refused=refused)
     result = {"tables": tab, "elapsed_s": elapsed, "unit": "deg/s",
               "signals": {m: va.MANEUVER_SIGNAL[m] for m in MANEUVERS},
               "windows": {m: va.MANEUVER_WINDOW[m] for m in MANEUVERS},
               "findings": found, "paper_ratio_rear_empty_bump": PAPER_RATIO,
               "drives": [d.as_dict() for d in results], "report": str(report),
-              "plots": [d.plot for d in results if d.plot], "variants": list(variants)}
+              "plots": [d.plot for d in results if d.plot], "variants": list(variants),
+              "input_findings": inputs, "refused_drives": refused}
     (out / "study.json").write_text(json.dumps(result, indent=1, default=_jsonable))
     result["elapsed_s"] = time.perf_counter() - t_start
     return result
@@ -457,5 +517,10 @@ def validation_summary_text(result: dict) -> str:
             f"{name} {r['measured']['comfort_wk_rms_m_s2']:.2f}/{r['simulated'][v]['comfort_wk_rms_m_s2']:.2f} "
             f"{max(r['simulated'][v]['dynamic_tyre_load_rms_rel'][w] for w in ('RL', 'RR')):.3f}"
             for name, r in ride if v in r.get("simulated", {})))
+    found, refused = result.get("input_findings", []), result.get("refused_drives", [])
+    if found or refused:
+        lines.append(f"input: {len(found)} finding(s) in the drives read, {len(refused)} drive(s) refused "
+                     f"and left out of the tables" + "".join(f"\n  refused: {r['error']}" for r in refused)
+                     + " (see the report's Input findings)")
     lines.append(f"report: {result['report']}  ({result['elapsed_s']:.1f} s)")
     return "\n".join(lines)

@@ -29,7 +29,7 @@ from ..analysis.ride_recording import summary_line
 from ..analysis.validation_study import run_validation_study, validation_summary_text
 from ..errors import ConfigError, RecordingError, SuspInputError
 from ..io.drive import IMU, SIM_IMU, imu_from_recording, read_drive
-from ..io.integrity import require_live_imu
+from ..io.integrity import drive_vehicle, require_live_imu
 from ..io.reader import read_recording
 from ..io.suspension import SIM_SUSPENSION, suspension_from_recording
 from ..io.topic_map import add_topic_map_argument
@@ -98,7 +98,7 @@ def _pair(args) -> dict:
     topic, sim, sim_rec = _simulated_imu(args.simulated, args.simulated_topic, with_recording=True)
     if len(sim) < 2:
         raise RecordingError(f"{args.simulated}: fewer than 2 IMU samples on {topic}")
-    windows = va.analysis_windows(drive, _wheelbase_of(drive))
+    windows = va.analysis_windows(drive, _wheelbase_of(drive, args.measured))
     # input integrity (io/integrity.py): a dead gyro axis gives no metric, an IMU gap is left out
     dead = set(drive.extra.get("unusable_signals", ()))
     signals = [s for s in va.RATE_SIGNALS if s not in dead]
@@ -136,14 +136,11 @@ def _pair(args) -> dict:
     return out
 
 
-def _wheelbase_of(drive) -> float:
+def _wheelbase_of(drive, path) -> float:
     """Wheelbase [m] of the drive's vehicle (its ``vehicle`` metadata, as the validation study reads it);
-    the reference vehicle's where the drive names none or one without a parameter set here."""
-    name = drive.metadata.get("vehicle") or ""
-    try:
-        return load_vehicle(name).wheelbase if name else load_vehicle().wheelbase
-    except ConfigError:
-        return load_vehicle().wheelbase
+    the reference vehicle's where the drive names none or one without a parameter set here (then a
+    ``bad_metadata`` finding, :func:`~susp_sim_ros.io.integrity.drive_vehicle`)."""
+    return load_vehicle(drive_vehicle(drive, path)).wheelbase
 
 
 def _ride(args, drive, sim, sim_rec) -> dict:

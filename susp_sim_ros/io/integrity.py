@@ -25,7 +25,9 @@ Kinds and what is done (``action``):
   is recorded in ``drive.extra["excluded_spans"]`` for the measured IMU (comparisons leave it out,
   ``excluded``); an input holds its last value over it as the node does (``kept``).
 * ``spike`` -- a sample far from the running median (``spikes.mad_factor`` robust sd, at least the
-  ``spikes.floor_*`` of its signal): dropped (``excluded``).
+  ``spikes.floor_*`` of its signal): dropped (``excluded``). On the road profile (along the path, per
+  track, ``spikes.floor_road_profile``) the sample is dropped and the profile joined linearly over it
+  (:meth:`_Checker.road_spikes`).
 * ``implausible_unit`` -- speed beyond ``limits.speed_max`` m/s but plausible as km/h, steering beyond
   ``limits.steering_max`` rad but plausible as degrees: an error (a topic map with a factor says the unit).
 * ``out_of_range`` -- input samples outside what the node accepts (the one set of limits, ``limits.*`` of
@@ -46,7 +48,9 @@ Kinds and what is done (``action``):
   (:data:`~susp_sim_ros.model.paper.MANEUVER_KINDS`) but does not start with one of its names, so that
   :func:`~susp_sim_ros.model.paper.classify_maneuver` reads it as free text (compared over the whole
   drive; ``kept``), a ``vehicle_state`` that names no vehicle state (ignored, the state comes from
-  ``damper_oil_level``; ``kept``); a ``damper_oil_level`` that is not four fractions in [0, 1] (nor
+  ``damper_oil_level``; ``kept``); a ``vehicle`` without a parameter set here, reported by the commands that
+  take the vehicle from the drive (:func:`drive_vehicle`: the reference car is used; ``kept``); a
+  ``damper_oil_level`` that is not four fractions in [0, 1] (nor
   ``unknown``) is an error (every simulation needs the oil levels; :func:`check_oil_metadata`).
 * ``missing_topic`` -- a maneuver driven by the road (``maneuvers.needs_road``) without ``/road/profile`` or
   ``/road/wheel_heights``: an error (the model would drive a flat road).
@@ -62,9 +66,10 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from ..errors import RecordingError
+from ..errors import ConfigError, RecordingError
 from ..model.paper import MANEUVER_KINDS, STATES, classify_maneuver
-from ..model.params import load_settings
+from ..model.params import DEFAULT_VEHICLE, load_settings, load_vehicle
+from ..model.road import RoadProfile
 from . import drive_data as _drive
 
 from .drive_data import Series, TestDrive
@@ -182,6 +187,41 @@ def check_oil_metadata(metadata: dict[str, Any], file: str | Path) -> None:
         raise IntegrityError(f"{file}: {METADATA_RECORD} metadata damper_oil_level: bad_metadata: expected four "
                              f"comma-separated fractions FL,FR,RL,RR in [0, 1] (or 'unknown'), got {text!r}"
                              ) from None
+
+
+def unknown_vehicle(metadata: dict[str, Any]) -> str | None:
+    """Why the ``vehicle`` metadata of a drive names no vehicle parameter set that loads (a name in
+    ``config/vehicles/`` or a YAML path), or None when it does or names none (``bad_metadata``)."""
+    name = str(metadata.get("vehicle") or "").strip()
+    if not name:
+        return None
+    try:
+        load_vehicle(name)
+    except ConfigError as exc:  # an unknown name, a missing or malformed file
+        return str(exc)
+    return None
+
+
+def drive_vehicle(drive: TestDrive, file: str | Path) -> str:
+    """The vehicle parameter set a command that takes the vehicle from the drive uses (validate, the
+    validation study): its ``vehicle`` metadata when that loads, else the reference car
+    (:data:`~susp_sim_ros.model.params.DEFAULT_VEHICLE`), said so as a ``bad_metadata`` finding (kept) on
+    stderr, in the command's findings and in ``drive.extra["input_findings"]``. Only such a command reports
+    it: where the vehicle comes from the command line (``diagnose --vehicle``, ``sim --config``) the
+    drive's name for its car changes nothing, and a drive of another car is no damaged drive."""
+    meta = drive.metadata
+    why = unknown_vehicle(meta)
+    if why is None:
+        name = str(meta.get("vehicle") or "").strip()
+        return name or DEFAULT_VEHICLE
+    f = InputFinding(str(file), METADATA_RECORD, "bad_metadata", 0.0, drive.duration_s, "kept",
+                     f"vehicle {str(meta.get('vehicle')).strip()!r} has no parameter set here ({why}); the "
+                     f"reference car {DEFAULT_VEHICLE} is used where the vehicle is taken from the drive")
+    found = drive.extra.setdefault("input_findings", [])
+    if f.to_json() not in found:
+        found.append(f.to_json())
+    report([f])
+    return DEFAULT_VEHICLE
 
 
 class _Checker:
@@ -425,6 +465,7 @@ class _Checker:
         cmd = self.in_range(names.get("damper_command", DAMPER_COMMAND), cmd, lo, hi, "1",
                             "the valve command range of interface.md")
         self.road_range(names.get("road_profile", ROAD_PROFILE), wh_max)
+        road = self.road_spikes(names.get("road_profile", ROAD_PROFILE))
         imu = d.imu
         unusable: set[str] = set()
         saturated: set[str] = set()
@@ -451,7 +492,7 @@ class _Checker:
         extra["excluded_spans"] = excluded
         extra["unusable_signals"] = sorted(unusable)
         extra["saturated_signals"] = sorted(saturated)
-        out = _drive.TestDrive(d.metadata, speed, steering, d.road, wh, imu, extra, damper_command=cmd)
+        out = _drive.TestDrive(d.metadata, speed, steering, road, wh, imu, extra, damper_command=cmd)
         return IntegrityResult(out, list(self.findings), unusable, saturated)
 
     def road_range(self, topic: str, limit_m: float) -> None:
@@ -466,6 +507,34 @@ class _Checker:
         raise self.fail(topic, self.t0, self.t0,
                         f"out_of_range: road elevation up to {float(z.max()):.4g} m beyond +-{limit_m:g} m "
                         f"(limits.wheel_height_max); expected a road the node accepts")
+
+    def road_spikes(self, topic: str) -> RoadProfile | None:
+        """``spike`` (``excluded``): road-profile samples far from the running median along the path (over
+        ``spikes.window`` samples, beyond ``spikes.mad_factor`` robust sd of the residual and at least
+        ``spikes.floor_road_profile`` m) in either track. The sample (its ``s`` and both tracks) is dropped:
+        the profile is joined linearly over it, as the model joins any two neighbouring samples. A smooth
+        bump follows the running median and gives none. More than 5 % of the samples that far off are the
+        road, not spikes (kept as recorded)."""
+        road = self.drive.road
+        w = int(self.pol["spikes.window"])
+        if road is None or len(road.s) < w:
+            return road
+        floor = float(self.pol["spikes.floor_road_profile"])
+        factor = float(self.pol["spikes.mad_factor"])
+        bad = np.zeros(len(road.s), bool)
+        for z in (road.zl, road.zr):
+            r = z - _running_median(z, w)
+            sd = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+            bad |= np.abs(r) > max(factor * sd, floor)
+        if not bad.any() or bad.mean() >= 0.05:
+            return road
+        for i0, i1 in _runs(bad):
+            peak = float(np.max(np.abs(np.concatenate([road.zl[i0:i1 + 1], road.zr[i0:i1 + 1]]))))
+            self.add(topic, "spike", self.t0, self.t0, "excluded",
+                     f"{i1 - i0 + 1} road sample(s) at s = {road.s[i0]:.4g}-{road.s[i1]:.4g} m up to {peak:.4g} m "
+                     f"far from the running median along the path (beyond {floor:g} m and {factor:g} robust sd); "
+                     f"dropped, the profile joined linearly over it")
+        return RoadProfile(road.s[~bad], road.zl[~bad], road.zr[~bad])
 
     # -- metadata ------------------------------------------------------------------------------------
     def metadata(self) -> None:

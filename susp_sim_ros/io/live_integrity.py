@@ -14,7 +14,15 @@ Kinds judged live (``level``: 1 WARN, 2 ERROR where the offline policy raises it
   on ``/road/profile`` (one latched message: nothing left to work on) ERROR.
 * ``implausible_unit`` -- speed beyond ``limits.speed_max`` m/s that fits it as km/h, steering beyond
   ``limits.steering_max`` rad that fits it as degrees (the offline rule on the magnitude): ERROR,
-  ``excluded``.
+  ``excluded``. It needs the evidence the offline check needs: offline, samples far from the running
+  median are dropped as spikes before the unit is judged, so one outlier in a signal recorded in the right
+  unit is a ``spike``, never a unit mistake. Live, once a topic has ``spikes.window`` - 1 earlier messages,
+  a value beyond the limit is judged against them (:meth:`LiveIntegrity.check`): far from the value the
+  last two predict (beyond ``spikes.mad_factor`` robust sd of their second differences and at least the
+  ``spikes.floor_*`` of the signal) it is a ``spike`` (WARN, ``excluded``: the node rejects it, the last
+  value holds); in line with them (a signal that really lives there: recorded in the other unit) it is
+  ``implausible_unit``. With fewer earlier messages the magnitude alone decides, as offline on a series
+  shorter than the spike window.
 * ``out_of_range`` -- a value outside what the node accepts and no unit mistake: speed outside
   [0, ``limits.speed_max``] m/s, a steering angle beyond +-``limits.steering_max`` rad, a wheel height beyond
   +-``limits.wheel_height_max`` m, a damper command outside [0, 1] (WARN, ``excluded``); a road profile
@@ -28,8 +36,9 @@ Kinds judged live (``level``: 1 WARN, 2 ERROR where the offline policy raises it
   message ends it (WARN, ``kept``: the last value is held over it). The latched road profile has no gaps.
 
 Not judged live: ``duplicate_stamp`` (a message's time is the ROS time at which the node applies it; with
-a ``/clock`` slower than the input several messages share one), ``spike`` and ``rate_change`` (both need
-the samples after the one judged; the node holds each value at once), ``dead_sensor``,
+a ``/clock`` slower than the input several messages share one), ``spike`` within the limits and
+``rate_change`` (both need the samples after the one judged; the node holds each value at once; a spike
+beyond the limit is judged, above), ``dead_sensor``,
 ``saturated_sensor`` (the node subscribes to no measured IMU), ``missing_topic`` and ``bad_metadata``
 (no recording metadata live).
 """
@@ -102,6 +111,9 @@ class LivePolicy:
     clock_jump_ns: int
     backward_jump_ns: int
     rate_window: int
+    spike_window: int = 11
+    mad_factor: float = 25.0
+    spike_floor: dict[str, float] = field(default_factory=dict)  # topic -> spikes.floor_* [its unit]
 
     @classmethod
     def from_table(cls, policy: dict[str, Any] | None = None) -> "LivePolicy":
@@ -113,7 +125,9 @@ class LivePolicy:
                    gap_periods=float(p["stamps.gap_periods"]), gap_min_ns=int(float(p["stamps.gap_min_s"]) * NS),
                    clock_jump_ns=int(float(p["stamps.clock_jump_s"]) * NS),
                    backward_jump_ns=int(float(p["stamps.backward_jump_s"]) * NS),
-                   rate_window=int(p["stamps.rate_window"]))
+                   rate_window=int(p["stamps.rate_window"]), spike_window=int(p["spikes.window"]),
+                   mad_factor=float(p["spikes.mad_factor"]),
+                   spike_floor={SPEED: float(p["spikes.floor_speed"]), STEERING: float(p["spikes.floor_steering"])})
 
 
 def _fmt(values: Sequence[float]) -> str:
@@ -197,6 +211,8 @@ class LiveIntegrity:
     def __init__(self, policy: dict[str, Any] | LivePolicy | None = None):
         self.policy = policy if isinstance(policy, LivePolicy) else LivePolicy.from_table(policy)
         self._clocks: dict[str, _TopicClock] = {}
+        #: the last ``spikes.window`` - 1 finite values of speed and steering (the evidence of a unit mistake)
+        self._recent: dict[str, deque] = {}
 
     def gap_limit_ns(self, topic: str) -> int | None:
         """The gap limit of ``topic`` now [ns]: ``stamps.gap_periods`` median intervals (of the last
@@ -214,6 +230,11 @@ class LiveIntegrity:
         out: list[LiveFinding] = []
         t_ns = int(t_ns)
         judged = judge_value(topic, values, self.policy)
+        if judged is not None and judged[0] == "implausible_unit":
+            judged = self._outlier(topic, float(values[0])) or judged
+        if topic in self.policy.spike_floor and len(values) == 1 and math.isfinite(float(values[0])):
+            recent = self._recent.setdefault(topic, deque(maxlen=max(self.policy.spike_window - 1, 2)))
+            recent.append(float(values[0]))
         if judged is not None:
             kind, level, value, expected = judged
             out.append(LiveFinding(topic, kind, t_ns, level, "excluded", value, expected,
@@ -222,6 +243,26 @@ class LiveIntegrity:
         if topic in STREAM_TOPICS and (judged is None or judged[0] != "non_finite"):
             out.extend(self._stamp(topic, t_ns))
         return out
+
+    def _outlier(self, topic: str, v: float) -> tuple[str, int, str, str] | None:
+        """A value beyond the limit that fits the other unit, judged against the topic's earlier messages
+        (module docstring): ``spike`` when it is far from what the last two predict (linear extrapolation;
+        ``spikes.mad_factor`` robust sd of the earlier second differences, at least ``spikes.floor_*``),
+        None (the unit mistake stands) when it is in line with them or too few are known."""
+        pol = self.policy
+        recent = self._recent.get(topic)
+        if recent is None or len(recent) < pol.spike_window - 1 or len(recent) < 3:
+            return None
+        x = np.asarray(recent, dtype=float)
+        pred = 2.0 * x[-1] - x[-2]
+        sd = 1.4826 * float(np.median(np.abs(np.diff(x, 2))))
+        limit = max(pol.mad_factor * sd, pol.spike_floor[topic])
+        if abs(v - pred) <= limit:
+            return None
+        unit = "m/s" if topic == SPEED else "rad"
+        return ("spike", WARN, f"{v:.6g} {unit}",
+                f"a value near {pred:.6g} {unit} (what the last {len(x)} messages predict, within {limit:.4g} "
+                f"{unit}: spikes.mad_factor robust sd, at least spikes.floor_*); one outlier, no unit mistake")
 
     def _stamp(self, topic: str, t_ns: int) -> list[LiveFinding]:
         c = self._clocks.setdefault(topic, _TopicClock(intervals=deque(maxlen=self.policy.rate_window)))

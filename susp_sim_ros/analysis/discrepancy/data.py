@@ -62,6 +62,7 @@ class DriveCase:
     t_raw_s: np.ndarray | None = None       # every measured sample time within the simulated span [s since t0]
     y_raw: np.ndarray | None = None         # all six measured signals there (SIGNALS order), for the noise
     resample_factor: float = 1.0            # noise variance factor of resampling (1: compared as sampled)
+    holes_s: tuple[tuple[float, float], ...] = ()  # excluded spans of the measured IMU [s since t0] (gaps)
 
     @property
     def n_steps(self) -> int:
@@ -196,7 +197,10 @@ def prepare_case(path: str | Path, drive, *, wheelbase: float, dt: float = 0.001
 
     The comparison is made at the measured IMU sample times inside the drive's analysis window (the
     simulation, at 1 kHz and smooth, is interpolated onto them; the measurement is never resampled, so
-    the residual holds the sensor's noise exactly as sampled). ``signals`` (default: all six IMU
+    the residual holds the sensor's noise exactly as sampled). Where the integrity check excluded a span of
+    the measured IMU (``drive.extra["excluded_spans"]``: a gap, never interpolated across) no sample inside
+    it is compared, and the span is kept as ``holes_s`` so that nothing downstream (noise differences,
+    sliding windows) reaches across it. ``signals`` (default: all six IMU
     signals) are narrowed to the excited ones by the finder once the noise is known. A signal the
     integrity check found dead or saturated (:func:`unsound_signals`) is left out: not used as a
     measurement (``y_raw`` keeps all six columns, as recorded).
@@ -226,6 +230,11 @@ def prepare_case(path: str | Path, drive, *, wheelbase: float, dt: float = 0.001
     axes = np.array([SIGNALS.index(x) for x in signals])
     meas_all = np.column_stack([np.degrees(drive.imu.gyro), drive.imu.accel])
     t_meas, m_meas = va.check_series(drive.imu.t_ns, meas_all, f"{path} /imu/data")
+    holes = excluded_imu_spans(drive)
+    inside = np.zeros(t_meas.size, bool)
+    for a, b in holes:  # strictly inside: the samples bounding a gap are measured and compared
+        inside |= (t_meas > a) & (t_meas < b)
+    t_meas, m_meas = t_meas[~inside], m_meas[~inside]
     sim_span = (t0 + int(round(dt * NS)), t0 + U.shape[0] * int(round(dt * NS)))
     span = va.overlap((int(t_meas[0]), int(t_meas[-1])), sim_span, window.span,
                       what=[f"{path} /imu/data", "simulation", f"{window.name} window"])
@@ -238,7 +247,27 @@ def prepare_case(path: str | Path, drive, *, wheelbase: float, dt: float = 0.001
     return DriveCase(name=path.stem, path=str(path), maneuver=maneuver, state=classify_state(oil),
                      oil=oil, U=U, road=drive.road, t0_ns=int(t0), dt=dt, signals=signals, axes=axes,
                      window=window, grid_ns=grid, y_meas=y, drive=drive, metadata=dict(meta),
-                     t_raw_s=(t_meas[insim] - t0) / NS, y_raw=m_meas[insim], resample_factor=1.0)
+                     t_raw_s=(t_meas[insim] - t0) / NS, y_raw=m_meas[insim], resample_factor=1.0,
+                     holes_s=tuple(((a - t0) / NS, (b - t0) / NS) for a, b in holes))
+
+
+def excluded_imu_spans(drive) -> list[tuple[int, int]]:
+    """The spans [ns] of the measured IMU the integrity check excluded (``drive.extra["excluded_spans"]`` of
+    the IMU topic, e.g. gaps), sorted; empty for a drive that was not checked."""
+    extra = getattr(drive, "extra", {}) or {}
+    topic = extra.get("input_topics", {}).get("imu", "/imu/data")
+    return sorted((int(a), int(b)) for a, b in extra.get("excluded_spans", {}).get(topic, ()))
+
+
+def segment_starts(t_s: np.ndarray, holes_s: Sequence[tuple[float, float]]) -> list[int]:
+    """Indices into the sorted times ``t_s`` where a new stretch starts after an excluded span (the first
+    sample past the span's middle, when samples lie on both sides of it)."""
+    out = []
+    for a, b in holes_s:
+        k = int(np.searchsorted(t_s, 0.5 * (a + b)))
+        if 0 < k < t_s.size:
+            out.append(k)
+    return sorted(set(out))
 
 
 def select_signals(case: DriveCase, keep: Sequence[str]) -> None:

@@ -35,7 +35,7 @@ from scipy import stats
 
 from ...model import simulate
 from ...model.layout import WHEELS
-from .data import SIGNAL_UNIT, SIGNALS, DriveCase, has_road_input, primary_signals
+from .data import SIGNAL_UNIT, SIGNALS, DriveCase, has_road_input, primary_signals, segment_starts, unsound_signals
 
 WINDOW_S = 0.5
 HOP_S = 0.25
@@ -48,12 +48,15 @@ _TRUNC = 3.0
 _TRUNC_VAR = 1.0 - 2 * _TRUNC * stats.norm.pdf(_TRUNC) / (2 * stats.norm.cdf(_TRUNC) - 1)
 
 
-def noise_sigma(e: np.ndarray, order: int = DIFF_ORDER) -> float:
-    """Robust white-noise RMS of a residual column from its ``order``-th differences (module doc)."""
+def noise_sigma(e: np.ndarray, order: int = DIFF_ORDER, breaks: Sequence[int] = ()) -> float:
+    """Robust white-noise RMS of a residual column from its ``order``-th differences (module doc);
+    ``breaks``: indices where a new stretch of samples starts after an excluded span (a gap of the
+    measurement), no difference reaches across one."""
     e = np.asarray(e, float)
-    if e.size < order + 8:
+    pieces = np.split(e, [k for k in breaks if 0 < k < e.size])
+    d = np.concatenate([np.diff(p, order) for p in pieces if p.size > order] or [np.zeros(0)])
+    if d.size < 8:
         return math.nan
-    d = np.diff(e, order)
     scale = math.sqrt(math.comb(2 * order, order))
     med = np.median(d)
     s0 = 1.4826 * np.median(np.abs(d - med))
@@ -67,29 +70,47 @@ def noise_sigma(e: np.ndarray, order: int = DIFF_ORDER) -> float:
 def noise_floor(cases: Sequence[DriveCase], sims: Sequence[np.ndarray]) -> dict:
     """Noise floors per drive and signal (native units: deg/s, m/s^2), pooled per signal over the drives,
     and the legacy gyro figure (pooled over each drive's primary gyro signal); ``sims`` are the base
-    simulation's six IMU signals per drive (n_steps, 6) at the step times."""
+    simulation's six IMU signals per drive (n_steps, 6) at the step times.
+
+    A signal the integrity check found unfit on a drive (a dead axis, ``drive.extra["unusable_signals"]``,
+    or one clipped by the sensor range: :func:`~.data.unsound_signals`) has no noise of its own there: its
+    per-drive figure is NaN (the pooled floor stands in for it) and it stays out of the pool, as does a
+    zero figure (no noise estimate); only a signal no drive measures soundly is pooled from those figures
+    (so that every signal has a floor; no drive compares it). No difference of the residual reaches across
+    an excluded span of the measurement (``case.holes_s``)."""
     per: dict[str, dict[str, float]] = {}
     quiet: dict[str, float] = {}
     pooled: dict[str, list[tuple[float, int]]] = {s: [] for s in SIGNALS}
+    unsound_pool: dict[str, list[tuple[float, int]]] = {s: [] for s in SIGNALS}  # the fallback (doc)
     for c, y in zip(cases, sims):
         assert c.t_raw_s is not None and c.y_raw is not None  # set by data.prepare_case
         t = c.dt * np.arange(1, y.shape[0] + 1)
         per[c.name] = {}
         q = c.quiet_raw if c.quiet_raw is not None else np.zeros(c.t_raw_s.size, bool)
+        unsound = unsound_signals(c.drive)
+        breaks = segment_starts(c.t_raw_s, c.holes_s)
         for j, sig in enumerate(SIGNALS):
             e = np.interp(c.t_raw_s, t, y[:, j]) - c.y_raw[:, j]
-            sd = noise_sigma(e)
+            sd = noise_sigma(e, breaks=breaks)
+            if sig in unsound:  # no measurement: no noise floor of its own, none in the pool
+                per[c.name][sig] = math.nan
+                if math.isfinite(sd) and sd > 0:
+                    unsound_pool[sig].append((sd, e.size))
+                continue
             if q.sum() >= MIN_QUIET:  # both overstate the noise at worst; the lead-in replaces a clearly
                 sd_q = float(np.std(c.y_raw[q, j], ddof=1))  # contaminated difference estimate only
                 if sd > CONTAMINATED * sd_q:
                     sd = sd_q
             per[c.name][sig] = sd
-            if math.isfinite(sd):
+            if math.isfinite(sd) and sd > 0:  # a zero floor is no noise estimate (it would divide by zero)
                 pooled[sig].append((sd, e.size))
         if c.quiet is not None and c.quiet.sum() >= 10:
             prim = [j for j, s in enumerate(c.signals) if s in primary_signals(c.maneuver)]
             if prim:
                 quiet[c.name] = float(np.sqrt(np.mean(np.var(c.y_meas[c.quiet][:, prim], axis=0, ddof=1))))
+    for s in SIGNALS:
+        if not pooled[s]:
+            pooled[s] = unsound_pool[s]
     floors = {s: float(np.sqrt(sum(v * v * n for v, n in pooled[s]) / sum(n for _, n in pooled[s])))
               for s in SIGNALS if pooled[s]}
     # legacy deg/s figure: each drive's primary gyro signal(s), weighted by their comparison samples
@@ -155,28 +176,31 @@ def _dominant_frequency(e: np.ndarray, rate: float) -> float:
 def locate(cases: Sequence[DriveCase], residuals: Sequence[np.ndarray], sigmas: Sequence[np.ndarray],
            outputs: Sequence[dict] | None = None) -> list[dict]:
     """Significant windows (merged), each with drive, signal, time span, RMS (native units), conditions;
-    ``sigmas`` per drive: the noise sigma of each of its signals."""
+    ``sigmas`` per drive: the noise sigma of each of its signals. No window reaches across an excluded
+    span of the measurement (``case.holes_s``, a gap): each stretch between them is searched on its own."""
     found = []
     for ci, (c, e) in enumerate(zip(cases, residuals)):
         t = c.t_grid_s
         rate = 1.0 / float(np.median(np.diff(t)))
         nwin = max(int(round(WINDOW_S * rate)), 10)
         hop = max(int(round(HOP_S * rate)), 1)
+        cuts = [0, *segment_starts(t, c.holes_s), e.shape[0]]
         for j, sig in enumerate(c.signals):
             sigma = float(sigmas[ci][j])
             thr = _threshold(sigma, nwin)
             flags = []
-            for s in range(0, max(e.shape[0] - nwin, 0) + 1, hop):
-                seg = e[s:s + nwin, j]
-                if np.sqrt(np.mean(seg * seg)) > thr:
-                    flags.append((s, s + nwin))
+            for lo, hi in zip(cuts[:-1], cuts[1:]):  # one stretch between excluded spans at a time
+                for s in range(lo, max(hi - nwin, lo) + 1, hop):
+                    seg = e[s:min(s + nwin, hi), j]
+                    if np.sqrt(np.mean(seg * seg)) > thr:
+                        flags.append((s, min(s + nwin, hi), lo))
             merged: list[list[int]] = []
-            for a, b in flags:
-                if merged and a <= merged[-1][1]:
+            for a, b, lo in flags:
+                if merged and a <= merged[-1][1] and lo == merged[-1][2]:
                     merged[-1][1] = b
                 else:
-                    merged.append([a, b])
-            for a, b in merged:
+                    merged.append([a, b, lo])
+            for a, b, _ in merged:
                 seg = e[a:b, j]
                 t0, t1 = float(t[a]), float(t[min(b, len(t)) - 1])
                 w = {"drive": c.name, "signal": sig, "unit": SIGNAL_UNIT[SIGNALS.index(sig)],
