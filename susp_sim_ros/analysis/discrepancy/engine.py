@@ -127,6 +127,9 @@ class Evaluator:
         self.progress = progress
         # residual weights (n_grid, n_sig): 1 / noise sigma of each drive's signal once known
         self.weights = [np.ones_like(c.y_meas) for c in self.cases]
+        #: per drive, the correlation samples (samples per independent one) of each signal's residual after the
+        #: first calibration (:func:`~.fit.learn_residual_correlation`); empty until then
+        self.corr_samples: dict[int, np.ndarray] = {}
 
     def set_noise(self, sigma: Sequence[np.ndarray]) -> None:
         """Per drive, the white-noise sigma of each of its signals (native units): residuals are then

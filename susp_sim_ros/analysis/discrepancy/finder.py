@@ -48,8 +48,10 @@ from .calibration import (STEP_OF_SD, CalParam, calibration_candidate, calibrati
 from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PHYSICS
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .data import SIGNAL_UNIT, as_cases
+from .decoys import decoy_margin
 from .engine import Evaluator, Structure
-from .fit import FitResult, debias, fit_structure, prior_rows, raw_residuals, screen
+from .fit import (FitResult, bic, debias, fit_structure, learn_residual_correlation, n_effective, prior_rows,
+                  raw_residuals, screen)
 from .locate import base_outputs, locate, noise_floor
 from .report import interface_json
 from .road_estimate import GYRO_VERTICAL, estimate_road, road_usability
@@ -398,9 +400,11 @@ class DiscrepancyFinder:
                      "criterion_with_shifts": crit_shift, "criterion_without_shifts": crit_held,
                      "criterion_term_without_shifts": crit}
             # better on equal terms but failing on held-out drives, or within the margin: undecided
-            checks = self._heldout_check(ev, cur, f) if crit <= crit_shift - MIN_DELTA_BIC else {}
+            checks = self._decoy_check(ev, held, f) if crit <= crit_shift - MIN_DELTA_BIC else {}
+            if checks.get("decoys_beaten"):
+                checks.update(self._heldout_check(ev, cur, f))
             entry.update(checks)
-            if checks.get("passed") and not competing:
+            if checks.get("decoys_beaten") and checks.get("passed") and not competing:
                 path.append({**entry, "added": [name], "structure": list(f.structure.names), "rss": f.rss,
                              "bic": f.bic, "accepted": True,
                              "why": f"with {', '.join(rivals)} at their measured values the term explains the "
@@ -536,7 +540,10 @@ class DiscrepancyFinder:
                 ok = (cur.bic - f.bic) >= MIN_DELTA_BIC and cur.rss - f.rss >= MIN_EXPLAINED * excess
                 in_sample = ok
                 if ok:
-                    checks = self._heldout_check(ev, cur, f)
+                    checks = self._decoy_check(ev, cur, f)
+                    ok = checks["decoys_beaten"]
+                if ok:
+                    checks.update(self._heldout_check(ev, cur, f))
                     ok = checks["passed"]
                 if ok:
                     recal = self._recalibration(ev, cur, recalibrations, step)
@@ -712,10 +719,15 @@ class DiscrepancyFinder:
         self.calibrated_vehicle_, self.calibrated_fields_, self.informed_ = model.vehicle, [], []
         if not params and not meas:
             self.calibration_, self.identifiability_ = [], None
+            learn_residual_correlation(ev, fit_structure(ev, Structure([])))
             return fit_structure(ev, Structure([]))
         cand = calibration_candidate(model, params) if params else None
         st = Structure([cand, *meas] if cand else meas)
         fit1 = fit_structure(ev, st, st.neutral(), allidx, max_nfev=12)
+        # every criterion from here on counts the samples the calibrated misfit leaves independent
+        learn_residual_correlation(ev, fit1)
+        ne = n_effective(ev, allidx)
+        fit1 = dataclasses.replace(fit1, n_eff=ne, bic=bic(fit1.rss, fit1.n, fit1.k_bic, ne))
         ident, informed = None, []
         if params:
             k = len(params)
@@ -835,6 +847,20 @@ class DiscrepancyFinder:
         self.calibrated_fields_ = sorted({p.field for p in informed})
 
     # -- proof --------------------------------------------------------------------------------------
+    @staticmethod
+    def _decoy_check(ev: Evaluator, before: FitResult, after: FitResult) -> dict:
+        """The term that took ``before`` to ``after`` against its decoys (:mod:`.decoys`: its own effect
+        time-reversed and circularly shifted, scaled to the residual): ``decoys_beaten`` when its criterion
+        beats the best decoy's by :data:`MIN_DELTA_BIC`."""
+        blocks, o = [], 0
+        for r in before.idx:
+            n, s = ev.cases[r].y_meas.shape
+            blocks.append((o, n, s))
+            o += n * s
+        d = decoy_margin(before.residual, after.residual, after.n_eff, after.n, blocks)
+        return {"decoy_margin": d["decoy_margin"], "decoys": d["decoys"],
+                "decoys_beaten": bool(d["decoy_margin"] >= MIN_DELTA_BIC)}
+
     def _heldout_check(self, ev: Evaluator, cur: FitResult, new: FitResult) -> dict:
         """Leave-one-drive-out of the new term(s), linearised (no further simulation): for each drive,
         the current structure and the structure with the new term are each refitted on the other drives

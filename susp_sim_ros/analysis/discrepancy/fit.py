@@ -9,9 +9,13 @@
 - Residuals are whitened: every signal of every drive divided by its own white-noise sigma, so roll,
   pitch and yaw rate [deg/s] and specific forces [m/s^2] add up in one sum of squares (1 per sample for
   pure noise).
-- Information criterion: BIC on an effective sample count ``n_eff`` (model errors are smooth, so
-  neighbouring samples are not independent: one independent sample per :data:`T_CORR_S` of each drive),
-  ``k ln n_eff`` penalising parameters.
+- Information criterion: BIC on an effective sample count ``n_eff``, ``k ln n_eff`` penalising
+  parameters. After calibration the residual is not white: it carries the structural misfit, smooth over
+  the body modes, so neighbouring samples are not independent. :func:`learn_residual_correlation` measures,
+  per drive and signal, the correlation samples ``tau = 1 + 2 sum rho(k)^2`` of the first calibrated
+  residual (Bartlett; an automatic window); each signal then counts ``n / tau`` independent samples, never
+  more than one per :data:`T_CORR_S` (the sensor's own bandwidth). A colored misfit thus buys no evidence
+  that white noise of the same size would: criteria, intervals and the prior weights all use this ``n_eff``.
 - Parameters with a prior (the calibration's) add prior residuals ``sqrt(n / n_eff) (x - mu) / sd``: the
   maximum a posteriori with the data counted at their effective sample size.
 """
@@ -27,20 +31,79 @@ from scipy.optimize import least_squares
 
 from .engine import Evaluator, Structure
 
-T_CORR_S = 0.05  # one independent sample of model error per 50 ms
+T_CORR_S = 0.05  # at most one independent sample of model error per 50 ms (the IMU's bandwidth)
+#: automatic-window constant: the (squared) autocorrelation sum stops at the first lag M >= C tau(M)
+#: (A. Sokal, "Monte Carlo methods in statistical mechanics", 1997, sec. 3; emcee's ``integrated_time``)
+SOKAL_WINDOW_C = 5.0
+#: fewest compared samples a signal needs for its autocorrelation time to be measured (else the T_CORR_S bound)
+MIN_CORR_SAMPLES = 50
 PRIOR_SCALE_MAX = 5.0   # the priors' documented spread is widened at most this much (prior_scale)
 PRIOR_SCALE_MIN_INFO = 1.0  # directions whose data information is at least the prior's tell the spread
 
 
+def _grid_step_s(c) -> float:
+    t = c.t_grid_s
+    return float(np.median(np.diff(t))) if t.size > 1 else T_CORR_S
+
+
 def n_effective(ev: Evaluator, idx: Sequence[int]) -> float:
-    """Effective independent sample count of drives ``idx`` (all their signals)."""
+    """Effective independent sample count of drives ``idx`` (all their signals): per signal, its samples
+    over the residual's autocorrelation time (:attr:`Evaluator.corr_samples`, once learnt), at most one per
+    :data:`T_CORR_S`."""
     n = 0.0
     for r in idx:
         c = ev.cases[r]
-        t = c.t_grid_s
-        dt = float(np.median(np.diff(t))) if t.size > 1 else T_CORR_S
-        n += c.y_meas.size * min(1.0, dt / T_CORR_S)
+        floor = max(1.0, T_CORR_S / _grid_step_s(c))
+        tau = ev.corr_samples.get(r)
+        if tau is None:
+            n += c.y_meas.size / floor
+        else:
+            n += float(np.sum(c.y_meas.shape[0] / np.maximum(tau, floor)))
     return max(n, 1.0)
+
+
+def correlation_samples(e: np.ndarray) -> float:
+    """Samples of the series ``e`` per independent one, for a regression on a feature that looks like it:
+    ``1 + 2 sum_k rho(k)^2`` over the lags up to an automatic window (the first ``M >= C tau(M)``,
+    :data:`SOKAL_WINDOW_C`), between 1 and the length. Bartlett's variance of the correlation of two
+    independent series, ``(1/n) sum_k rho_x(k) rho_y(k)``, with the feature as smooth as the residual
+    (the worst case: a term that can mimic the misfit); Pyper and Peterman (1998, Can. J. Fish. Aquat. Sci.
+    55, 2127) give ``n_eff`` this way. Squared, so an oscillating misfit (a body mode ringing out, whose
+    plain autocorrelation sum cancels) counts as correlated as it is. White noise gives 1, an AR(1) process
+    ``(1 + phi^2) / (1 - phi^2)``."""
+    x = np.asarray(e, float) - float(np.mean(e))
+    n = x.size
+    var = float(x @ x)
+    if n < 2 or var <= 0.0:
+        return 1.0
+    f = np.fft.rfft(x, 2 * n)
+    acf = np.fft.irfft(f * np.conj(f))[:n] / var
+    taus = 2.0 * np.cumsum(acf * acf) - 1.0
+    ok = np.arange(n) >= SOKAL_WINDOW_C * taus
+    m = int(np.argmax(ok)) if ok.any() else n // 2
+    return float(min(max(taus[min(m, n // 2)], 1.0), n))
+
+
+def learn_residual_correlation(ev: Evaluator, fit: FitResult) -> dict[int, np.ndarray]:
+    """Set :attr:`Evaluator.corr_samples` from ``fit``'s residual (the first calibrated fit: what the
+    model leaves when its known physics is tuned): per drive of the fit, the correlation samples
+    (:func:`correlation_samples`) of every signal's compared (weighted) samples. A signal with fewer than
+    :data:`MIN_CORR_SAMPLES` compared samples keeps the :data:`T_CORR_S` bound. Returns what it set."""
+    out: dict[int, np.ndarray] = {}
+    o = 0
+    for r in fit.idx:
+        c = ev.cases[r]
+        n, s = c.y_meas.shape
+        blk = fit.residual[o:o + n * s].reshape(n, s)
+        tau = np.ones(s)
+        for j in range(s):
+            used = ev.weights[r][:, j] > 0
+            if used.sum() >= MIN_CORR_SAMPLES:
+                tau[j] = correlation_samples(blk[used, j])
+        out[r] = tau
+        o += n * s
+    ev.corr_samples = dict(out)
+    return out
 
 
 def debias(ev: Evaluator, vec: np.ndarray, idx: Sequence[int]) -> np.ndarray:

@@ -16,6 +16,7 @@ from ...model.vehicle import hydraulic_curves, hydraulic_from_measured, velocity
 from .calibration import outside_statement
 from .candidates import BY_NAME, LIBRARY, MEASUREMENT, PHYSICS, axle_map
 from .data import SIGNAL_UNIT, SIGNALS
+from .fit import n_effective
 from . import missing_force_report
 
 VERDICTS = ("missing_physics", "no_significant_discrepancy", "unexplained_residual", "unmeasured_input")
@@ -211,6 +212,7 @@ def interface_json(f) -> dict:
         "heldout_rmse_after_deg_s": _num(ho.get("after_deg_s", math.nan)),
         "noise_floor_deg_s": _num(f.noise_floor_),
         "structure_level_over_noise": _num(structure_level()),
+        "effective_samples": _clean(effective_samples(f)),
         "calibration": _clean(f.calibration_),
         "noise_floors": {s: _num(x) for s, x in f.noise_["noise_floors"].items()},
         "heldout_rmse_by_signal": _clean(ho.get("by_signal", {})),
@@ -229,6 +231,23 @@ def interface_json(f) -> dict:
     if getattr(f, "missing_force_", None) is not None:  # estimated when the outputs were written
         rep["missing_force"] = f.missing_force_
     return rep
+
+
+def effective_samples(f) -> dict:
+    """What the criteria count (issue 24, item 2): the compared samples ``n``, the effective independent
+    count ``n_eff`` after the calibrated residual's autocorrelation, and per drive and signal the
+    residual's correlation time [s] (its correlation samples times the grid step; ``n_eff`` counts one sample per
+    correlation time, at most one per ``T_CORR_S``)."""
+    ev = f.evaluator_
+    idx = range(len(f.cases_))
+    corr = {}
+    for r in idx:
+        c = f.cases_[r]
+        tau = ev.corr_samples.get(r)
+        if tau is not None:
+            dt = float(np.median(np.diff(c.t_grid_s))) if c.t_grid_s.size > 1 else math.nan
+            corr[c.name] = {s: float(t * dt) for s, t in zip(c.signals, tau)}
+    return {"n": int(sum(ev.n_res)), "n_eff": float(n_effective(ev, idx)), "correlation_time_s": corr}
 
 
 def _in_sample_primary(f, fit) -> float:
