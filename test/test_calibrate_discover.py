@@ -13,6 +13,7 @@ import yaml
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder
 from susp_sim_ros.analysis.discrepancy.calibration import calibration_params, vehicle_at
 from susp_sim_ros.analysis.discrepancy.candidates import PHYSICS, BY_NAME
+from susp_sim_ros.analysis.discrepancy.report import write_outputs
 from truth_generators.independent_sim import (TruthCar, TruthFriction, TruthHidden, TruthManeuver,
                                                    TruthSensor, make_drive, write_drive)
 from susp_sim_ros.errors import ConfigError
@@ -362,7 +363,11 @@ def test_a_term_and_a_one_state_damper_value_compete_until_another_state_separat
     paths = {k: _write(tmp_path, k, make_drive(TruthCar(), TruthFriction(), hid, m, sensor, oil=oil, seed=i))
              for i, (k, (m, oil)) in enumerate(drives.items())}
 
-    rep = DiscrepancyFinder(variant="full").fit([paths["bump_rear_empty"], paths["sine_rear_empty"]]).report()
+    f = DiscrepancyFinder(variant="full").fit([paths["bump_rear_empty"], paths["sine_rear_empty"]])
+    rep = f.report()
+    # the Markdown report states the competition too
+    md = Path(write_outputs(f, tmp_path / "out", "rear", plots=False)["report"]).read_text()
+    assert "damper_measured_empty:rear" in md and "extra_viscous_damping" in md
     assert not [t for t in rep["terms"] if BY_NAME[t["name"]].kind == PHYSICS], rep["terms"]
     ni = {x["name"]: x for x in rep["not_identifiable"]}
     assert "extra_viscous_damping" in ni, rep["not_identifiable"]

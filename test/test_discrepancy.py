@@ -168,6 +168,11 @@ def test_amplitude_friction_found_on_a_single_rear_empty_bump(bump_rear_amp):
     assert amp[0]["params"]["extra_rear"] == pytest.approx(24.0, rel=0.25)
     lo, hi = amp[0]["ci95"]["extra_rear"]
     assert lo < amp[0]["params"]["extra_rear"] < hi
+    # named only past its decoys (issue 24, item 3), said in its evidence; what the criteria counted
+    ev = amp[0]["evidence"]
+    assert ev["decoy_margin"] >= 10 and ev["decoys"] == 9 and "decoys" in ev["statement"]
+    es = rep["effective_samples"]
+    assert 0 < es["n_eff"] <= es["n"] and set(es["correlation_time_s"]) == {bump_rear_amp.name}
     # the gyro noise is 0.04 deg/s per sample, and the comparison is made at the samples: within 10 %
     assert rep["noise_floor_deg_s"] == pytest.approx(0.04, rel=0.10)
     assert rep["noise_floors"]["accel_z"] == pytest.approx(0.02, rel=0.10)

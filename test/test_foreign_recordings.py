@@ -64,6 +64,7 @@ def test_every_layout_reads_as_the_interface_layout(corpus):
         np.testing.assert_allclose(x.steering.values, ref.steering.values, rtol=1e-15, atol=0, err_msg=name)
         np.testing.assert_array_equal(x.road.zl, ref.road.zl, err_msg=name)
         assert read_recording(p).latched("/road/profile"), name  # the latch survives every container
+        assert x.extra.get("input_findings", []) == [], name  # undamaged in any container: no finding (issue 28)
 
 
 @pytest.mark.parametrize("layout", LAYOUTS)

@@ -100,6 +100,9 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
         s += (f"; on drives held out from its fit it removes {100 * ev['heldout_gain_fraction_of_excess']:.0f} % "
               f"of the residual above noise and is selected in {100 * ev['selected_in_fraction_of_refits']:.0f} % "
               f"of the leave-one-drive-out refits")
+    if "decoy_margin" in ev:
+        s += (f"; its criterion beats the best of its {ev.get('decoys', 'time-shuffled')} decoys (its own effect "
+              f"time-reversed and shifted) by {ev['decoy_margin']:.0f}")
     if cand.kind == PHYSICS:
         s += "; no recalibration of the base model within its priors explains it (fitted jointly with them"
         if "recalibration_rss" in ev:
@@ -623,6 +626,14 @@ def _md_selection(f, rep: dict, paths: dict, name: str) -> list[str]:
         if "removed" in p:
             L.append(f"| {p['step']} | removed {p['removed']} | {math.sqrt(p['rss'] / f.result_.n):.3f} | "
                      f"{p['delta_bic']:.1f} | | | | {p['why']} |")
+            continue
+        if "shift_test" in p:  # a term against the calibration shifts (criterion gain over the shifted calibration)
+            rms = f"{math.sqrt(p['rss'] / f.result_.n):.3f}" if "rss" in p else ""
+            L.append(f"| {p['step']} | {p['shift_test']} with {', '.join(p['held_at_prior'])} at their priors | "
+                     f"{rms} | {p['criterion_with_shifts'] - p['criterion_term_without_shifts']:.1f} | | "
+                     f"{_pct(p.get('heldout_gain_fraction_of_excess'))} | "
+                     f"{_pct(p.get('selected_in_fraction_of_refits'))} | "
+                     f"{'yes' if p.get('accepted') else 'no'}: {p['why']} |")
             continue
         L.append(f"| {p['step']} | {', '.join(p['added'])} | {p['rms_x_noise']:.3f} | {p['delta_bic']:.1f} | "
                  f"{100 * p['explained_fraction_of_excess']:.0f} % | "
