@@ -22,6 +22,28 @@ where identified per wheel; coverage of the 95 % intervals; states (intact must 
 damper ``empty`` or ``degraded``, never ``ok``); run time.
 
     PYTHONPATH=. .venv/bin/python benchmarks/bench_inspect.py [N] [--own]
+
+Over the truth-generator family (issue 27, ``--family development|held_out``, the two always reported
+apart): the family's forms that hide no physics (``effect: none``: integrators and steps, damper-curve
+shapes, friction velocity scalings, oil law, roll-centre handling, tyre lag, cars within and beyond the
+vehicle file's ranges; ``--effects all`` adds the hidden-physics forms), each driving ``--cars`` cars
+(default 3) over one bump each (:func:`truth_generators.family.bump_crossing`): a form's own car band,
+its nominal car moved within the priors otherwise, friction levels +-2 N, gyro noise 0.1 deg/s. The
+crossings are stratified over three speed bands of 5-15 km/h and three bump bands of 4-8 cm (car i of
+form f: speed band i mod 3, bump band (i + f) mod 3, uniform within the band), oil states cycling as
+above (car i of form f: state f + i, so a run with fewer cars is a prefix of one with more). Scores per
+damper (a wheel's own figures where the drive tells left from right, else its axle's against the axle's
+mean truth), per speed band, per bump band and overall: share with |error| <= 0.10,
+mean (signed) error, 95 % interval coverage, wrong states (a called state ``ok``/``degraded``/``empty``
+whose band misses the truth by more than 0.10; ``unknown`` is never wrong), the peak damper velocity and
+the model-form sd the inspection used.
+
+    PYTHONPATH=. .venv/bin/python benchmarks/bench_inspect.py --family development [--cars 3] [--json]
+        [--effects all] [--inspection-config FILE]
+
+``--inspection-config``: another ``config/inspection.yaml``, e.g. ``benchmarks/inspection_before_issue27.yaml``
+(the estimator as it was before issue 27: no signal model-form fractions, the curve beyond its measured points
+held, a constant model-form sd of 0.05), to measure before and after on the same crossings.
 """
 from __future__ import annotations
 
@@ -38,6 +60,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from susp_sim_ros.analysis import synthetic  # noqa: E402
 from susp_sim_ros.analysis.inspection import inspect_drives  # noqa: E402
 from susp_sim_ros.model.maneuvers import STATES, vehicle_state  # noqa: E402
+from susp_sim_ros.analysis.inspection import load_config  # noqa: E402
+from truth_generators import family as fam  # noqa: E402
 from truth_generators import independent_sim as ind  # noqa: E402
 
 PERTURB = 0.10
@@ -131,7 +155,125 @@ def main(n: int = 24, own: bool = False, cfg: dict | None = None, first: int = 0
     return summary
 
 
+SPEED_BANDS_KMH = ((5.0, 25.0 / 3.0), (25.0 / 3.0, 35.0 / 3.0), (35.0 / 3.0, 15.0))
+BUMP_BANDS_M = ((0.04, 0.16 / 3.0), (0.16 / 3.0, 0.2 / 3.0), (0.2 / 3.0, 0.08))
+WITHIN = 0.10   # the issue's error target per damper [oil fraction]
+
+
+def _band_name(lo: float, hi: float, scale: float, unit: str) -> str:
+    return f"{lo * scale:.1f}-{hi * scale:.1f} {unit}"
+
+
+def family_crossings(split: str, cars: int, effects: str = "none", first_seed: int = 5000) -> list[dict]:
+    """The benchmark's crossings of one split: form, seed, oil, speed [km/h], bump height [m], car band."""
+    out = []
+    fs = [f for f in fam.forms(split) if effects == "all" or f.effect == "none"]
+    for fi, form in enumerate(fs):
+        for i in range(cars):
+            seed = first_seed + 1000 * fi + i
+            rng = np.random.default_rng(seed)
+            sb, bb = SPEED_BANDS_KMH[i % 3], BUMP_BANDS_M[(i + fi) % 3]
+            out.append({"form": form.name, "seed": seed, "oil": oil_state(fi + i, rng),
+                        "speed_kmh": float(rng.uniform(*sb)), "height_m": float(rng.uniform(*bb)),
+                        "car_band": form.car_band if form.car_band != "nominal" else "within"})
+    return out
+
+
+def _state_wrong(state: str, truth: float, states_cfg: dict) -> bool:
+    """A called state whose band misses the truth by more than :data:`WITHIN`."""
+    ok, empty = states_cfg["ok_from"], states_cfg["empty_below"]
+    band = {"ok": (ok, 1.0), "degraded": (empty, ok), "empty": (0.0, empty)}.get(state)
+    return band is not None and not band[0] - WITHIN <= truth <= band[1] + WITHIN
+
+
+def family_rows(res, cr: dict) -> list[dict]:
+    """One row per damper of the crossing ``cr`` scored against the inspection ``res``."""
+    d = res.to_json()
+    seen = d["protocol"]["seen"][0]
+    rows = []
+    for axle, (l, r) in (("front", (0, 1)), ("rear", (2, 3))):
+        for w in (l, r):
+            e = d["wheels"][WHEELS[w]]
+            if e["oil_level"] is None:
+                continue
+            truth = cr["oil"][w] if e["identifiable"] == "wheel" else 0.5 * (cr["oil"][l] + cr["oil"][r])
+            rows.append({"form": cr["form"], "seed": cr["seed"], "damper": WHEELS[w], "axle": axle,
+                         "kind": e["identifiable"], "truth": truth, "est": e["oil_level"], "ci": e["ci95"],
+                         "sd_fit": e.get("sd_fit"), "model_form_sd_axle": d["protocol"].get(
+                             "model_form_sd_per_axle", {}).get(axle, d["protocol"]["model_form_sd"]),
+                         "state": e["state"], "speed_kmh": cr["speed_kmh"], "height_m": cr["height_m"],
+                         "peak_damper_velocity_m_s": seen["peak_damper_velocity_m_s"][axle],
+                         "model_form_sd": d["protocol"]["model_form_sd"],
+                         "warnings": [x["quantity"] for x in d["protocol"]["warnings"]]})
+    return rows
+
+
+def family_scores(rows: list[dict], states_cfg: dict) -> dict:
+    """The issue's scores over ``rows``: n, share |error| <= 0.10, mean and max |error|, mean error,
+    95 % coverage, wrong states."""
+    if not rows:
+        return {"n": 0}
+    err = np.array([r["est"] - r["truth"] for r in rows])
+    cover = np.array([r["ci"][0] - 1e-9 <= r["truth"] <= r["ci"][1] + 1e-9 for r in rows])
+    return {"n": len(rows), "share_within_0_10": float(np.mean(np.abs(err) <= WITHIN)),
+            "mean_error": float(err.mean()), "mean_abs_error": float(np.abs(err).mean()),
+            "max_abs_error": float(np.abs(err).max()), "coverage_95": float(cover.mean()),
+            "mean_ci_width": float(np.mean([r["ci"][1] - r["ci"][0] for r in rows])),
+            "wrong_states": int(sum(_state_wrong(r["state"], r["truth"], states_cfg) for r in rows))}
+
+
+def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | None = None) -> dict:
+    """Inspect the split's crossings; scores overall, per speed band, per bump band, per form."""
+    cfg = load_config() if cfg is None else cfg
+    rows, times = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for cr in family_crossings(split, cars, effects):
+            drive = fam.bump_crossing(fam.FORMS[cr["form"]], cr["seed"], cr["oil"], cr["speed_kmh"],
+                                      cr["height_m"], gyro_noise_deg_s=GYRO_NOISE, car_band=cr["car_band"],
+                                      friction_dev_N=2.0)
+            path = Path(tmp) / f"{cr['seed']}.mcap"
+            ind.write_drive(path, drive, overwrite=True)
+            t0 = time.perf_counter()
+            res = inspect_drives([path], cfg=cfg)
+            times.append(time.perf_counter() - t0)
+            new = family_rows(res, cr)
+            rows += new
+            print(cr["form"], cr["seed"], f"{cr['speed_kmh']:.1f} km/h {cr['height_m'] * 100:.1f} cm",
+                  [(r["damper"], r["truth"], round(r["est"], 2), r["state"]) for r in new],
+                  f"{times[-1]:.1f} s", file=sys.stderr, flush=True)
+    st = cfg["states"]
+    by_speed = {_band_name(lo, hi, 1.0, "km/h"): family_scores(
+        [r for r in rows if lo <= r["speed_kmh"] <= hi], st) for lo, hi in SPEED_BANDS_KMH}
+    by_bump = {_band_name(lo, hi, 100.0, "cm"): family_scores(
+        [r for r in rows if lo <= r["height_m"] <= hi], st) for lo, hi in BUMP_BANDS_M}
+    by_form = {f: family_scores([r for r in rows if r["form"] == f], st)
+               for f in dict.fromkeys(r["form"] for r in rows)}
+    intact = [r for r in rows if r["truth"] == 1.0]
+    return {"split": split, "forms": list(by_form), "effects": effects, "cars_per_form": cars,
+            "crossings": len(times), "overall": family_scores(rows, st),
+            "intact_mean_error": float(np.mean([r["est"] - 1.0 for r in intact])) if intact else None,
+            "by_speed_band": by_speed, "by_bump_band": by_bump, "by_form": by_form,
+            "time_s_mean": float(np.mean(times)), "time_s_max": float(np.max(times)),
+            "rows": [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()} for r in rows]}
+
+
+def _opt(name: str, default: str | None = None) -> str | None:
+    return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
+
+
 if __name__ == "__main__":
-    args = [a for a in sys.argv[1:] if not a.startswith("--")]
-    print(json.dumps(main(int(args[0]) if args else 24, "--own" in sys.argv,
-                          first=int(args[1]) if len(args) > 1 else 0), indent=1))
+    if "--family" in sys.argv:
+        split = _opt("--family")
+        if split not in fam.SPLITS:
+            sys.exit(f"--family must be one of {fam.SPLITS}")
+        cfg_path = _opt("--inspection-config")
+        out = family_main(split, int(_opt("--cars", "3") or 3), _opt("--effects", "none") or "none",
+                          cfg=load_config(cfg_path) if cfg_path else None)
+        out["inspection_config"] = cfg_path or "config/inspection.yaml"
+        if "--json" not in sys.argv:
+            out = {k: v for k, v in out.items() if k != "rows"}
+        print(json.dumps(out, indent=1))
+    else:
+        args = [a for a in sys.argv[1:] if not a.startswith("--")]
+        print(json.dumps(main(int(args[0]) if args else 24, "--own" in sys.argv,
+                              first=int(args[1]) if len(args) > 1 else 0), indent=1))

@@ -173,7 +173,13 @@ def test_a_crossing_outside_the_protocol_is_warned_about_with_wider_intervals(tm
     assert any("outside the test protocol" in n for n in outside.notes_)
     width = {r: [e["ci95"][1] - e["ci95"][0] for e in res.axles_.values()] for r, res in
              (("in", inside), ("out", outside))}
-    assert outside.protocol_["model_form_sd"] == 2 * inside.protocol_["model_form_sd"]
+    # the model-form sd grows with the crossing's peak damper velocity, doubled outside the protocol
+    from susp_sim_ros.analysis.inspection.estimate import model_form_sd
+    factor = CFG["protocol"]["outside_model_form_factor"]
+    assert inside.protocol_["model_form_sd_per_axle"] == model_form_sd(inside.protocol_["seen"], CFG["estimator"])
+    assert outside.protocol_["model_form_sd_per_axle"] == model_form_sd(outside.protocol_["seen"], CFG["estimator"],
+                                                                        factor)
+    assert outside.protocol_["model_form_sd"] >= factor * inside.protocol_["model_form_sd"]
     for w_in, w_out in zip(width["in"], width["out"]):
         assert w_out > w_in
 
@@ -188,3 +194,87 @@ def test_protocol_names_a_drive_set_that_excites_one_axle_only():
     assert protocol.model_form_factor(found, cfg) == 1.0      # a set-level warning, no drive outside
     slow = [dict(seen[0], speed_m_s=1.0)]
     assert protocol.model_form_factor(protocol.warnings(slow, {}, cfg), cfg) == cfg["outside_model_form_factor"]
+
+
+def test_model_form_sd_grows_with_the_peak_damper_velocity():
+    """Issue 27 item 2: the intervals' model-form term is learned on the development forms as a base plus
+    a part per m/s of the axle's peak damper velocity (config entries with unit and source), per axle."""
+    from susp_sim_ros.analysis.inspection.estimate import model_form_sd
+    est = CFG["estimator"]
+    assert est["model_form_sd_per_m_s"] > 0
+    seen = [{"peak_damper_velocity_m_s": {"front": 0.5, "rear": 2.0}},
+            {"peak_damper_velocity_m_s": {"front": 1.0, "rear": 1.5}}]
+    sd = model_form_sd(seen, est)
+    assert sd["front"] == pytest.approx(est["model_form_sd"] + 1.0 * est["model_form_sd_per_m_s"])
+    assert sd["rear"] == pytest.approx(est["model_form_sd"] + 2.0 * est["model_form_sd_per_m_s"])
+    assert model_form_sd(seen, est, 2.0)["rear"] == pytest.approx(2 * sd["rear"])
+
+
+def test_signal_model_form_weights_a_signal_by_how_hard_the_drive_moved_it():
+    """Each signal's residual sd is its noise combined with a fraction of its own RMS excursion: a signal
+    the drive barely moves keeps its noise weight, one it moves hard counts less; samples held out (weight
+    0) stay out."""
+    from types import SimpleNamespace
+    import numpy as np
+    from susp_sim_ros.analysis.inspection.estimate import add_signal_model_form, signal_excursion
+    rng = np.random.default_rng(0)
+    quiet, moved = rng.normal(0, 0.1, 400), 2.0 * np.sin(np.linspace(0, 20, 400))
+    case = SimpleNamespace(signals=("roll_rate", "accel_z"), y_meas=np.column_stack([quiet, moved]))
+    w = np.column_stack([np.full(400, 10.0), np.full(400, 50.0)])
+    w[:5] = 0.0
+    ev = SimpleNamespace(cases=[case], weights=[w.copy()])
+    add_signal_model_form(ev, {"roll_rate": 0.1, "accel_z": 0.3})
+    got = ev.weights[0]
+    assert np.all(got[:5] == 0.0)
+    assert got[10, 0] == pytest.approx(1.0 / np.hypot(0.1, 0.1 * signal_excursion(quiet)))
+    assert got[10, 0] == pytest.approx(10.0, rel=0.01)                   # noise-dominated: unchanged
+    assert got[10, 1] == pytest.approx(1.0 / np.hypot(0.02, 0.3 * signal_excursion(moved)))
+    assert got[10, 1] < 50.0 / 10                                         # moved hard: counts much less
+
+
+def test_curve_beyond_factor_changes_the_intact_curve_only_beyond_its_measured_points():
+    """The per-axle factor scales the intact hydraulic curve's rise beyond the last measured velocity and
+    leaves the measured range and the oil-empty curve alone; 1 is the vehicle file's extrapolation."""
+    import numpy as np
+    from susp_sim_ros.analysis.inspection.estimate import curve_beyond_candidate
+    from susp_sim_ros.model import Model
+    from susp_sim_ros.model.layout import DAMPER_GRID, N_GRID, P_H_EMPTY, P_H_INTACT
+    model = Model()
+    cand = curve_beyond_candidate(model, 0.5)
+    P0 = model.params()[None, :]
+    P1 = P0.copy()
+    cand.apply(P1, P0, np.array([1.0, 1.0]), model)
+    assert np.array_equal(P1, P0)
+    P2 = P0.copy()
+    cand.apply(P2, P0, np.array([2.0, 0.5]), model)
+    v_end = max(model.vehicle.damper_velocity)
+    out = np.abs(DAMPER_GRID) > v_end + 1e-9
+    g_end = int(np.argmin(np.abs(DAMPER_GRID - v_end)))
+    g_far = int(np.argmax(DAMPER_GRID))
+    for w, f in ((0, 2.0), (1, 2.0), (2, 0.5), (3, 0.5)):
+        base = P_H_INTACT + w * N_GRID
+        assert np.array_equal(P2[0, base:base + N_GRID][~out], P0[0, base:base + N_GRID][~out])
+        rise0 = P0[0, base + g_far] - P0[0, base + g_end]
+        assert P2[0, base + g_far] - P2[0, base + g_end] == pytest.approx(f * rise0)
+    assert np.array_equal(P2[0, P_H_EMPTY:P_H_EMPTY + 4 * N_GRID], P0[0, P_H_EMPTY:P_H_EMPTY + 4 * N_GRID])
+
+
+def test_a_fast_high_crossing_of_a_development_form_reads_intact(tmp_path):
+    """Issue 27 item 1: an intact car of another simulator's development form (PCHIP curve, own
+    extrapolation), driven at 14 km/h over a 7.5 cm bump (dampers at 2-3 m/s, beyond the curve's last
+    measured point), reads intact once the estimate stands on what the drive informs (the curve beyond
+    its measured points fitted per axle, each signal weighted by its model-form spread); with both held
+    as before it read 0.7-0.8."""
+    from truth_generators import family
+    d = family.bump_crossing(family.FORMS["structure/nominal"], 1, (1.0, 1.0, 1.0, 1.0), 14.0, 0.075)
+    p = tmp_path / "fast.mcap"
+    ind.write_drive(p, d, overwrite=True)
+    res = inspect_drives([p])
+    for w, e in res.wheels_.items():
+        assert e["oil_level"] == pytest.approx(1.0, abs=0.06), w
+        assert e["ci95"][0] <= 1.0 <= e["ci95"][1] + 1e-9 and e["state"] in ("ok", "unknown"), w
+    assert {n["param"] for n in res.nuisance_} >= {"curve_beyond_front", "curve_beyond_rear"}
+    old = load_config()
+    old["estimator"].update(signal_model_form={}, curve_beyond_prior_sd=0.0)
+    before = inspect_drives([p], cfg=old)
+    assert max(e["oil_level"] for e in before.wheels_.values()) < 0.85

@@ -16,6 +16,7 @@ Public API::
     forms(split=None) -> list[GeneratorForm]        in registry order
     CASE_DRIVES: the six drives of a case (bump crossing and sine steer; intact, front-empty, rear-empty)
     make_case(form, seed, gyro_noise_deg_s=0.05, drives=CASE_DRIVES) -> list[(label, TestDrive)]
+    bump_crossing(form, seed, oil, speed_kmh, height_m, gyro_noise_deg_s=0.1, car_band=None) -> TestDrive
 
 Every difference of a form from the product's model is in its ``description`` and in
 ``docs/independent_sim.md`` ("The generator family").
@@ -232,5 +233,30 @@ def make_case(form: GeneratorForm, seed: int, gyro_noise_deg_s: float = 0.05,
     return out
 
 
+def bump_crossing(form: GeneratorForm, seed: int, oil, speed_kmh: float, height_m: float,
+                  gyro_noise_deg_s: float = 0.1, car_band: str | None = None,
+                  friction_dev_N: float = 0.0) -> TestDrive:
+    """One bump crossing of ``form`` with the oil levels ``oil`` (FL FR RL RR, known to the caller) at
+    ``speed_kmh`` over a full-width bump of ``height_m``: the form's structure (integrator and step,
+    friction forms, damper-curve shape, oil law, hidden physics) and its car, or the car of ``car_band``
+    (:data:`CAR_BANDS`) drawn with the same seed when given (a form's nominal car moved within the
+    priors, as a workshop's cars are); friction levels moved by U(-``friction_dev_N``, +``friction_dev_N``)
+    N each (the paper's rig tolerance is 2 N), the form's friction forms kept. Sensor as :func:`make_case`
+    (accelerometer noise 0.02 m/s^2, a random gyro bias N(0, 0.02) deg/s per axis), gyro noise
+    ``gyro_noise_deg_s``; seeded. Added for the damper-inspection benchmark (issue 27); the forms and the
+    split are unchanged."""
+    rng = np.random.default_rng(seed)
+    car = form.car(seed) if car_band is None else replace(form, car_band=car_band).car(seed)
+    bias = rng.normal(0.0, 0.02, 3)
+    friction = form.friction.perturbed(rng, friction_dev_N) if friction_dev_N > 0 else form.friction
+    sensor = TruthSensor(imu_rate_hz=200, gyro_noise_deg_s=(gyro_noise_deg_s,) * 3,
+                         accel_noise_m_s2=(0.02,) * 3, gyro_bias_deg_s=tuple(float(b) for b in bias))
+    man = TruthManeuver.bump(speed_kmh=speed_kmh, height_m=height_m, wheelbase_m=car.wheelbase)
+    d = make_drive(car, friction, form.hidden, man, sensor, oil=tuple(float(o) for o in oil),
+                   seed=seed * 100 + 7, step_s=form.step_s, integrator=form.integrator)
+    d.metadata["family_form"] = form.name
+    return d
+
+
 __all__ = ["FORMS", "SPLITS", "SPLIT_RECORDED", "EFFECTS", "CASE_DRIVES", "CAR_BANDS", "GeneratorForm",
-           "split_of", "forms", "maneuver", "make_case"]
+           "split_of", "forms", "maneuver", "make_case", "bump_crossing"]
