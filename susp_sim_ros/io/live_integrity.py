@@ -254,8 +254,11 @@ class LiveIntegrity:
         if recent is None or len(recent) < pol.spike_window - 1 or len(recent) < 3:
             return None
         x = np.asarray(recent, dtype=float)
-        pred = 2.0 * x[-1] - x[-2]
-        sd = 1.4826 * float(np.median(np.abs(np.diff(x, 2))))
+        with np.errstate(over="ignore", invalid="ignore"):  # earlier messages near the float limit
+            pred = 2.0 * x[-1] - x[-2]
+            sd = 1.4826 * float(np.median(np.abs(np.diff(x, 2))))
+        if not (np.isfinite(pred) and np.isfinite(sd)):
+            return None  # nothing to predict from: the size of the value alone decides
         limit = max(pol.mad_factor * sd, pol.spike_floor[topic])
         if abs(v - pred) <= limit:
             return None
