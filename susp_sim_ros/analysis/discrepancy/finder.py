@@ -171,6 +171,38 @@ class DiscrepancyFinder:
         return self
 
     def _fit(self, drives, bar):
+        ev = self._prepare(drives, bar)
+        allidx = tuple(range(len(ev.cases)))
+        # 3. calibration of the known physics (with the measurement chain)
+        cur = self._calibrate(ev, self.model_)
+        self.calibrated_fit_ = cur  # what the missing force is estimated against (missing_force_report)
+        path = [{"step": 0, "structure": list(cur.structure.names), "rss": cur.rss, "bic": cur.bic,
+                 "rms_x_noise": math.sqrt(cur.rss / cur.n)}]
+        accepted: list[dict] = []
+        # 4. discovery on the calibrated model: forward, backward, against the calibration shifts
+        cur = self._forward(ev, cur, path, accepted)
+        cur = self._backward(ev, cur, path, accepted)
+        cur, shift_competing = self._shift_competition(ev, cur, self.testable_, path, accepted)
+        shift_competing += self._refused_competition(cur, shift_competing)
+        if accepted:
+            cur = self._measurement_chain(ev, cur, path)
+        if any(c.kind == PHYSICS for c in cur.structure.cands):  # final polish, calibration jointly
+            cur = fit_structure(ev, cur.structure, cur.x, allidx, max_nfev=30)
+            self._set_calibration(cur)
+        self.path_, self.accepted_ = path, accepted
+        self._finish(ev, cur)
+        # 6. the measurement chain judged on its intervals: an entry the data do not support is dropped;
+        # one a held vehicle value could stand in for is not named but listed as competing with it
+        drop, competing = self._judge_measurement_terms()
+        if drop:
+            self._finish(ev, self._drop_terms(ev, self.result_, drop, path, accepted))
+            _, competing = self._judge_measurement_terms()
+        self.competing_: list[dict] = competing + shift_competing
+        return self
+
+    def _prepare(self, drives, bar) -> Evaluator:
+        """Stages 1-2: the extended model, the prepared drives and their evaluator, the base run (noise
+        floors, windows, excited signals), the testable candidates and the base model's fit."""
         model = extended_model(self.vehicle, self.variant)
         self.model_ = model
         self.base_variant_ = load_variant(self.variant) if isinstance(self.variant, (str, Path)) else self.variant
@@ -180,23 +212,22 @@ class DiscrepancyFinder:
             cases = load_cases(list(drives), wheelbase=model.vehicle.wheelbase)
         ev = Evaluator(model, cases, progress=bar)
         self.cases_, self.evaluator_ = cases, ev
-        allidx = tuple(range(len(cases)))
         self._base_run(ev, model, cases)
         testable, skipped, in_base = self._testable(cases, self.base_variant_)
         self.refused_: list[tuple] = []  # (fit before, option, its fit, checks) of terms refused after the criterion
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
-        base_fit = fit_structure(ev, Structure([]))
-        self.base_fit_ = base_fit
-        # 3. calibration of the known physics (with the measurement chain)
-        cur = self._calibrate(ev, model)
-        self.calibrated_fit_ = cur  # what the missing force is estimated against (missing_force_report)
+        self.base_fit_ = fit_structure(ev, Structure([]))
+        return ev
+
+    def _forward(self, ev: Evaluator, cur: FitResult, path: list, accepted: list) -> FitResult:
+        """Forward selection on the calibrated model ``cur``: at each step the screened candidates (and
+        pairs) are fitted and the first that passes every test (:meth:`_first_passing`) is added; stops at
+        the noise floor, when nothing is left or nothing passes. Records each step in ``path`` and each
+        added term in ``accepted``; sets the single-candidate ranking of the first step (``ranking_``)."""
         n = cur.n
-        path = [{"step": 0, "structure": list(cur.structure.names), "rss": cur.rss, "bic": cur.bic,
-                 "rms_x_noise": math.sqrt(cur.rss / n)}]
-        accepted: list[dict] = []
+        base_fit, testable, skipped = self.base_fit_, self.testable_, self.skipped_
         ranking = None
         recalibrations: dict[int, FitResult] = {}  # per step: every ranged value refitted within its prior
-        # 4. discovery on the calibrated model
         for step in range(1, self.max_steps + 1):
             if math.sqrt(cur.rss / n) <= FLOOR_STOP:
                 break
@@ -230,25 +261,8 @@ class DiscrepancyFinder:
                                  "per_drive_rmse_before": per_before,
                                  "per_drive_rmse_after": per_after, "with": list(best.add), **checks})
             cur = best_fit
-        cur = self._backward(ev, cur, path, accepted)
-        cur, shift_competing = self._shift_competition(ev, cur, testable, path, accepted)
-        shift_competing += self._refused_competition(cur, shift_competing)
-        if accepted:
-            cur = self._measurement_chain(ev, cur, path)
-        if any(c.kind == PHYSICS for c in cur.structure.cands):  # final polish, calibration jointly
-            cur = fit_structure(ev, cur.structure, cur.x, allidx, max_nfev=30)
-            self._set_calibration(cur)
-        self.path_, self.accepted_ = path, accepted
         self.ranking_ = ranking or []
-        self._finish(ev, cur)
-        # 6. the measurement chain judged on its intervals: an entry the data do not support is dropped;
-        # one a held vehicle value could stand in for is not named but listed as competing with it
-        drop, competing = self._judge_measurement_terms()
-        if drop:
-            self._finish(ev, self._drop_terms(ev, self.result_, drop, path, accepted))
-            _, competing = self._judge_measurement_terms()
-        self.competing_: list[dict] = competing + shift_competing
-        return self
+        return cur
 
     # -- calibration against physics (issue 24, item 4) -----------------------------------------------
     def _one_state_shifts(self, cur: FitResult) -> list[tuple[int, CalParam, str, float]]:
@@ -383,15 +397,8 @@ class DiscrepancyFinder:
         rivals = sorted({f"{p.field}:{p.where}" for _, p, *_ in shifts})
         reveals = [reveal_for(p, s) for _, p, s, _ in shifts]
         moved = ", ".join(f"{d['param']} {d['value']:.3g} (prior {d['prior']:.3g})" for d in self.shifts_)
-        trials = []
-        for name in cands:
-            st = cur.structure.with_(name)
-            fix = [st.labels().index(cur.structure.labels()[j]) for j in idx]
-            f = fit_structure(ev, st, st.embed(held.structure, held.x), allidx, max_nfev=TRIAL_NFEV, fixed=fix)
-            trials.append((f.bic - len(idx) * lne, name, f))
-        trials.sort(key=lambda t: t[0])
         competing: list[dict] = []
-        for crit, name, f in trials:
+        for crit, name, f in _held_trials(ev, cur, held, cands, idx, lne):
             if not BY_NAME[name].physical(f.structure.part(f.x, name)):
                 continue  # no physical rival: the term stands in for a weaker model element
             if crit_held - crit < MIN_DELTA_BIC or crit > crit_shift + MIN_DELTA_BIC:
@@ -1048,6 +1055,21 @@ class DiscrepancyFinder:
         """The interface JSON (``susp diagnose --json``)."""
         self._check_fitted()
         return interface_json(self)
+
+
+def _held_trials(ev: Evaluator, cur: FitResult, held: FitResult, cands: Sequence[str], idx: Sequence[int],
+                 lne: float) -> list[tuple[float, str, FitResult]]:
+    """Every candidate of ``cands`` added to ``cur``'s structure and fitted with the values ``idx`` held
+    where ``held`` has them (at their priors), best first, as ``(criterion, name, fit)``: the criterion is
+    the fit's BIC less ``log n_eff`` per held value (those values are not fitted, so they cost nothing)."""
+    trials = []
+    for name in cands:
+        st = cur.structure.with_(name)
+        fix = [st.labels().index(cur.structure.labels()[j]) for j in idx]
+        f = fit_structure(ev, st, st.embed(held.structure, held.x), tuple(range(len(ev.cases))),
+                          max_nfev=TRIAL_NFEV, fixed=fix)
+        trials.append((f.bic - len(idx) * lne, name, f))
+    return sorted(trials, key=lambda t: t[0])
 
 
 def _warm(st: Structure, cur: FitResult, o) -> np.ndarray:

@@ -301,16 +301,8 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
     ne = n_effective(ev, idx)
     k = n_params_bic(ev, st, idx)
     if st.n_params == 0:
-        r = raw_residuals(ev, st, np.zeros((1, 0)), idx)[0]
-        if st.bias:
-            r = debias(ev, r, idx)
-        rss = float(r @ r)
-        return FitResult(st, np.zeros(0), rss, n, k, bic(rss, n, k, ne), True, "no free parameters", 1, r,
-                         None, idx, ne)
-    pidx, pmu, psd = st.prior()
-    pw = math.sqrt(n / ne) * st.prior_gain
-    prior_jac = np.zeros((len(pidx), st.n_params))
-    prior_jac[np.arange(len(pidx)), pidx] = pw / psd
+        return _without_parameters(ev, st, idx, n, k, ne)
+    pidx, pmu, psd, pw, prior_jac = _prior_system(st, n, ne)
 
     x0 = np.clip(x0, lo, hi)
 
@@ -342,6 +334,27 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
     rss = float(r @ r)
     return FitResult(st, x, rss, n, k, bic(rss, n, k, ne), bool(sol.success), str(sol.message),
                      int(sol.nfev), r, J, idx, ne)
+
+
+def _without_parameters(ev: Evaluator, st: Structure, idx: tuple[int, ...], n: int, k: int, ne: float
+                        ) -> FitResult:
+    """The fit of a structure without parameters: its residual (debiased when it has a bias)."""
+    r = raw_residuals(ev, st, np.zeros((1, 0)), idx)[0]
+    if st.bias:
+        r = debias(ev, r, idx)
+    rss = float(r @ r)
+    return FitResult(st, np.zeros(0), rss, n, k, bic(rss, n, k, ne), True, "no free parameters", 1, r, None, idx,
+                     ne)
+
+
+def _prior_system(st: Structure, n: int, ne: float):
+    """The prior's parameter indices, means and sds, the weight of its residual rows (the data counted at
+    their effective size, :func:`n_effective`) and their Jacobian."""
+    pidx, pmu, psd = st.prior()
+    pw = math.sqrt(n / ne) * st.prior_gain
+    prior_jac = np.zeros((len(pidx), st.n_params))
+    prior_jac[np.arange(len(pidx)), pidx] = pw / psd
+    return pidx, pmu, psd, pw, prior_jac
 
 
 def prior_rows(free: Sequence[int], at: np.ndarray, pidx, pmu, psd, pw: float):
