@@ -96,6 +96,21 @@ def test_white_residual_keeps_one_sample_per_bound_and_colored_counts_fewer():
     assert abs(n_effective(fine, [0]) - N / 5) < 1e-6
 
 
+def test_no_lag_reaches_across_an_excluded_span():
+    """Two stretches of white noise on either side of a gap, at different levels (a sensor bias that moved
+    while the logger was down): each counts as white; joined across the gap they would look correlated."""
+    rng = np.random.default_rng(4)
+    half = N // 2
+    y = np.concatenate([rng.standard_normal(half), 5.0 + rng.standard_normal(half)])
+    ev = _evaluator()
+    t = ev.cases[0].t_grid_s
+    learn_residual_correlation(ev, SimpleNamespace(idx=(0,), residual=y))
+    joined = float(ev.corr_samples[0][0])
+    ev.cases[0].holes_s = ((float(t[half - 1]) + 0.1 * DT, float(t[half]) - 0.1 * DT),)
+    learn_residual_correlation(ev, SimpleNamespace(idx=(0,), residual=y))
+    assert joined > 50 and float(ev.corr_samples[0][0]) < 1.3
+
+
 @settings(max_examples=60, deadline=None)
 @given(arrays(np.float64, st.integers(2, 400), elements=st.floats(-1e6, 1e6)))
 def test_correlation_samples_are_finite_and_between_one_and_the_length(x):

@@ -29,6 +29,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
+from .data import segment_starts
 from .engine import Evaluator, Structure
 
 T_CORR_S = 0.05  # at most one independent sample of model error per 50 ms (the IMU's bandwidth)
@@ -87,8 +88,10 @@ def correlation_samples(e: np.ndarray) -> float:
 def learn_residual_correlation(ev: Evaluator, fit: FitResult) -> dict[int, np.ndarray]:
     """Set :attr:`Evaluator.corr_samples` from ``fit``'s residual (the first calibrated fit: what the
     model leaves when its known physics is tuned): per drive of the fit, the correlation samples
-    (:func:`correlation_samples`) of every signal's compared (weighted) samples. A signal with fewer than
-    :data:`MIN_CORR_SAMPLES` compared samples keeps the :data:`T_CORR_S` bound. Returns what it set."""
+    (:func:`correlation_samples`) of every signal's compared (weighted) samples, each stretch between
+    excluded spans of the measurement (``holes_s``: gaps) on its own and weighted by its samples; a signal
+    without a stretch of :data:`MIN_CORR_SAMPLES` compared samples keeps the :data:`T_CORR_S` bound.
+    Returns what it set."""
     out: dict[int, np.ndarray] = {}
     o = 0
     for r in fit.idx:
@@ -96,10 +99,13 @@ def learn_residual_correlation(ev: Evaluator, fit: FitResult) -> dict[int, np.nd
         n, s = c.y_meas.shape
         blk = fit.residual[o:o + n * s].reshape(n, s)
         tau = np.ones(s)
+        cuts = segment_starts(c.t_grid_s, getattr(c, "holes_s", ()))  # no lag reaches across a gap
         for j in range(s):
             used = ev.weights[r][:, j] > 0
-            if used.sum() >= MIN_CORR_SAMPLES:
-                tau[j] = correlation_samples(blk[used, j])
+            pieces = [(e[u], int(u.sum())) for e, u in zip(np.split(blk[:, j], cuts), np.split(used, cuts))]
+            pieces = [(e, m) for e, m in pieces if m >= MIN_CORR_SAMPLES]
+            if pieces:  # each stretch between excluded spans on its own, weighted by its samples
+                tau[j] = sum(correlation_samples(e) * m for e, m in pieces) / sum(m for _, m in pieces)
         out[r] = tau
         o += n * s
     ev.corr_samples = dict(out)
