@@ -11,22 +11,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from _series import ar1
 from susp_sim_ros.analysis.discrepancy.finder import MIN_DELTA_BIC
 from susp_sim_ros.analysis.discrepancy.fit import (T_CORR_S, bic, correlation_samples,
                                                    learn_residual_correlation, n_effective)
 
 N = 2000
 DT = T_CORR_S  # one grid step per T_CORR_S: the bound leaves every white sample independent
-
-
-def _ar1(rng: np.random.Generator, n: int, phi: float) -> np.ndarray:
-    """Unit-variance AR(1) series (a smooth misfit when phi is near 1)."""
-    e = rng.standard_normal(n)
-    x = np.empty(n)
-    x[0] = e[0] / np.sqrt(1.0 - phi * phi)
-    for i in range(1, n):
-        x[i] = phi * x[i - 1] + e[i]
-    return x / x.std()
 
 
 def _evaluator(n: int = N, dt: float = DT) -> SimpleNamespace:
@@ -51,7 +42,7 @@ def test_correlation_samples_of_white_noise_an_ar1_process_and_a_ring_out():
     rng = np.random.default_rng(1)
     assert abs(correlation_samples(rng.standard_normal(20000)) - 1.0) < 0.15
     phi = 0.9
-    tau = correlation_samples(_ar1(rng, 20000, phi))
+    tau = correlation_samples(ar1(rng, 20000, phi))
     assert abs(tau / ((1 + phi * phi) / (1 - phi * phi)) - 1.0) < 0.15, tau
     # a lightly damped 1.3 Hz mode at 100 Hz (AR(2)): its plain autocorrelation sum nearly cancels,
     # the squared one counts the ring-out's length
@@ -71,7 +62,7 @@ def test_a_colored_residual_does_not_name_a_term_that_white_noise_would():
     named_white, named_colored, named_naive = 0, 0, 0
     for seed in range(60):
         rng = np.random.default_rng(seed)
-        f, colored = _ar1(rng, N, 0.98), _ar1(rng, N, 0.98)
+        f, colored = ar1(rng, N, 0.98), ar1(rng, N, 0.98)
         d_colored, b = _delta_bic(colored, f, learn=True)
         d_naive, _ = _delta_bic(colored, f, learn=False)
         d_white, _ = _delta_bic(b * f + rng.standard_normal(N), f, learn=True)
@@ -89,7 +80,7 @@ def test_white_residual_keeps_one_sample_per_bound_and_colored_counts_fewer():
     ev = _evaluator()
     learn_residual_correlation(ev, SimpleNamespace(idx=(0,), residual=rng.standard_normal(N)))
     assert n_effective(ev, [0]) > 0.85 * N
-    learn_residual_correlation(ev, SimpleNamespace(idx=(0,), residual=_ar1(rng, N, 0.95)))
+    learn_residual_correlation(ev, SimpleNamespace(idx=(0,), residual=ar1(rng, N, 0.95)))
     assert n_effective(ev, [0]) < N / 15
     fine = _evaluator(N, DT / 5)  # five grid steps per T_CORR_S: white noise counts one in five
     learn_residual_correlation(fine, SimpleNamespace(idx=(0,), residual=rng.standard_normal(N)))

@@ -53,16 +53,13 @@ def best_decoy_rss(residual: np.ndarray, decoys: np.ndarray) -> np.ndarray:
     return float(residual @ residual) - gain
 
 
-def decoy_margin(r_before: np.ndarray, r_after: np.ndarray, n_eff: float, n: int,
+def decoy_margin(r_before: np.ndarray, r_after: np.ndarray, n_eff: float,
                  blocks: Sequence[tuple[int, int, int]]) -> dict:
-    """How clearly a term beats its decoys: ``margin`` = criterion of the best decoy minus the term's
-    (``n_eff ln(rss_decoy / rss_term)``; both pay the same parameters), with the rss of the residual
-    before the term, after it and after the best decoy. The term lowered ``r_before`` by its effect
+    """How clearly a term beats its decoys: ``decoy_margin`` = criterion of the best decoy minus the
+    term's (``n_eff ln(rss_decoy / rss_term)``; both pay the same parameters), and the number of
+    ``decoys``. The term lowered ``r_before`` by its effect
     ``delta = r_before - r_after``; a decoy lowers it by ``a * decoy(delta)``."""
     rss_d = best_decoy_rss(r_before, decoy_effects(r_before - r_after, blocks))
     rss_t = float(r_after @ r_after)
-    best = float(rss_d.min())
-    ne = max(n_eff, 1.0)
-    margin = ne * math.log(max(best, 1e-300) / max(rss_t, 1e-300))
-    return {"decoy_margin": margin, "decoy_rss": best, "decoys": int(rss_d.size),
-            "rss_before": float(r_before @ r_before), "rss_term": rss_t, "n": int(n)}
+    margin = max(n_eff, 1.0) * math.log(max(float(rss_d.min()), 1e-300) / max(rss_t, 1e-300))
+    return {"decoy_margin": margin, "decoys": int(rss_d.size)}

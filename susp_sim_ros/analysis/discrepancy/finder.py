@@ -864,9 +864,8 @@ class DiscrepancyFinder:
             n, s = ev.cases[r].y_meas.shape
             blocks.append((o, n, s))
             o += n * s
-        d = decoy_margin(before.residual, after.residual, after.n_eff, after.n, blocks)
-        return {"decoy_margin": d["decoy_margin"], "decoys": d["decoys"],
-                "decoys_beaten": bool(d["decoy_margin"] >= MIN_DELTA_BIC)}
+        d = decoy_margin(before.residual, after.residual, after.n_eff, blocks)
+        return {**d, "decoys_beaten": bool(d["decoy_margin"] >= MIN_DELTA_BIC)}
 
     def _heldout_check(self, ev: Evaluator, cur: FitResult, new: FitResult) -> dict:
         """Leave-one-drive-out of the new term(s), linearised (no further simulation): for each drive,

@@ -42,7 +42,8 @@ PRIOR_SCALE_MAX = 5.0   # the priors' documented spread is widened at most this 
 PRIOR_SCALE_MIN_INFO = 1.0  # directions whose data information is at least the prior's tell the spread
 
 
-def _grid_step_s(c) -> float:
+def grid_step_s(c) -> float:
+    """The comparison grid's step [s] of the drive case ``c`` (median; :data:`T_CORR_S` with one sample)."""
     t = c.t_grid_s
     return float(np.median(np.diff(t))) if t.size > 1 else T_CORR_S
 
@@ -54,7 +55,7 @@ def n_effective(ev: Evaluator, idx: Sequence[int]) -> float:
     n = 0.0
     for r in idx:
         c = ev.cases[r]
-        floor = max(1.0, T_CORR_S / _grid_step_s(c))
+        floor = max(1.0, T_CORR_S / grid_step_s(c))
         tau = ev.corr_samples.get(r)
         if tau is None:
             n += c.y_meas.size / floor

@@ -16,7 +16,7 @@ from ...model.vehicle import hydraulic_curves, hydraulic_from_measured, velocity
 from .calibration import outside_statement
 from .candidates import BY_NAME, LIBRARY, MEASUREMENT, PHYSICS, axle_map
 from .data import SIGNAL_UNIT, SIGNALS
-from .fit import n_effective
+from .fit import grid_step_s, n_effective
 from . import missing_force_report
 
 VERDICTS = ("missing_physics", "no_significant_discrepancy", "unexplained_residual", "unmeasured_input")
@@ -101,7 +101,7 @@ def statement(name: str, params: dict, ev: dict, f) -> str:
               f"of the residual above noise and is selected in {100 * ev['selected_in_fraction_of_refits']:.0f} % "
               f"of the leave-one-drive-out refits")
     if "decoy_margin" in ev:
-        s += (f"; its criterion beats the best of its {ev.get('decoys', 'time-shuffled')} decoys (its own effect "
+        s += (f"; its criterion beats the best of its {ev['decoys']} decoys (its own effect "
               f"time-reversed and shifted) by {ev['decoy_margin']:.0f}")
     if cand.kind == PHYSICS:
         s += "; no recalibration of the base model within its priors explains it (fitted jointly with them"
@@ -248,8 +248,7 @@ def effective_samples(f) -> dict:
         c = f.cases_[r]
         tau = ev.corr_samples.get(r)
         if tau is not None:
-            dt = float(np.median(np.diff(c.t_grid_s))) if c.t_grid_s.size > 1 else math.nan
-            corr[c.name] = {s: float(t * dt) for s, t in zip(c.signals, tau)}
+            corr[c.name] = {s: float(t * grid_step_s(c)) for s, t in zip(c.signals, tau)}
     return {"n": int(sum(ev.n_res)), "n_eff": float(n_effective(ev, idx)), "correlation_time_s": corr}
 
 
