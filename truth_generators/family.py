@@ -16,10 +16,13 @@ Public API::
     forms(split=None) -> list[GeneratorForm]        in registry order
     CASE_DRIVES: the six drives of a case (bump crossing and sine steer; intact, front-empty, rear-empty)
     make_case(form, seed, gyro_noise_deg_s=0.05, drives=CASE_DRIVES) -> list[(label, TestDrive)]
+    case_truth(form, seed, label) -> TruthResult     noise-free truth of one case drive (hidden force exposed)
     bump_crossing(form, seed, oil, speed_kmh, height_m, gyro_noise_deg_s=0.1, car_band=None) -> TestDrive
 
 Every difference of a form from the product's model is in its ``description`` and in
-``docs/independent_sim.md`` ("The generator family").
+``docs/independent_sim.md`` ("The generator family"). The ``unlisted/`` forms (issue 26, held out) hold
+physics no candidate of the product lists (effect ``unlisted_force``; ``GeneratorForm.leading`` names the
+dependences that would be the right leading dependence of a learned force).
 """
 from __future__ import annotations
 
@@ -30,13 +33,14 @@ import numpy as np
 import yaml
 
 from susp_sim_ros.io.drive import TestDrive
-from .independent_sim import TruthCar, TruthFriction, TruthHidden, TruthManeuver, TruthSensor, make_drive
+from .independent_sim import (TruthCar, TruthFriction, TruthHidden, TruthManeuver, TruthResult, TruthSensor,
+                              make_drive, simulate)
 
 SPLIT_FILE = Path(__file__).resolve().with_name("family_split.yaml")
 SPLITS = ("development", "held_out")
 #: what a form hides: "none" (structure only: the finder must name nothing) or the physics it adds
 EFFECTS = ("none", "amplitude_friction", "extra_viscous", "gas_spring", "lateral_force_friction",
-           "amplitude_and_viscous")
+           "amplitude_and_viscous", "unlisted_force")
 
 INTACT, FRONT_EMPTY, REAR_EMPTY = (1.0, 1.0, 1.0, 1.0), (0.0, 0.0, 1.0, 1.0), (1.0, 1.0, 0.0, 0.0)
 #: (maneuver kind, oil levels FL FR RL RR, label) of a case: the same six drives for every form
@@ -55,6 +59,9 @@ class GeneratorForm:
     ``expect``: terms of the finder's vocabulary that name the hidden physics (must be found);
     ``optional``: terms that are right if named and not missed if not (physics the drives barely inform,
     or that a calibration value can stand in for, e.g. a gas spring's linear rate and the wheel rate).
+    ``leading``: for physics no candidate lists (effect ``unlisted_force``), the dependence names of the
+    product's feature vocabulary an engineer would call right as the leading dependence of the learned
+    force (any one of them).
     """
 
     name: str
@@ -69,6 +76,7 @@ class GeneratorForm:
     car_changes: dict = field(default_factory=dict)
     integrator: str = "rk4"
     step_s: float = 2e-4
+    leading: tuple[str, ...] = ()
 
     @property
     def split(self) -> str:
@@ -87,6 +95,7 @@ def _forms() -> dict[str, GeneratorForm]:
     amp = dict(effect="amplitude_friction", expect=("friction_amplitude",))
     visc = dict(effect="extra_viscous", expect=("extra_viscous_damping",))
     gas = dict(effect="gas_spring", optional=("damper_gas_preload",))
+    unl = dict(effect="unlisted_force", expect=("unlisted_force",))
     lat = dict(effect="lateral_force_friction", base="no_horizontal", expect=("friction_lateral_force",),
                optional=("friction_longitudinal_force",))
     other = dict(integrator="heun", step_s=1e-3, friction=TruthFriction(sv_shape="sqrt", damper_curve="akima",
@@ -166,6 +175,22 @@ def _forms() -> dict[str, GeneratorForm]:
                       "(decaying peak, saturating, 20 N) and extra viscous damping 300 N s/m",
                       expect=("friction_amplitude", "extra_viscous_damping"),
                       hidden=TruthHidden(amplitude_extra_N=(0.0, 20.0), extra_viscous=(0.0, 300.0))),
+        # physics no candidate of the product lists (issue 26, added 2026-11-26, all held out)
+        GeneratorForm("unlisted/damper_blow_off", description="a blow-off valve in all four dampers: beyond "
+                      "+-0.2 m/s the intact hydraulic curve grows with 0.3 of its slope (softer at high velocity "
+                      "than the measured curve; oil-empty dampers have no pressure to blow off)",
+                      hidden=TruthHidden(blow_off_velocity_m_s=(0.2, 0.2), blow_off_slope_factor=0.3),
+                      leading=("velocity_beyond_knee", "velocity_squared"), **unl),
+        GeneratorForm("unlisted/arb_free_play", description="free play in both anti-roll bars: "
+                      "F_left = k_arb (delta - clip(delta, -g, g)), delta = d_left - d_right, gap g 4 mm",
+                      hidden=TruthHidden(arb_free_play_m=(0.004, 0.004)),
+                      leading=("roll_free_play", "roll_deflection"), **unl),
+        GeneratorForm("unlisted/stribeck_friction", description="a velocity-weakening (Stribeck) friction at the "
+                      "rear corners: (F_c + (F_s - F_c) exp(-(v/v_s)^2)) tanh(v/v_eps), F_s 120 N, F_c 40 N, "
+                      "v_s 0.02 m/s, v_eps 1 mm/s (another shape than the product's Dahl elements)",
+                      hidden=TruthHidden(stribeck_static_N=(0.0, 120.0), stribeck_coulomb_N=(0.0, 40.0),
+                                         stribeck_speed_m_s=0.02, stribeck_eps_m_s=0.001),
+                      leading=("sign_velocity",), **unl),
     ]
     return {f.name: f for f in fs}
 
@@ -233,6 +258,18 @@ def make_case(form: GeneratorForm, seed: int, gyro_noise_deg_s: float = 0.05,
     return out
 
 
+def case_truth(form: GeneratorForm, seed: int, label: str) -> TruthResult:
+    """The noise-free truth (:class:`~.independent_sim.TruthResult`, incl. the hidden force per corner) of
+    the drive ``label`` (:data:`CASE_DRIVES`) of :func:`make_case` with ``seed``: the same car, friction,
+    hidden physics, maneuver, oil, step and integrator (the sensor does not enter the truth)."""
+    kinds = {lbl: (kind, oil) for kind, oil, lbl in CASE_DRIVES}
+    if label not in kinds:
+        raise ValueError(f"case drive must be one of {sorted(kinds)}, got {label!r}")
+    kind, oil = kinds[label]
+    return simulate(form.car(seed), form.friction, form.hidden, maneuver(kind), oil, form.step_s,
+                    integrator=form.integrator)
+
+
 def bump_crossing(form: GeneratorForm, seed: int, oil, speed_kmh: float, height_m: float,
                   gyro_noise_deg_s: float = 0.1, car_band: str | None = None,
                   friction_dev_N: float = 0.0) -> TestDrive:
@@ -259,4 +296,4 @@ def bump_crossing(form: GeneratorForm, seed: int, oil, speed_kmh: float, height_
 
 
 __all__ = ["FORMS", "SPLITS", "SPLIT_RECORDED", "EFFECTS", "CASE_DRIVES", "CAR_BANDS", "GeneratorForm",
-           "split_of", "forms", "maneuver", "make_case", "bump_crossing"]
+           "split_of", "forms", "maneuver", "make_case", "case_truth", "bump_crossing"]

@@ -8,7 +8,8 @@ difference is listed in ``docs/independent_sim.md``.
 Public API::
 
     TruthCar, TruthFriction, TruthHidden, TruthSensor, TruthManeuver   (dataclasses)
-    simulate(car, friction, hidden, maneuver, oil, step_s, y0) -> TruthResult   (noise-free truth)
+    simulate(car, friction, hidden, maneuver, oil, step_s, y0) -> TruthResult   (noise-free truth, with the
+        hidden physics' force per corner, ``TruthResult.hidden``)
     make_drive(car, friction, hidden, maneuver, sensor, oil, seed, record_road, step_s) -> TestDrive
     body_modes(car) -> {"bounce": Hz, "pitch": Hz, "roll": Hz}
     write_drive(path, drive, overwrite=True)    (re-exported from susp_sim_ros.io.drive)
@@ -164,6 +165,15 @@ class TruthHidden:
     viscous_exponent: float = 0.6
     viscous_ref_m_s: float = 0.1
     gas_cubic_N_m3: tuple = (0.0, 0.0, 0.0, 0.0)  # progressive gas spring: + k3 d^3
+    # physics no candidate of the product lists (issue 26; off by default, bit-identical then)
+    blow_off_velocity_m_s: tuple = (0.0, 0.0)     # damper blow-off valve opens beyond +-v_bo (0 = no valve):
+    blow_off_slope_factor: float = 0.3            # the intact hydraulic curve grows with this share of its
+    #                                               slope there: F(+-v_bo) + factor (F(v) - F(+-v_bo))
+    arb_free_play_m: tuple = (0.0, 0.0)           # anti-roll bar gap g: F_left = k (delta - clip(delta, -g, g))
+    stribeck_static_N: tuple = (0.0, 0.0)         # velocity-weakening friction at each corner (front, rear):
+    stribeck_coulomb_N: tuple = (0.0, 0.0)        # (F_c + (F_s - F_c) exp(-(v/v_s)^2)) tanh(v/v_eps)
+    stribeck_speed_m_s: float = 0.02              # v_s
+    stribeck_eps_m_s: float = 0.001               # v_eps (regularisation of sign(v))
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -299,11 +309,12 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
 # ==== parameter arrays for the kernel =================================================================
 (G, MS, MT, IXX, IYY, IZZ, H, HRC, HPC, A_, B_, MU, RELAX, VFADE, RATIO, KT, CT, KSTOP, ESTOP, DSCALE,
  SIGMA, SVINF, SVS, SVREF, FRIC, AMPA0, AMPTAU, DRIVEF, BRAKEF, SVON, AMPENV, AMPLAW, AMPEXP, AMPSEP, SEPSIG,
- VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, NP) = range(43)
+ VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, NP) = range(46)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
- WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, NW) = range(25)
+ WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, NW) = range(29)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
-NOUT = 18        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]
+NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
+NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
 
 
 def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on: bool = True,
@@ -331,6 +342,8 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
     P[OILLAW] = _code(fr.oil_law, OIL_LAWS, "oil_law")
     P[RCMODE] = _code(car.roll_centre_handling, ROLL_CENTRE_HANDLINGS, "roll_centre_handling")
     P[INTEG] = _code(integrator, INTEGRATORS, "integrator")
+    P[BOFAC] = hid.blow_off_slope_factor
+    P[STRVS], P[STREPS] = hid.stribeck_speed_m_s, hid.stribeck_eps_m_s
     W = np.zeros((4, NW))
     L = car.wheelbase
     for i in range(4):
@@ -350,6 +363,8 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WAMPX], W[i, WGF0], W[i, WGK] = hid.amplitude_extra_N[k], hid.gas_preload_N[i], hid.gas_rate_N_m[i]
         W[i, WCV], W[i, WHRC] = hid.extra_viscous[k], car.roll_centre[k]
         W[i, WGK3] = hid.gas_cubic_N_m3[i]
+        W[i, WBOV], W[i, WGAP] = hid.blow_off_velocity_m_s[k], hid.arb_free_play_m[k]
+        W[i, WSTRS], W[i, WSTRC] = hid.stribeck_static_N[k], hid.stribeck_coulomb_N[k]
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -375,7 +390,8 @@ def _damper(v, ax, X, C, E):
 
 @njit(cache=True)
 def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
-    """dy/dt of the mechanical states; aux[i] = (d, dd, Fz, Fs). Friction forces Ff held (splitting)."""
+    """dy/dt of the mechanical states; aux[i] = (d, dd, Fz, Fs, F_hidden): F_hidden the part of Fs from
+    the hidden physics computed here (all but the Dahl elements). Friction forces Ff held (splitting)."""
     z, zd, phi, phid, th, thd, vy, r = y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7]
     d = np.empty(4)
     dd = np.empty(4)
@@ -389,7 +405,14 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
     sXF = 0.0
     for i in range(4):
         o = i - 1 if i % 2 == 1 else i + 1            # partner wheel on the same axle
-        Fs = W[i, WK] * d[i] + W[i, WKARB] * (d[i] - d[o])
+        Fhid = 0.0
+        if W[i, WGAP] > 0.0:                          # anti-roll bar with free play +-gap
+            delta = d[i] - d[o]
+            dc = min(max(delta, -W[i, WGAP]), W[i, WGAP])
+            Fs = W[i, WK] * d[i] + W[i, WKARB] * (delta - dc)
+            Fhid -= W[i, WKARB] * dc
+        else:
+            Fs = W[i, WK] * d[i] + W[i, WKARB] * (d[i] - d[o])
         eb = d[i] - W[i, WBUMP]
         er = -d[i] - W[i, WREB]
         if eb > 0.0:
@@ -398,7 +421,15 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
             Fs -= P[KSTOP] * (er + er * er * er / (P[ESTOP] * P[ESTOP]))
         ia = int(W[i, WAXLE])
         w_oil = W[i, WOIL] if P[OILLAW] == 0.0 else W[i, WOIL] * W[i, WOIL]
-        Fh = w_oil * _damper(dd[i], ia, X, C, E) + (1.0 - w_oil) * W[i, WCEMPTY] * dd[i]
+        if W[i, WBOV] > 0.0 and abs(dd[i]) > W[i, WBOV]:   # blow-off valve open: softer intact curve
+            vb = W[i, WBOV] if dd[i] > 0.0 else -W[i, WBOV]
+            Fc0 = _damper(dd[i], ia, X, C, E)
+            Fb = _damper(vb, ia, X, C, E)
+            Fbo = Fb + P[BOFAC] * (Fc0 - Fb)
+            Fh = w_oil * Fbo + (1.0 - w_oil) * W[i, WCEMPTY] * dd[i]
+            Fhid += P[DSCALE] * w_oil * (Fbo - Fc0)
+        else:
+            Fh = w_oil * _damper(dd[i], ia, X, C, E) + (1.0 - w_oil) * W[i, WCEMPTY] * dd[i]
         if P[VISLAW] == 0.0:
             Fv = W[i, WCV] * dd[i]
         elif P[VISLAW] == 1.0:
@@ -406,7 +437,14 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
             Fv = W[i, WCV] * P[VISREF] * sg * (abs(dd[i]) / P[VISREF]) ** P[VISN]
         else:
             Fv = W[i, WCV] * P[VISREF] * math.tanh(dd[i] / P[VISREF])
+        Fgas = W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fs += P[DSCALE] * Fh + Ff[i] + Fv + W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
+        Fhid += Fv + Fgas
+        if W[i, WSTRS] != 0.0 or W[i, WSTRC] != 0.0:  # Stribeck (velocity-weakening) friction
+            ra = dd[i] / P[STRVS]
+            Fst = (W[i, WSTRC] + (W[i, WSTRS] - W[i, WSTRC]) * math.exp(-ra * ra)) * math.tanh(dd[i] / P[STREPS])
+            Fs += Fst
+            Fhid += Fst
         Ft = P[KT] * (ZR[i, j] - y[8 + i]) + P[CT] * (ZRD[i, j] - y[12 + i])
         if W[i, WFZ0] + Ft < 0.0:
             Ft = -W[i, WFZ0]                           # lift-off
@@ -421,6 +459,7 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
         aux[i, 1] = dd[i]
         aux[i, 2] = Fz
         aux[i, 3] = Fs
+        aux[i, 4] = Fhid
         sF += Fs
         sYF += W[i, WY] * Fs
         sXF += W[i, WX] * Fs
@@ -543,6 +582,7 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
     Fa = np.zeros(4)
     Fd = np.zeros(4)
     Fe = np.zeros(4)                 # separate amplitude element
+    Fash = np.zeros(4)               # shadow of the axle element without the amplitude extra (hidden output)
     Aenv = np.zeros(4)
     Ahi = np.zeros(4)
     Alo = np.zeros(4)
@@ -553,8 +593,8 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
     k3 = np.zeros(NY)
     k4 = np.zeros(NY)
     yt = np.zeros(NY)
-    aux = np.zeros((4, 4))
-    aux2 = np.zeros((4, 4))
+    aux = np.zeros((4, NAUX))
+    aux2 = np.zeros((4, NAUX))
     decay = math.exp(-h / P[AMPTAU])
     for k in range(n + 1):
         j = 2 * k
@@ -572,6 +612,7 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
             out[k, 6 + i] = aux[i, 0]
             out[k, 10 + i] = Ff[i]
             out[k, 14 + i] = aux[i, 2]
+            out[k, 18 + i] = aux[i, 4] + P[FRIC] * (Fa[i] - Fash[i] + Fe[i])
         if k == n:
             break
         _step(y, yt, h, j, V, AX, DSW, ZR, ZRD, Ff, P, W, X, C, E, k1, k2, k3, k4, aux2)
@@ -585,6 +626,9 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
             sh = 1.0 + W[i, WKX] * abs(Fx) + W[i, WKY] * abs(y[16 + i])
             _envelope(i, dn, decay, P, Aenv, Ahi, Alo, M2)
             Famp = _amplitude_level(W[i, WAMPX], Aenv[i], P)
+            # shadow axle element at the level without the amplitude extra (equals Fa when nothing is
+            # added inside the axle element, so the hidden output's Fa - Fash is then exactly zero)
+            Fash[i] = _dahl(Fash[i], dx, W[i, WFCA] * sh, P[SIGMA])
             if P[AMPSEP] == 0.0:
                 Fca = (W[i, WFCA] + Famp) * sh
             else:
@@ -605,7 +649,14 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
 @dataclass
 class TruthResult:
     """Noise-free truth at every step: t [s], gyro (n,3) rad/s, accel (n,3) specific force m/s^2,
-    deflection (n,4) m, friction (n,4) N, tyre load (n,4) N."""
+    deflection (n,4) m, friction (n,4) N, tyre load (n,4) N, and ``hidden`` (n,4) N per corner (FL FR RL RR):
+    the sum of the forces of the hidden physics (everything :class:`TruthHidden` adds), with the sign of the
+    suspension force (positive pushes the body up and the wheel down). Its parts: extra viscous ``Fv``; gas
+    ``f0 + k d + k3 d^3``; a separate amplitude element's force; amplitude friction inside the axle element:
+    that element's force minus a shadow Dahl element run on the same deflection increments at the level
+    without the amplitude extra (the same s_h); blow-off: the damper force with the valve minus without it;
+    anti-roll-bar free play: the bar's force with the gap minus without it (``-k clip(delta, -g, g)``);
+    Stribeck friction. Friction forces are those held over the step that starts at ``t`` (as ``friction``)."""
 
     t: np.ndarray
     gyro: np.ndarray
@@ -613,6 +664,7 @@ class TruthResult:
     deflection: np.ndarray
     friction: np.ndarray
     tyre_load: np.ndarray
+    hidden: np.ndarray
 
 
 def _road_at(s_query, road):
@@ -639,7 +691,7 @@ def _static_offset(P, W, X, C, E):
     acc = [1, 3, 5, 12, 13, 14, 15]
     ZR = np.zeros((4, 1))
     dy = np.zeros(NY)
-    aux = np.zeros((4, 4))
+    aux = np.zeros((4, NAUX))
     Ff = np.zeros(4)
 
     def res(yy):
@@ -688,7 +740,7 @@ def simulate(car: TruthCar | None = None, friction: TruthFriction | None = None,
     out = np.zeros((n + 1, NOUT))
     _run(y, n, step_s, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out)
     return TruthResult(np.arange(n + 1) * step_s, out[:, 0:3], out[:, 3:6], out[:, 6:10], out[:, 10:14],
-                       out[:, 14:18])
+                       out[:, 14:18], out[:, 18:22])
 
 
 def body_modes(car: TruthCar | None = None) -> dict:
@@ -700,7 +752,7 @@ def body_modes(car: TruthCar | None = None) -> dict:
     st = [0, 2, 4, 8, 9, 10, 11, 1, 3, 5, 12, 13, 14, 15]
     ZR = np.zeros((4, 1))
     Ff = np.zeros(4)
-    aux = np.zeros((4, 4))
+    aux = np.zeros((4, NAUX))
 
     def f(x):
         y = np.zeros(NY)
