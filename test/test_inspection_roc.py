@@ -121,3 +121,67 @@ def test_independent_truth_cars_are_scored_by_every_method():
     assert all(intact[f"est_oil_{w}"] > 0.85 for w in ("FL", "FR", "RL", "RR"))
     assert empty["est_oil_FR"] < 0.3 and empty["model_based"] > intact["model_based"] + 0.5
     assert empty["eusama"] > intact["eusama"] and empty["phase_shift"] > intact["phase_shift"]
+
+
+def _held_out_roc(cars: int, **extra):
+    """The held-out twin's roc section (config/studies/inspection_roc_held_out.yaml) with ``cars`` cars."""
+    import yaml
+    doc = yaml.safe_load((ROOT / "config/studies/inspection_roc_held_out.yaml").read_text())
+    doc["roc"].update(cars=cars, **extra)
+    return doc
+
+
+def test_family_plugin_cycles_the_held_out_forms_deterministically():
+    """truth_generators.roc:family_bump_crossing: car i from held-out form i mod n (the split as loaded),
+    the same drive for the same draw, different forms giving different drives; the drawn car values in
+    the form's car except for the beyond-priors form, whose car keeps its own band."""
+    from truth_generators import family
+    from truth_generators import roc as plugins
+    spec = roc.roc_spec(_held_out_roc(4), "<t>", "t")
+    r = spec.data["roc"]
+    held_out = [f.name for f in family.forms("held_out")]
+    assert r["truth_generator_options"]["forms"] == held_out
+    vp = load_vehicle(spec.data["vehicle"])
+    draws = [roc.car_draw(r, vp, i) for i in range(2)]
+    out = [plugins.family_bump_crossing(d, r) for d in draws]
+    assert [o[0].metadata["truth_form"] for o in out] == held_out[:2]
+    again = plugins.family_bump_crossing(draws[0], r)
+    np.testing.assert_array_equal(again[0].imu.gyro, out[0][0].imu.gyro)
+    assert again[1] == out[0][1]
+    n = min(len(o[2]) for o in out)
+    assert not np.allclose(out[0][2][:n], out[1][2][:n])
+    assert 0 < out[0][1] < len(out[0][2])
+    # the car: drawn values where the form's car allows
+    d = draws[0]
+    form = family.FORMS["structure/tyre_lag_0.25m"]
+    car = plugins.family_car(form, d, 7)
+    assert car.sprung_mass == d["values"]["sprung_mass"] and car.relaxation_length == 0.25
+    beyond = plugins.family_car(family.FORMS["structure/car_beyond_priors"], d, 7)
+    assert abs(beyond.sprung_mass / 1400.0 - 1.0) >= 0.15 and beyond.sprung_mass != d["values"]["sprung_mass"]
+    # forms named in the study; an unknown one refused when the study is loaded
+    named = roc.roc_spec(_held_out_roc(2, truth_generator_options={"forms": ["viscous/power"]}), "<t>", "t")
+    assert plugins.family_bump_crossing(d, named.data["roc"])[0].metadata["truth_form"] == "viscous/power"
+    from susp_sim_ros.errors import ConfigError
+    with pytest.raises(ConfigError, match="truth_generator_options.*no/such"):
+        roc.roc_spec(_held_out_roc(2, truth_generator_options={"forms": ["no/such"]}), "<t>", "t")
+
+
+def test_held_out_twin_study_end_to_end(tmp_path):
+    """A handful of the held-out twin's cars (two forms, 6 cars) through the study: every method
+    reported, each car's form in cars.csv."""
+    import csv
+    from susp_sim_ros.analysis.sweep import make_executor, run_study, study_from_dict
+    doc = _held_out_roc(6, truth_generator_options={"forms": ["structure/velocity_scaling_sqrt", "viscous/power"]},
+                        states={"intact": 0.5, "one_empty": 0.5}, bootstrap=20, estimator_variants=["full"],
+                        seed=5)
+    doc["chunk_size"] = 6
+    spec = study_from_dict(doc, "<held-out tiny>")
+    res = run_study(spec, tmp_path / "out", make_executor("inprocess"), progress=False)
+    assert res["cars_failed"] == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert set(summary["roc"]) == set(roc.METHODS)
+    for m in roc.METHODS:
+        assert 0.0 <= summary["roc"][m]["auc"] <= 1.0
+    with open(tmp_path / "out" / "cars.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["truth_form"] for r in rows] == ["structure/velocity_scaling_sqrt", "viscous/power"] * 3

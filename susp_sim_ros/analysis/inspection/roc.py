@@ -23,6 +23,11 @@ measured by a 200 Hz IMU with white noise, and it stands on the virtual EUSAMA b
   other ``estimator_variants`` (``dahl_only``: the estimator built on the Dahl-only friction model,
   issue 14 item 4).
 
+``truth_generator`` (default ``"model"``) may instead name a plug-in ``"package.module:function"``
+(:func:`truth_generator`) that gives the bump crossing from another simulator, with its own
+``truth_generator_options`` (:func:`generator_options`); a plug-in drive's ``metadata["truth_form"]`` is
+recorded per car (``truth_form`` column of ``cars.csv``).
+
 Output (:func:`finish_roc`): ROC curves (PNG), AUC with a stratified bootstrap 95 % interval and the
 sensitivity at 95 % specificity per method, for one damper oil-empty (the ``roc`` key of
 ``summary.json``, interface.md), one damper at half oil, and any oil loss; ``cars.csv`` with every car.
@@ -56,7 +61,7 @@ SEVERITIES = {ONE_EMPTY: "one damper oil-empty", ONE_HALF: "one damper at half o
               "any": "any oil loss (one or more dampers)"}
 ROC_KEYS = {"seed", "cars", "states", "variation", "speed_kmh", "bump_height", "gyro_noise_deg_s",
             "accel_noise_m_s2", "imu_rate_hz", "truth_variant", "estimator_variants", "bootstrap",
-            "specificity", "several_oil", "local_workers", "vehicle", "truth_generator"}
+            "specificity", "several_oil", "local_workers", "vehicle", "truth_generator", "truth_generator_options"}
 
 
 # ---- the study description ------------------------------------------------------------------------------
@@ -156,6 +161,10 @@ def roc_spec(data: dict, source: str, name: str):
                     "estimator_variants": list(ests), "bootstrap": int(roc.get("bootstrap", 1000)),
                     "specificity": float(roc.get("specificity", 0.95)), "several_oil": [float(x) for x in several],
                     "local_workers": int(roc.get("local_workers", 2)), "truth_generator": generator}}
+    options = generator_options(generator, roc.get("truth_generator_options"), norm["roc"],
+                                f"{source}: roc.truth_generator_options")
+    if options:   # only then: the hash of a study without options stays as it was
+        norm["roc"]["truth_generator_options"] = options
     spec = StudySpec(source, norm)
     spec.runs = [{"car": i} for i in range(cars)]
     spec.chunks = [Chunk(k, tuple(range(j, min(j + chunk, cars)))) for k, j in enumerate(range(0, cars, chunk))]
@@ -257,6 +266,26 @@ def truth_generator(spec: str, source: str = "roc.truth_generator"):
     return fn
 
 
+def generator_options(spec: str, options, roc: Mapping, source: str = "roc.truth_generator_options") -> dict:
+    """The plug-in's ``roc.truth_generator_options`` (a mapping, default none), checked and normalised by
+    the plug-in's module function ``<function>_options(options, roc)`` when it has one (a ValueError
+    there is a ConfigError naming the key); the plug-in reads them from ``roc["truth_generator_options"]``.
+    The reference model (``"model"``) takes none."""
+    if options is not None and not isinstance(options, dict):
+        raise ConfigError(f"{source}: expected a mapping, got {options!r}")
+    fn = truth_generator(spec, source)
+    module, _, func = spec.partition(":")
+    check = None if fn is None else getattr(sys.modules[module], f"{func}_options", None)
+    if check is None:
+        if options and fn is None:
+            raise ConfigError(f"{source}: the reference model ('model') takes no options")
+        return dict(options or {})
+    try:
+        return dict(check(options, roc))
+    except ValueError as exc:
+        raise ConfigError(f"{source}: {exc}") from exc
+
+
 _cache: dict = {}
 
 
@@ -295,6 +324,8 @@ def car_statistics(data: Mapping, i: int) -> dict:
     plugin = truth_generator(roc.get("truth_generator", "model"))
     if plugin is not None:
         drive, k_after, pitch_meas = plugin(draw, roc)
+        if drive.metadata.get("truth_form"):   # the plug-in's form of the truth (a generator family)
+            row["truth_form"] = str(drive.metadata["truth_form"])
     else:
         drive, k_after, pitch_meas = bump_drive(car, draw, roc)
     row["decay_ratio"] = decay_ratio(pitch_meas, k_after)
