@@ -6,13 +6,15 @@ mechanics; the generator family of issue 24 measures it on structure the model d
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from susp_sim_ros.analysis.discrepancy import missing_force as mf
 from susp_sim_ros.model import load_variant, load_vehicle
 from susp_sim_ros.model.linear import linearise
-from susp_sim_ros.model.vehicle import Model
+from susp_sim_ros.model.vehicle import Model, make_inputs, simulate
 from truth_generators.hidden_force import hidden_axle_friction
 
 AXLE_LEVEL_N = 150.0       # hidden axle friction per corner [N]
@@ -94,3 +96,44 @@ def test_equivalent_linearisation_takes_a_viscous_and_a_friction_slope():
     J = mf.deflection_jacobian(c)
     np.testing.assert_allclose(eq.C - lin.C, J.T @ np.diag(3000.0 + lin.C[0, 3:]) @ J, rtol=1e-9, atol=1e-6)
     np.testing.assert_allclose(eq.K - lin.K, J.T @ np.diag([5000.0] * 4) @ J, rtol=1e-9, atol=1e-6)
+
+
+def _run_with_corner_outputs(P, model, n=4000, dt=0.001):
+    """A drive over a four-poster input (wheel heights, steering, acceleration) with the corner outputs."""
+    t = dt * np.arange(n)
+    wh = np.column_stack([0.02 * np.sin(2 * np.pi * 1.3 * t), 0.01 * np.sin(2 * np.pi * 1.7 * t + 0.5),
+                          0.015 * np.sin(2 * np.pi * 0.9 * t + 1.0), 0.01 * np.sin(2 * np.pi * 2.1 * t)])
+    U = make_inputs(n, 10.0, 0.05 * np.sin(0.5 * t), 0.3 * np.sin(0.7 * t), wh)
+    names = ("DEFL", "DEFL_VEL", "F_X", "F_Y", "F_Z", "F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")
+    r = simulate(model, U, dt=dt, P=P, outputs=[f"{o}_{w}" for o in names for w in ("FL", "FR", "RL", "RR")])
+    return {o: r.values[:, 4 * k:4 * k + 4] for k, o in enumerate(names)}
+
+
+def test_suspension_force_along_a_run_reproduces_the_kernels_own_force():
+    """Spring, damper, friction (with its Dahl history and the horizontal-force scaling) and anti-roll bar
+    re-evaluated along a run give the kernel's outputs; so the calibration's part is exactly the force
+    difference of the two parameter rows along the run."""
+    model = Model(load_vehicle(), load_variant("full"))
+    P = model.params((1.0, 1.0, 0.0, 0.0))
+    Y = _run_with_corner_outputs(P, model)
+    own = Y["F_SPRING"] + Y["F_DAMPER"] + Y["F_FRICTION"] + Y["F_ARB"]
+    traj = {k: Y[k] for k in mf.TRAJECTORY}
+    again = mf.suspension_force_along(model.kernel, P, *traj.values())
+    np.testing.assert_allclose(again, own, atol=1e-6)
+    # a stiffer wheel rate and a stronger damper table: the difference is k d + the table's extra force
+    vp = load_vehicle()
+    stiffer = dataclasses.replace(vp, wheel_rate=tuple(k + 2500.0 for k in vp.wheel_rate),
+                                  damper_measured_empty=tuple(tuple(1.5 * f for f in row)
+                                                              for row in vp.damper_measured_empty))
+    P2 = Model(stiffer, load_variant("full")).params((1.0, 1.0, 0.0, 0.0))
+    cf = mf.calibration_force(model.kernel, P2, P, traj, None)
+    d_prev = np.vstack([np.zeros((1, 4)), Y["DEFL"][:-1]])
+    extra = cf.corner - 2500.0 * d_prev
+    assert np.max(np.abs(extra[:, :2])) < 1e-6                       # intact front: only the rate changed
+    rear = extra[:, 2:]
+    v_prev = np.vstack([np.zeros((1, 4)), Y["DEFL_VEL"][:-1]])[:, 2:]
+    assert np.all(rear * v_prev >= -1e-6) and np.max(np.abs(rear)) > 10.0   # oil-empty rear: more damping
+    ch = mf.axle_channels(cf.corner, mf.Corners.of(P))
+    np.testing.assert_allclose(ch[:, 0], cf.corner[:, 0] + cf.corner[:, 1])
+    np.testing.assert_allclose(ch[:, 2], cf.corner @ mf.Corners.of(P).y)
+    assert mf.calibration_force(model.kernel, P, P, traj, own).check_N < 1e-6

@@ -285,6 +285,80 @@ def estimate_on_model(vehicle, P: np.ndarray, deflection: np.ndarray, velocity: 
     return estimate(lin, corners, t_meas, resid, sigma, cfg)
 
 
+#: per-corner kernel outputs a suspension force is re-evaluated along (:func:`suspension_force_along`)
+TRAJECTORY = ("DEFL", "DEFL_VEL", "F_X", "F_Y", "F_Z")
+_ARB_PARTNER = (1, 0, 3, 2)   # the other wheel of a corner's axle (FL FR RL RR)
+
+
+def suspension_force_along(kernel, P: np.ndarray, deflection: np.ndarray, velocity: np.ndarray,
+                           fx: np.ndarray, fy: np.ndarray, fz: np.ndarray) -> np.ndarray:
+    """(n_steps, 4) suspension force [N] per corner (FL FR RL RR; positive up on the body) of the parameter
+    row ``P`` along a simulated trajectory: spring with stops, hydraulic damper, every physics term (the
+    friction elements with their Dahl history along the trajectory) and anti-roll bar, i.e. the kernel
+    outputs ``F_SPRING + F_DAMPER + F_FRICTION + F_ARB`` that ``P`` would give at the trajectory's
+    deflections, velocities and wheel forces.
+
+    The trajectory is a run's per-step kernel outputs (n_steps, 4 each): ``deflection`` ``DEFL`` [m],
+    ``velocity`` ``DEFL_VEL`` [m/s], wheel forces ``fx``, ``fy``, ``fz`` (``F_X``, ``F_Y``, ``F_Z``) [N],
+    from rest. The corner's force comes from the kernel's own code (``rig_run`` of ``kernel``: spring,
+    damper and terms of the vehicle's step), one sample per call so the wheel forces follow the
+    trajectory; the anti-roll bar is ``K_ARB (d_i - d_partner)`` as in the step. A step's forces act at
+    the deflection it starts from (the previous step's output, rest before the first), and the terms
+    advance over the step's increment, as in the step. Not reproduced (``rig_run`` holds them at zero):
+    the speed and the step in the terms' context (no built-in term reads them; the amplitude term's
+    ``memory`` does) and the semi-active valve. :func:`calibration_force` checks the reproduction."""
+    P = np.ascontiguousarray(P, float)
+    n = len(deflection)
+    d = np.vstack([np.zeros((1, 4)), np.asarray(deflection, float)[:-1]])
+    dd = np.vstack([np.zeros((1, 4)), np.asarray(velocity, float)[:-1]])
+    out = np.zeros((n, 4))
+    S = np.zeros(int(kernel.N_S))   # rest: every term unloaded, as a run starts
+    two = np.zeros(2)
+    rig_run, mask = kernel.rig_run, kernel.MASK_ALL
+    for i in range(4):
+        di, ddi = np.ascontiguousarray(d[:, i]), np.ascontiguousarray(dd[:, i])
+        fxi, fyi, fzi = (np.asarray(a, float)[:, i].tolist() for a in (fx, fy, fz))
+        col = out[:, i]
+        for k in range(n):   # force at d[k], then the terms over d[k+1] - d[k] with this step's wheel forces
+            rig_run(P, S, i, di[k:k + 2], ddi[k:k + 2], fxi[k], fyi[k], fzi[k], mask, True, two)
+            col[k] = two[0]
+    k_arb = P[P_INDEX["K_ARB"]:P_INDEX["K_ARB"] + 4]
+    return out + k_arb * (d - d[:, list(_ARB_PARTNER)])
+
+
+@dataclass
+class CalibrationForce:
+    """What the calibration supplied as corner force along the calibrated model's trajectory:
+    ``corner`` (n_steps, 4) [N] the calibrated model's suspension force minus the base model's at the
+    same deflections, velocities and wheel forces; ``check_N`` the largest deviation of the re-evaluated
+    calibrated force from the kernel's own outputs over the run (0 up to rounding when the reproduction
+    holds)."""
+
+    corner: np.ndarray
+    check_N: float
+
+
+def calibration_force(kernel, P_calibrated: np.ndarray, P_base: np.ndarray, trajectory: dict[str, np.ndarray],
+                      kernel_force: np.ndarray | None = None) -> CalibrationForce:
+    """:class:`CalibrationForce` along ``trajectory`` (:data:`TRAJECTORY` names -> (n_steps, 4) outputs of
+    the calibrated run); ``kernel_force`` (n_steps, 4) the run's ``F_SPRING + F_DAMPER + F_FRICTION +
+    F_ARB``, to check the re-evaluation against. Body-level values (masses, inertias, centre of gravity,
+    tyres) are no corner force: they shape the trajectory but their difference is not in here."""
+    args = [trajectory[k] for k in TRAJECTORY]
+    cal = suspension_force_along(kernel, P_calibrated, *args)
+    base = suspension_force_along(kernel, P_base, *args) if not np.array_equal(P_calibrated, P_base) else cal
+    check = float(np.max(np.abs(cal - kernel_force))) if kernel_force is not None and len(cal) else 0.0
+    return CalibrationForce(cal - base, check)
+
+
+def axle_channels(corner: np.ndarray, corners: Corners) -> np.ndarray:
+    """(n, 3) the :data:`CHANNELS` of per-corner forces ``corner`` (n, 4; positive up on the body): front
+    and rear axle sums [N] and the roll moment on the body ``sum y_i f_i`` [N*m] (as the kernel applies
+    suspension forces; the estimate's ``d``)."""
+    corner = np.asarray(corner, float)
+    return np.column_stack([corner[:, 0] + corner[:, 1], corner[:, 2] + corner[:, 3], corner @ corners.y])
+
+
 def band_passed(x: np.ndarray, dt: float, cfg: dict | None = None) -> np.ndarray:
     """``x`` (n, ...) band-passed to the body-mode band of the settings (zero-phase Butterworth)."""
     cfg = settings() if cfg is None else cfg

@@ -3,6 +3,15 @@ physics term is added: what the calibration could not explain), seen: time serie
 (``missing_force`` in the JSON) and a report section (issue 26, items 1-2; estimation in
 :mod:`.missing_force`).
 
+Two parts make the force the *base* model (the vehicle file's values) lacks at the corners: what the
+calibration supplied as corner force (the calibrated model's suspension force -- spring, damper, friction,
+anti-roll bar -- minus the base model's at the same deflections, velocities and wheel forces, along the
+calibrated model's run; :func:`~.missing_force.calibration_force`), plus the estimate against the calibrated
+model. The calibration takes up what lies in the span of its corner values (extra viscous damping in a
+damper-curve scale, a gas spring's rate in the wheel rate); the first part gives it back. Body-level values
+(sprung mass, inertias, centre of gravity, tyres) are not corner forces and stay out of it: their
+calibration only shapes the trajectory both parts are read along.
+
 Per drive the calibrated model (base structure, calibration and measurement chain as fitted) is
 simulated to the drive's end; the residual measured - simulated of roll rate, pitch rate and vertical
 specific force at the measured sample times (sensor offset removed over the quiet lead-in, else over the
@@ -22,21 +31,27 @@ import numpy as np
 from ...model.params import AXLE_CORNERS, CORNER_NAMES
 from . import missing_force as mf
 from .data import SIGNAL_OF_OUTPUT, SIGNALS, has_road_input
+from .candidates import CALIBRATION
 from .engine import MIN_QUIET_BIAS
 
 #: kernel outputs simulated per drive: deflection [m], its velocity [m/s], the suspension's forces [N]
-_CORNER_OUTPUTS = ("DEFL", "DEFL_VEL", "F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")
+_CORNER_OUTPUTS = ("DEFL", "DEFL_VEL", "F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB", "F_X", "F_Y", "F_Z")
 _OUTPUTS = tuple(mf.MEASURED) + tuple(f"{o}_{w}" for o in _CORNER_OUTPUTS for w in CORNER_NAMES)
 #: CSV columns (interface.md "missing_force": the first seven are the interface's)
 CSV_COLUMNS = ("t", "front_N", "front_sd_N", "rear_N", "rear_sd_N", "roll_Nm", "roll_sd_Nm",
                "front_deflection_m", "rear_deflection_m", "front_deflection_velocity_m_s",
-               "rear_deflection_velocity_m_s", "front_model_force_N", "rear_model_force_N")
+               "rear_deflection_velocity_m_s", "front_model_force_N", "rear_model_force_N",
+               "front_calibration_N", "rear_calibration_N", "roll_calibration_Nm",
+               "front_base_N", "rear_base_N", "roll_base_Nm")
 
 
 @dataclass
 class DriveForce:
-    """One drive's missing force (:class:`~.missing_force.MissingForce`) with the model's own axle
-    deflection [m], deflection velocity [m/s] and suspension force [N] (n, 2: front, rear) on its grid."""
+    """One drive's missing force (:class:`~.missing_force.MissingForce`, the force the calibrated model
+    lacks) with the model's own axle deflection [m], deflection velocity [m/s] and suspension force [N]
+    (n, 2: front, rear) on its grid; ``calibration`` (n, 3 in :data:`~.missing_force.CHANNELS`): what the
+    calibration supplied as corner force (module docstring; None when not computed, zero without a
+    calibration), ``calibration_check_N`` how closely the re-evaluation reproduced the kernel's force."""
 
     drive: str
     est: mf.MissingForce
@@ -44,6 +59,13 @@ class DriveForce:
     velocity: np.ndarray
     model_force: np.ndarray
     unmeasured_input: bool
+    calibration: np.ndarray | None = None
+    calibration_check_N: float | None = None
+
+    @property
+    def base_total(self) -> np.ndarray | None:
+        """(n, 3) the force the base model lacks: the calibration's part plus the estimate."""
+        return None if self.calibration is None else self.est.force + self.calibration
 
 
 def _corner(Y: np.ndarray, name: str) -> np.ndarray:
@@ -70,6 +92,30 @@ def _residual(f, fit, r: int, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     return c.t_raw_s, resid, sd
 
 
+def _base_x(st, x: np.ndarray) -> np.ndarray | None:
+    """``x`` with the calibration's values back at the vehicle file's (its neutral); None without one."""
+    if CALIBRATION not in st.names:
+        return None
+    k = st.names.index(CALIBRATION)
+    xb = np.array(x, float, copy=True)
+    xb[st.offsets[k]:st.offsets[k + 1]] = st.neutral()[st.offsets[k]:st.offsets[k + 1]]
+    return xb
+
+
+def _calibration_part(f, fit, r: int, Y: np.ndarray) -> tuple[np.ndarray, float]:
+    """Per-corner force (n_steps, 4) [N] the calibration supplied along drive ``r``'s calibrated run ``Y``
+    and the re-evaluation's check [N] (:func:`~.missing_force.calibration_force`)."""
+    ev, st, x = f.evaluator_, fit.structure, fit.x
+    xb = _base_x(st, x)
+    if xb is None:
+        return np.zeros((len(Y), 4)), 0.0
+    P_cal, P_base = ev.rows(st, x, [r])[0], ev.rows(st, xb, [r])[0]
+    traj = {k: _corner(Y, k) for k in mf.TRAJECTORY}
+    own = np.sum([_corner(Y, n) for n in ("F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")], axis=0)
+    cf = mf.calibration_force(ev.model.kernel, P_cal, P_base, traj, own)
+    return cf.corner, cf.check_N
+
+
 def _per_axle(t: np.ndarray, t_sim: np.ndarray, corners: np.ndarray, combine) -> np.ndarray:
     """(n, 2) front and rear of the per-corner series ``corners`` (n_steps, 4) at the times ``t``, its
     two corners combined by ``combine`` (mean of a deflection, sum of a force)."""
@@ -77,9 +123,10 @@ def _per_axle(t: np.ndarray, t_sim: np.ndarray, corners: np.ndarray, combine) ->
                             for ij in AXLE_CORNERS.values()])
 
 
-def estimate_drives(f, fit, cfg: dict | None = None) -> dict[str, DriveForce]:
+def estimate_drives(f, fit, cfg: dict | None = None, *, calibration: bool = False) -> dict[str, DriveForce]:
     """The missing force of every drive of the fitted finder ``f`` against the model of ``fit`` (module
-    docstring)."""
+    docstring). With ``calibration`` also the calibration's part (:attr:`DriveForce.calibration`: the
+    calibrated model of ``fit`` against the same structure with its calibration at the file's values)."""
     cfg = mf.settings() if cfg is None else cfg
     ev, st, x = f.evaluator_, fit.structure, fit.x
     out = {}
@@ -87,12 +134,20 @@ def estimate_drives(f, fit, cfg: dict | None = None) -> dict[str, DriveForce]:
         Y = ev.simulate_outputs(st, x, r, _OUTPUTS)
         defl, vel = _corner(Y, "DEFL"), _corner(Y, "DEFL_VEL")
         t, resid, sd = _residual(f, fit, r, Y)
-        est = mf.estimate_on_model(f.model_.vehicle, ev.rows(st, x, [r])[0], defl, vel,
+        P = ev.rows(st, x, [r])[0]
+        est = mf.estimate_on_model(f.model_.vehicle, P, defl, vel,
                                    _corner(Y, "F_DAMPER") + _corner(Y, "F_FRICTION"), t, resid, sd, cfg)
         force = np.sum([_corner(Y, n) for n in ("F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")], axis=0)
-        out[c.name] = DriveForce(c.name, est, _per_axle(est.t, c.t_sim_s, defl, np.mean),
-                                 _per_axle(est.t, c.t_sim_s, vel, np.mean),
-                                 _per_axle(est.t, c.t_sim_s, force, np.sum), not has_road_input(c))
+        d = DriveForce(c.name, est, _per_axle(est.t, c.t_sim_s, defl, np.mean),
+                       _per_axle(est.t, c.t_sim_s, vel, np.mean),
+                       _per_axle(est.t, c.t_sim_s, force, np.sum), not has_road_input(c))
+        if calibration:
+            corner, d.calibration_check_N = _calibration_part(f, fit, r, Y)
+            ch = mf.axle_channels(corner, mf.Corners.of(P))
+            # on the estimate's grid as the residual takes the simulation: the measurement at t is the run at t - lag
+            tq = est.t - st.lag(x)
+            d.calibration = np.column_stack([np.interp(tq, c.t_sim_s, ch[:, j]) for j in range(ch.shape[1])])
+        out[c.name] = d
     return out
 
 
@@ -115,8 +170,26 @@ def summary(forces: dict[str, DriveForce], cfg: dict | None = None) -> dict:
                 entry[ch]["loop_half_height_N"] = _finite(mf.loop_half_height(e.force[v, j], d.velocity[v, j], cfg))
         entry["intensity_N2_s"] = e.intensity
         entry["unmeasured_input"] = d.unmeasured_input
+        if d.calibration is not None and d.base_total is not None:
+            entry["calibration"] = _channel_figures(d.calibration, v, e.t, cfg)
+            entry["calibration"]["check_N"] = _finite(d.calibration_check_N if d.calibration_check_N is not None
+                                                      else math.nan)
+            entry["base_model"] = _channel_figures(d.base_total, v, e.t, cfg, d.velocity)
         per[name] = entry
     return per
+
+
+def _channel_figures(x: np.ndarray, v: np.ndarray, t: np.ndarray, cfg: dict,
+                     velocity: np.ndarray | None = None) -> dict:
+    """Per channel of the (n, 3) series ``x``: RMS and band RMS over the measured samples ``v`` (and with the
+    axle ``velocity`` (n, 2), the loop's half height per axle)."""
+    band = mf.band_passed(x, float(t[1] - t[0]), cfg) if len(t) > 1 else x
+    out: dict = {}
+    for j, ch in enumerate(mf.CHANNELS):
+        out[ch] = {"rms": float(np.sqrt(np.mean(x[v, j] ** 2))), "band_rms": float(np.sqrt(np.mean(band[v, j] ** 2)))}
+        if velocity is not None and j < 2:
+            out[ch]["loop_half_height_N"] = _finite(mf.loop_half_height(x[v, j], velocity[v, j], cfg))
+    return out
 
 
 def _finite(x: float) -> float | None:
@@ -126,9 +199,10 @@ def _finite(x: float) -> float | None:
 def write_csv(d: DriveForce, path: Path) -> None:
     """The time series of one drive (:data:`CSV_COLUMNS`; SI units as the column names say)."""
     e = d.est
+    cal = d.calibration if d.calibration is not None else np.full_like(e.force, np.nan)
     cols = [e.t, e.force[:, 0], e.sd[:, 0], e.force[:, 1], e.sd[:, 1], e.force[:, 2], e.sd[:, 2],
             d.deflection[:, 0], d.deflection[:, 1], d.velocity[:, 0], d.velocity[:, 1],
-            d.model_force[:, 0], d.model_force[:, 1]]
+            d.model_force[:, 0], d.model_force[:, 1], *cal.T, *(e.force + cal).T]
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(CSV_COLUMNS)
@@ -138,8 +212,9 @@ def write_csv(d: DriveForce, path: Path) -> None:
 
 def plot(d: DriveForce, path: Path, title: str) -> None:
     """Loops of one drive: per axle the missing force against deflection and against deflection
-    velocity, the model's own suspension force (less its mean) beside it on the right axis; below,
-    the three channels over time with their 95 % band."""
+    velocity, the calibration's part (the corner force the calibration supplied, when computed) beside it
+    on the same axis, the model's own suspension force (less its mean) on the right axis; below, the three
+    channels over time with their 95 % band and the calibration's parts dashed."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -149,7 +224,11 @@ def plot(d: DriveForce, path: Path, title: str) -> None:
         for col, (x, label) in enumerate(((d.deflection[:, row] * 1e3, "deflection [mm] (+ bump)"),
                                          (d.velocity[:, row] * 1e3, "deflection velocity [mm/s]"))):
             a = ax[row, col]
-            a.plot(x[v], e.force[v, row], color="C3", lw=1.0, label="missing force")
+            a.plot(x[v], e.force[v, row], color="C3", lw=1.0, label="missing force (calibrated model)")
+            if d.calibration is not None:
+                a.plot(x[v], d.calibration[v, row], color="C0", lw=0.8,
+                       label="calibration's part (calibrated - base model)")
+                a.legend(loc="upper left", fontsize=7)
             a.set_xlabel(label)
             a.set_ylabel(f"{axle} axle missing force [N]", color="C3")
             b = a.twinx()
@@ -166,9 +245,12 @@ def plot(d: DriveForce, path: Path, title: str) -> None:
         unit = "N*m" if ch.endswith("Nm") else "N"
         a.plot(e.t, np.where(v, e.force[:, j], np.nan), lw=1.0, label=f"{ch[:-2].rstrip('_')} [{unit}]")
         a.fill_between(e.t, e.force[:, j] - 2 * e.sd[:, j], e.force[:, j] + 2 * e.sd[:, j], alpha=0.2)
+        if d.calibration is not None:
+            a.plot(e.t, np.where(v, d.calibration[:, j], np.nan), lw=0.8, ls="--", color=f"C{j}",
+                   label=f"{ch[:-2].rstrip('_')}: calibration's part")
     a.set_xlabel("time [s]")
     a.set_ylabel("missing force, +-2 sd")
-    a.legend(loc="upper right")
+    a.legend(loc="upper right", fontsize=7, ncol=2)
     a.grid(alpha=0.3)
     fig.suptitle(title)
     fig.tight_layout()
@@ -180,7 +262,7 @@ def write(f, out: Path, name: str, *, plots: bool = True) -> dict:
     """Estimate, write ``missing_force_<drive>.csv`` (and ``<name>_missing_force_<drive>.png``) into
     ``out``; returns the interface's ``missing_force`` object."""
     cfg = mf.settings()
-    forces = estimate_drives(f, f.calibrated_fit_, cfg)
+    forces = estimate_drives(f, f.calibrated_fit_, cfg, calibration=True)
     files = []
     for drive, d in forces.items():
         p = out / f"missing_force_{drive}.csv"
@@ -188,7 +270,8 @@ def write(f, out: Path, name: str, *, plots: bool = True) -> dict:
         files.append(str(p))
         if plots:
             p = out / f"{name}_missing_force_{drive}.png"
-            plot(d, p, f"{drive}: the force the calibrated model lacks, estimated from the recording")
+            plot(d, p, f"{drive}: the force the calibrated model lacks (estimated from the recording) "
+                       "and the calibration's part")
             files.append(str(p))
     return {"per_drive": summary(forces, cfg), "files": files}
 
@@ -202,16 +285,29 @@ def markdown(mf_json: dict) -> list[str]:
              "specific force). Read its shape in the loop plots: friction is a rectangle in the force-"
              "velocity plot (a jump at zero velocity) and a loop of constant height against deflection; "
              "viscous damping a line through the origin against velocity; a spring a line against deflection. "
-             "The loop half height is the friction-like level of the axle (both wheels).", "",
+             "The loop half height is the friction-like level of the axle (both wheels). The calibration's "
+             "part is the corner force the calibration supplied (calibrated minus base model's spring, damper, "
+             "friction and anti-roll bar force along the calibrated run; body-level values such as mass and "
+             "inertia are not corner forces and stay out): plus the missing force, it is the force the base "
+             "model (the vehicle file's values) lacks at the corners.", "",
              "| drive | front RMS [N] | rear RMS [N] | roll RMS [N*m] | front loop half height [N] | "
-             "rear loop half height [N] | mean sd front / rear [N] |",
-             "|---|---|---|---|---|---|---|"]
+             "rear loop half height [N] | mean sd front / rear [N] | calibration's part band RMS front / rear [N] "
+             "| base model's lack band RMS front / rear [N] |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for drive, e in mf_json["per_drive"].items():
         def num(x):
             return "-" if x is None else f"{x:.0f}"
         lines.append(f"| {drive}{' (input not measured)' if e['unmeasured_input'] else ''} | "
                      f"{e['front_N']['rms']:.0f} | {e['rear_N']['rms']:.0f} | {e['roll_Nm']['rms']:.0f} | "
                      f"{num(e['front_N']['loop_half_height_N'])} | {num(e['rear_N']['loop_half_height_N'])} | "
-                     f"{e['front_N']['sd_mean']:.0f} / {e['rear_N']['sd_mean']:.0f} |")
+                     f"{e['front_N']['sd_mean']:.0f} / {e['rear_N']['sd_mean']:.0f} | "
+                     f"{_pair(e.get('calibration'))} | {_pair(e.get('base_model'))} |")
     lines += ["", "Files: " + ", ".join(Path(p).name for p in mf_json["files"]), ""]
     return lines
+
+
+def _pair(part: dict | None) -> str:
+    """``front / rear`` band RMS [N] of a part's figures, ``-`` when absent."""
+    if not part:
+        return "-"
+    return f"{part['front_N']['band_rms']:.0f} / {part['rear_N']['band_rms']:.0f}"
