@@ -198,7 +198,8 @@ def _family_spec(form: GeneratorForm, seed: int) -> dict:
     else:
         verdicts = ["no_significant_discrepancy"]
     return dict(base=form.base, seed=seed, expect=list(form.expect), optional=list(form.optional),
-                verdicts=verdicts, family_form=form.name, split=form.split, effect=form.effect)
+                verdicts=verdicts, family_form=form.name, split=form.split, effect=form.effect,
+                leading=list(form.leading))
 
 
 def run_family_case(form: GeneratorForm, seed: int, noise: float, tmp: Path) -> dict:
@@ -320,9 +321,16 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         "calibration": [{k: e[k] for k in ("param", "where", "unit", "prior", "value", "ci95", "informed")}
                         for e in rep.get("calibration", [])],
         "coverage_hits": sum(c["contains_truth"] for c in cov), "coverage_n": len(cov),
+        # issue 26: what the learned term (unlisted_force) depends on, and whether its leading dependence is
+        # one an engineer would call right for the form (GeneratorForm.leading)
+        "unlisted_dependences": next((t.get("dependences", []) for t in rep["terms"] if t["name"] == "unlisted_force"),
+                                     []),
+        "leading_expected": spec.get("leading", []),
         "diagnostics": _diagnostics(f),
         "generate_s": t_gen, "elapsed_s": time.perf_counter() - t0,
     }
+    res["leading_dependence_right"] = (bool(res["unlisted_dependences"]) and res["unlisted_dependences"][0]
+                                       in spec["leading"]) if spec.get("leading") else None
     if "road_class" in spec and spec.get("record_road") is False:
         um = rep.get("unmeasured_input") or {}
         est = um.get("iso8608_class")
@@ -447,6 +455,13 @@ def summarise_family(results: list[dict]) -> dict:
         "structure_max_heldout_over_noise": top,
         "nothing_missing_above_structure_level": dishonest,
     })
+    unlisted = [r for r in results if r["effect"] == "unlisted_force"]
+    if unlisted:  # issue 26: physics no candidate lists
+        s.update({"unlisted_forms": len(unlisted),
+                  "unlisted_named_with_right_leading_dependence": sum(bool(r["leading_dependence_right"])
+                                                                      for r in unlisted),
+                  "unlisted_dependences": {r["case"]: r["unlisted_dependences"] for r in unlisted},
+                  "unlisted_heldout_over_structure_level": {r["case"]: ratios.get(r["case"]) for r in unlisted}})
     t = FAMILY_TARGETS
     s["targets"] = dict(t)
     s["targets_met"] = {

@@ -160,7 +160,7 @@ def test_amplitude_friction_found_on_a_single_rear_empty_bump(bump_rear_amp):
     assert set(rep) == {"verdict", "terms", "windows", "not_identifiable", "heldout_rmse_before_deg_s",
                         "heldout_rmse_after_deg_s", "noise_floor_deg_s", "calibration", "noise_floors",
                         "heldout_rmse_by_signal", "structure_level_over_noise",
-                        "effective_samples"}  # the last two: README, issue 24
+                        "effective_samples", "force_shape"}  # the last three: README, issues 24 and 26
     assert rep["verdict"] == "missing_physics"
     amp = [t for t in rep["terms"] if t["name"] == "friction_amplitude"]
     assert amp, rep["terms"]

@@ -62,6 +62,9 @@ class HiddenPhysics:
     roll_inertia: float
     wheel_rate: tuple[float, float]
     step_s: float
+    #: further registered terms the synthetic vehicle has (``TermSetting``s; none in the bundled drives):
+    #: model-made truth for tests of what the finder learns (e.g. a learned term of another shape)
+    extra_terms: tuple = ()
 
     @classmethod
     def reference(cls) -> "HiddenPhysics":
@@ -79,7 +82,8 @@ class HiddenPhysics:
                 f"parameter differences: sprung mass x{self.sprung_mass:g}, pitch inertia "
                 f"x{self.pitch_inertia:g}, roll inertia x{self.roll_inertia:g}, wheel rate front "
                 f"x{self.wheel_rate[0]:g} / rear x{self.wheel_rate[1]:g}; integration step "
-                f"{self.step_s * 1e3:g} ms (model: 1 ms)")
+                f"{self.step_s * 1e3:g} ms (model: 1 ms)"
+                + "".join(f"; term {t.term.name}" for t in self.extra_terms))
 
 
 @dataclass(frozen=True)
@@ -152,7 +156,7 @@ def synthetic_variant(hidden: HiddenPhysics | None = None):
         "extra_level": (fe, fe, re_, re_), "onset": (hidden.amplitude_onset,) * 4,
         "scale": (hidden.amplitude_scale,) * 4, "band": (hidden.amplitude_band,) * 4,
         "sigma": (sigma,) * 4})
-    return dataclasses.replace(full, name="full+friction_amplitude", terms=full.terms + (setting,))
+    return dataclasses.replace(full, name="full+friction_amplitude", terms=full.terms + (setting,) + hidden.extra_terms)
 
 
 def _lowpass(y: np.ndarray, dt: float, f_c: float) -> np.ndarray:

@@ -49,9 +49,10 @@ from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PHYSICS
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .data import SIGNAL_UNIT, as_cases
 from .decoys import decoy_margin
+from . import force_shape
 from .engine import Evaluator, Structure
-from .fit import (FitResult, bic, debias, fit_structure, learn_residual_correlation, n_effective, prior_rows,
-                  raw_residuals, screen)
+from .fit import (FitResult, Option, bic, debias, fit_structure, learn_residual_correlation, n_effective,
+                  prior_rows, raw_residuals, screen)
 from .locate import base_outputs, locate, noise_floor
 from .report import interface_json
 from .road_estimate import GYRO_VERTICAL, estimate_road, road_usability
@@ -75,11 +76,13 @@ RIVAL_CORRELATION = 0.7     # a refused term whose parameters correlate this muc
 SHIFT_SD = 1.0              # a calibration value further than this (prior sd) from its prior, informed by
                             # the drives of one vehicle state only, is a hypothesis: physics competes with it
 TERM_CANDIDATES = tuple(c for c in LIBRARY if c.term_module)  # candidates that are kernel terms
+LEARNED_MODULE = "susp_sim_ros.model.learned_force"  # the learned term (unlisted_force) of force_shape
 
 
 def _ensure_terms_registered():
     for c in TERM_CANDIDATES:
         importlib.import_module(c.term_module)
+    importlib.import_module(LEARNED_MODULE)
 
 
 def extended_model(vehicle, variant) -> Model:
@@ -89,7 +92,7 @@ def extended_model(vehicle, variant) -> Model:
     var = variant if not isinstance(variant, (str, Path)) else load_variant(variant)
     have = {s.term.name for s in var.terms}
     extra = []
-    for name in (c.name for c in TERM_CANDIDATES):
+    for name in [c.name for c in TERM_CANDIDATES] + [force_shape.TERM]:
         if name not in have:
             t = get_term(name)
             vals = {p.name: (p.default,) * 4 for p in t.params}  # every term's default is zero effect
@@ -112,10 +115,11 @@ class DiscrepancyFinder:
                  candidates: Sequence[str] | None = None, max_steps: int = 8, heldout: bool = True,
                  progress: bool = False, calibrate: bool = True):
         self.vehicle, self.variant, self.calibrate = vehicle, variant, calibrate
-        self.candidates = tuple(candidates) if candidates is not None else tuple(c.name for c in LIBRARY)
-        unknown = [c for c in self.candidates if c not in BY_NAME]
+        self.candidates = tuple(candidates) if candidates is not None else \
+            tuple(c.name for c in LIBRARY) + (force_shape.TERM,)
+        unknown = [c for c in self.candidates if c not in BY_NAME and c != force_shape.TERM]
         if unknown:
-            raise SuspInputError(f"unknown candidate terms {unknown}; known: {sorted(BY_NAME)}")
+            raise SuspInputError(f"unknown candidate terms {unknown}; known: {sorted(BY_NAME) + [force_shape.TERM]}")
         self.max_steps, self.heldout, self.progress = max_steps, heldout, progress
 
     # -- helpers -------------------------------------------------------------------------------------
@@ -132,6 +136,8 @@ class DiscrepancyFinder:
             any(np.any(c.U[:, 3:7] != 0) for c in cases)
         in_base, out, skip = [], [], []
         for name in self.candidates:
+            if name == force_shape.TERM:  # learned from the data at each step (_learned_trial), not listed
+                continue
             cand = BY_NAME[name]
             if cand.kind != PHYSICS:  # parameters are calibrated, the measurement chain with them
                 continue
@@ -215,6 +221,8 @@ class DiscrepancyFinder:
         self._base_run(ev, model, cases)
         testable, skipped, in_base = self._testable(cases, self.base_variant_)
         self.refused_: list[tuple] = []  # (fit before, option, its fit, checks) of terms refused after the criterion
+        self.force_shape_: list[dict] = []  # what the shape regression saw at each forward step (force_shape)
+        self.learned_: dict[str, dict] = {}  # the learned term's dependences and description
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
         self.base_fit_ = fit_structure(ev, Structure([]))
         return ev
@@ -243,7 +251,9 @@ class DiscrepancyFinder:
                 if not opts:
                     break
             excess = max(cur.rss - n, 1e-12)
-            best, best_fit, ok, checks = self._first_passing(ev, cur, opts, recalibrations, step)
+            learned = None if (force_shape.TERM not in self.candidates or force_shape.TERM in cur.structure.names) \
+                else self._learned_trial(ev, cur, step)
+            best, best_fit, ok, checks = self._first_passing(ev, cur, opts, recalibrations, step, learned)
             gain = cur.rss - best_fit.rss
             per_before = self._per_drive_rmse(ev, cur)
             per_after = self._per_drive_rmse(ev, best_fit)
@@ -254,7 +264,8 @@ class DiscrepancyFinder:
             if not ok:
                 break
             for name in best.add:
-                accepted.append({"name": name, "step": step, "delta_bic": cur.bic - best_fit.bic,
+                accepted.append({"name": name, "step": step, **self.learned_.get(name, {}),
+                                 "delta_bic": cur.bic - best_fit.bic,
                                  "explained_fraction_of_excess": gain / excess,
                                  "explained_fraction_of_base_excess":
                                      gain / max(base_fit.rss - n, 1e-12),
@@ -526,42 +537,85 @@ class DiscrepancyFinder:
         return cache[step]
 
     def _first_passing(self, ev: Evaluator, cur: FitResult, opts: list, recalibrations: dict[int, FitResult],
-                       step: int):
+                       step: int, learned: tuple[Option, FitResult] | None = None):
         """Fit the best-screened candidates (singles first; a pair only when no single term alone
         passes) and return ``(option, fit, passed, checks)`` of the first that passes every test: BIC,
         share of the excess, held-out, and better than recalibrating the known physics alone
         (:meth:`_recalibration` of this ``step``); else the best-BIC trial with ``passed`` False."""
         allidx = tuple(range(len(ev.cases)))
-        excess = max(cur.rss - cur.n, 1e-12)
-        best, best_fit, ok, checks = None, None, False, {}
+        best, best_fit = None, None
+        checks: dict = {}
         for size in (1, 2):
             trials = []
             for o in [o for o in opts if len(o.add) == size][:TRIALS]:
                 st = cur.structure.with_(*o.add)
                 trials.append((o, fit_structure(ev, st, _warm(st, cur, o), allidx, max_nfev=TRIAL_NFEV)))
+            if size == 1 and learned is not None:  # the learned term competes with the single listed ones
+                trials.append(learned)
             # every trial in BIC order until one passes: the best-BIC term failing its held-out test
-            # must not hide a runner-up that passes
-            for o, f in sorted(trials, key=lambda t: t[1].bic):
+            # must not hide a runner-up that passes; on a tie the listed term goes first
+            for o, f in sorted(trials, key=lambda t: (t[1].bic, force_shape.TERM in t[0].add)):
                 if best_fit is None or f.bic < best_fit.bic:
                     best, best_fit = o, f
-                ok = (cur.bic - f.bic) >= MIN_DELTA_BIC and cur.rss - f.rss >= MIN_EXPLAINED * excess
-                in_sample = ok
-                if ok:
-                    checks = self._decoy_check(ev, cur, f)
-                    ok = checks["decoys_beaten"]
-                if ok:
-                    checks.update(self._heldout_check(ev, cur, f))
-                    ok = checks["passed"]
-                if ok:
-                    recal = self._recalibration(ev, cur, recalibrations, step)
-                    checks["recalibration_rss"] = recal.rss
-                    ok = f.rss < recal.rss
+                ok, in_sample, checks = self._passes(ev, cur, f, recalibrations, step)
                 if ok:
                     return o, f, True, checks
-                if in_sample and size == 1:  # clear in the drives, refused by a later test
+                if in_sample and size == 1 and force_shape.TERM not in o.add:  # clear in the drives, refused by
+                    #                                                            a later test
                     self.refused_.append((cur, o, f, dict(checks)))
         assert best is not None and best_fit is not None  # opts is not empty: a trial was fitted
         return best, best_fit, False, checks
+
+    def _passes(self, ev: Evaluator, cur: FitResult, f: FitResult, recalibrations: dict[int, FitResult],
+                step: int) -> tuple[bool, bool, dict]:
+        """Every test a new term (or pair) that took ``cur`` to ``f`` must pass, in order: BIC, share of
+        the excess, decoys, held-out drives, better than recalibrating the known physics alone. Returns
+        ``(passed, passed_in_sample, checks)``."""
+        excess = max(cur.rss - cur.n, 1e-12)
+        ok = (cur.bic - f.bic) >= MIN_DELTA_BIC and cur.rss - f.rss >= MIN_EXPLAINED * excess
+        in_sample, checks = ok, {}
+        if ok:
+            checks = self._decoy_check(ev, cur, f)
+            ok = checks["decoys_beaten"]
+        if ok:
+            checks.update(self._heldout_check(ev, cur, f))
+            ok = checks["passed"]
+        if ok:
+            recal = self._recalibration(ev, cur, recalibrations, step)
+            checks["recalibration_rss"] = recal.rss
+            ok = f.rss < recal.rss
+        return bool(ok), bool(in_sample), checks
+
+    # -- physics no candidate lists (issue 26, items 3-4) ---------------------------------------------
+    def _learned_trial(self, ev: Evaluator, cur: FitResult, step: int) -> tuple[Option, FitResult] | None:
+        """The missing force left by ``cur``, read off its shape (:mod:`.force_shape`), as a learned term
+        fitted on every drive: an extra trial of the forward step, tested like every listed candidate
+        (:meth:`_passes`) and competing with them on the criterion. None when no dependence is stable.
+        Records what the regression saw per step in ``force_shape_``."""
+        st, x = cur.structure, cur.x.copy()
+        if CALIBRATION in st.names:  # proposed against the file's values; the joint fit then weighs both
+            k = st.names.index(CALIBRATION)
+            x[st.offsets[k]:st.offsets[k + 1]] = st.cands[k].neutral()
+        sel = force_shape.select(force_shape.design_for(self, st, x, cur.idx))
+        if sel is None:
+            return None
+        self.force_shape_.append({
+            "step": step, "resamples": sel.resamples,
+            "selection_frequency": {f"{k[0]}:{k[1]}": q for k, q in sorted(sel.frequency.items())},
+            "stable": [f"{c.feature}:{c.axle}" for c in sel.stable], "dependences": sel.dependences,
+            "description": sel.description() if sel.stable else "", "listed_rivals": sel.listed_rivals()})
+        if not sel.stable:
+            return None
+        cand = force_shape.learned_candidate(sel)
+        st = cur.structure.with_(cand)
+        x0 = st.embed(cur.structure, cur.x)
+        a = st.offsets[st.names.index(cand.name)]
+        lo, hi = st.bounds()
+        k = len(sel.coef)
+        x0[a:a + k] = np.clip(sel.coef, lo[a:a + k], hi[a:a + k])
+        fit = fit_structure(ev, st, x0, tuple(range(len(ev.cases))), max_nfev=2 * TRIAL_NFEV)
+        self.learned_[cand.name] = {"dependences": sel.dependences, "description": sel.description()}
+        return Option((cand.name,), math.nan, math.nan, np.zeros(0)), fit
 
     def _backward(self, ev: Evaluator, cur: FitResult, path: list, accepted: list) -> FitResult:
         """Backward elimination after the forward steps: an accepted physics term that a later one made

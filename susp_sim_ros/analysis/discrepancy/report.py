@@ -14,7 +14,8 @@ from ...model.layout import DAMPER_GRID
 from ...model.params import PARAMETER_TABLE, load_settings, load_vehicle
 from ...model.vehicle import hydraulic_curves, hydraulic_from_measured, velocity_scaling
 from .calibration import outside_statement
-from .candidates import BY_NAME, LIBRARY, MEASUREMENT, PHYSICS, axle_map
+from .candidates import BY_NAME, LIBRARY, MEASUREMENT, PHYSICS, Candidate, axle_map
+from . import force_shape
 from .data import SIGNAL_UNIT, SIGNALS
 from .fit import grid_step_s, n_effective
 from . import missing_force_report
@@ -27,8 +28,7 @@ def _num(x):
     return x if math.isfinite(x) else None
 
 
-def _where(name: str, x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> str:
-    cand = BY_NAME[name]
+def _where(cand: Candidate, x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> str:
     axles: set[str] = set()
     for j, p in enumerate(cand.params):
         ax = cand.axle_of[j] if j < len(cand.axle_of) else None
@@ -53,9 +53,9 @@ def term_entries(f) -> list[dict]:
     acc = {a["name"]: a for a in f.accepted_}
     competing = {c["name"] for c in getattr(f, "competing_", [])}
     for k, name in enumerate(st.names):
-        if name not in BY_NAME or name in competing:  # the calibration has its own table; a competing
-            continue                                  # entry is listed as not identifiable
-        cand = BY_NAME[name]
+        cand = st.cands[k]
+        if (name not in BY_NAME and name != force_shape.TERM) or name in competing:
+            continue  # the calibration has its own table; a competing entry is listed as not identifiable
         a, b = st.offsets[k], st.offsets[k + 1]
         x = res.x[a:b]
         params = {p.name: _num(v) for p, v in zip(cand.params, x)}
@@ -74,15 +74,18 @@ def term_entries(f) -> list[dict]:
                     ci[f"{c.name}:{sig}"] = [_num(m[j] - 1.96 * se[j]), _num(m[j] + 1.96 * se[j])]
             params = {"bias": bias}
             ev["units"] = {"bias": "deg/s for rates, m/s^2 for specific forces"}
-        ev["statement"] = statement(name, params, ev, f)
-        out.append({"name": name, "where": _where(name, x, lo[a:b], hi[a:b]) if cand.n_params else "all",
-                    "params": params, "ci95": ci, "evidence": ev})
+        ev["statement"] = statement(cand, params, ev, f)
+        entry = {"name": name, "where": _where(cand, x, lo[a:b], hi[a:b]) if cand.n_params else "all",
+                 "params": params, "ci95": ci, "evidence": ev}
+        if name == force_shape.TERM:  # interface.md: what the learned force depends on, in words
+            entry["dependences"] = ev.get("dependences", [])
+            entry["description"] = ev.get("description", cand.meaning)
+        out.append(entry)
     return out
 
 
-def statement(name: str, params: dict, ev: dict, f) -> str:
+def statement(cand: Candidate, params: dict, ev: dict, f) -> str:
     """Plain words: what was left out, where, how sure."""
-    cand = BY_NAME[name]
     per_b = ev.get("per_drive_rmse_before", {})
     per_a = ev.get("per_drive_rmse_after", {})
     gain = {d: per_b[d] - per_a.get(d, per_b[d]) for d in per_b}
@@ -129,7 +132,7 @@ def verdict(f) -> tuple[str, str]:
     # what remains is judged on the pooled signals or on the maneuvers' own gyro signals, whichever keeps
     # more: a residual in the pitch rate of a bump crossing is not diluted by clean accelerometer channels
     before, after = max(_pooled_noise_ratio(f), _primary_noise_ratio(f), key=lambda ba: ba[1])
-    phys = [n for n in f.result_.structure.names if n in BY_NAME and BY_NAME[n].kind == PHYSICS]
+    phys = [c.name for c in f.result_.structure.cands if c.kind == PHYSICS]
     significant = bool(f.windows_)
     excess_before = max(before ** 2 - 1.0, 0.0)
     excess_after = max(after ** 2 - 1.0, 0.0)
@@ -202,7 +205,7 @@ PRIOR_SCALE_NOTE = 1.2  # the report says so when the priors are this much too n
 def interface_json(f) -> dict:
     v, _ = verdict(f)
     terms = term_entries(f) if v not in ("unexplained_residual", "unmeasured_input") else [
-        t for t in term_entries(f) if BY_NAME[t["name"]].kind == MEASUREMENT]
+        t for t in term_entries(f) if t["evidence"]["kind"] == MEASUREMENT]
     ni = [{"name": s["name"], "reveal_with": s["reveal_with"]} for s in f.skipped_]
     ni += [{k: _clean(c[k]) for k in ("name", "reveal_with", "competes_with")} for c in getattr(f, "competing_", [])]
     ho = f.heldout_ or {}
@@ -231,6 +234,7 @@ def interface_json(f) -> dict:
                                    "drives": [x["drive"] for x in u],
                                    "road_estimates": {x["drive"]: x["road_estimate"] for x in u
                                                       if "road_estimate" in x}}
+    rep["force_shape"] = _clean(getattr(f, "force_shape_", []))
     if getattr(f, "missing_force_", None) is not None:  # estimated when the outputs were written
         rep["missing_force"] = f.missing_force_
     return rep
@@ -661,6 +665,23 @@ def _md_missing_force(f, rep: dict, paths: dict, name: str) -> list[str]:
     return ["", *missing_force_report.markdown(mfj)] if mfj else []
 
 
+def _md_force_shape(f, rep: dict, paths: dict, name: str) -> list[str]:
+    """What the shape regression read off the missing force at each forward step (:mod:`.force_shape`)."""
+    steps = rep.get("force_shape") or []
+    if not steps:
+        return []
+    L = ["", "## Shape of the missing force", "",
+         "At each step the force the model still lacks was regressed on features of the model's own corner "
+         "states (sparse, drive-grouped cross-validation, drive-bootstrap stability); a stable set became a "
+         "learned term (`unlisted_force`) that competed with the listed candidates under the same tests.", "",
+         "| step | stable dependences (feature:axle) | selection frequency of the stable | in words |",
+         "|---|---|---|---|"]
+    for e in steps:
+        freq = ", ".join(f"{e['selection_frequency'][k]:.2f}" for k in e["stable"]) or "-"
+        L.append(f"| {e['step']} | {', '.join(e['stable']) or 'none'} | {freq} | {e['description'] or '-'} |")
+    return L
+
+
 def _md_files(f, rep: dict, paths: dict, name: str) -> list[str]:
     """The files written, how to run the fitted model, the plots."""
     L: list[str] = []
@@ -680,7 +701,7 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
     """The diagnosis as Markdown (``report.md``), section by section."""
     L: list[str] = []
     for section in (_md_header, _md_calibration, _md_unmeasured, _md_findings, _md_heldout, _md_selection,
-                    _md_missing_force, _md_files):
+                    _md_missing_force, _md_force_shape, _md_files):
         L += section(f, rep, paths, name)
     return "\n".join(L) + "\n"
 

@@ -1,0 +1,333 @@
+"""Physics read off the shape of the missing force (issue 26, items 3-4).
+
+What the model still lacks is regressed on features of the model's own corner states
+(:data:`~susp_sim_ros.model.learned_force.FEATURES`: deflection and its cube, deflection velocity, its
+square and a knee in it, friction-like states, stroke amplitude, wheel forces, the left-right
+deflection difference and a free play of it), one coefficient [N] per (feature, axle). The regression
+runs through the model's own dynamics: each column is the effect of a feature's force, acting at the
+axle's two corners as a suspension force does, on every compared signal of every drive (the
+forward-difference Jacobian of the whitened residual, as the finder's criteria see it), and the target
+is the residual itself, of the model as fitted so far with its calibration at the vehicle file's values:
+calibration and learned physics then compete on equal terms in the joint fit that follows, instead of
+the calibration having taken up first what the physics would explain. That is the missing force
+attributed to dependences without first estimating it as a smoothed series (:mod:`.missing_force`, the
+picture an engineer reads), whose body-mode band and uncertainty blur the fast forces of a bump impact.
+
+Selection is sparse and held out by drive: orthogonal matching pursuit (scikit-learn's
+``orthogonal_mp``; Pati, Rezaiifar and Krishnaprasad 1993) with the number of dependences, none
+included, chosen on left-out drives by the one-standard-error rule, repeated on drive-bootstrap
+resamples; a dependence is *stable* when it is selected in most resamples (stability selection,
+Meinshausen and Buehlmann 2010). Why scikit-learn rather than PySINDy: PySINDy regresses measured state
+derivatives on a library; here the library's columns are simulated effects, so only its optimizers would
+be used, and scikit-learn's OMP is that optimizer.
+
+The stable set is then a learned physics term (:data:`~susp_sim_ros.model.learned_force.LEARNED_FORCE`,
+TERM ``unlisted_force``) with one coefficient per dependence (and the knee or free play it selected,
+freed), which the finder fits and tests like every listed candidate (criterion, decoys, held-out
+drives, recalibration) and which competes with them on the criterion. When a listed term stands for
+every stable dependence (:data:`LISTED_FOR`), that term is named as its rival.
+"""
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...model.learned_force import FEATURES, LEARNED_FORCE
+from ...model.params import AXLE_CORNERS, load_settings
+from .candidates import PHYSICS, CandParam, Candidate, axle_map
+from .fit import debias, fd_jacobian
+
+TERM = LEARNED_FORCE.name
+AXLES = tuple(AXLE_CORNERS)  # ("front", "rear")
+#: the listed TERM that stands for a dependence (None: none does)
+LISTED_FOR = {"constant": "damper_gas_preload", "deflection": "damper_gas_preload",
+              "deflection_velocity": "extra_viscous_damping", "stroke_amplitude": "friction_amplitude",
+              "lateral_force": "friction_lateral_force", "longitudinal_force": "friction_longitudinal_force"}
+#: plain words per dependence (the description's parts)
+WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grows with the deflection)",
+         "deflection_cubed": "a progressive spring (grows with the cube of the deflection)",
+         "deflection_velocity": "viscous (grows with the deflection velocity)",
+         "velocity_squared": "grows with the square of the deflection velocity (orifice-like)",
+         "velocity_beyond_knee": "changes slope above a deflection velocity of {knee:.2f} m/s (a valve opening)",
+         "sign_velocity": "friction-like (a jump when the deflection reverses)",
+         "stroke_amplitude": "friction-like, growing with the stroke amplitude",
+         "lateral_force": "friction-like, growing with the lateral wheel force",
+         "longitudinal_force": "friction-like, growing with the longitudinal wheel force",
+         "roll_deflection": "acts on the left-right deflection difference (anti-roll-bar-like)",
+         "roll_free_play": "acts only within +-{gap_mm:.1f} mm of left-right deflection difference "
+                           "(free play in the anti-roll bar)"}
+
+
+#: what a positive and a negative coefficient of a dependence mean (the force is positive up on the body)
+SENSE = {"constant": ("pushes the body up", "pulls the body down"),
+         **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play")},
+         **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
+                                                           "velocity_beyond_knee")},
+         **{f: ("more friction", "less friction") for f in ("sign_velocity", "stroke_amplitude", "lateral_force",
+                                                             "longitudinal_force")}}
+
+
+def settings(path=None) -> dict:
+    """``config/force_shape.yaml`` as ``{"section.key": value}``."""
+    return load_settings("force_shape.yaml", path)
+
+
+@dataclass(frozen=True)
+class Column:
+    """One regression column: a feature on one axle at one shape value (knee or free play, else None)."""
+
+    feature: str
+    axle: str
+    shape: float | None = None
+
+    @property
+    def key(self) -> tuple[str, str]:
+        return self.feature, self.axle
+
+
+def library(cfg: dict) -> list[tuple[str, float | None]]:
+    """(feature, shape value) of every library entry: the knee and free-play features once per offered
+    value, the others once."""
+    out: list[tuple[str, float | None]] = []
+    for f in FEATURES:
+        if f == "velocity_beyond_knee":
+            out += [(f, float(v)) for v in cfg["library.knee_velocities_m_s"]]
+        elif f == "roll_free_play":
+            out += [(f, float(v)) for v in cfg["library.free_plays_m"]]
+        else:
+            out.append((f, None))
+    return out
+
+
+def _shape_of(feature: str, value: float | None) -> dict:
+    if value is None:
+        return {}
+    return {"knee_velocity": value} if feature == "velocity_beyond_knee" else {"free_play": value}
+
+
+@dataclass
+class Design:
+    """The regression problem: whitened, band-passed rows (three channels per sample, every drive),
+    the columns' meaning and each row's drive."""
+
+    X: np.ndarray
+    y: np.ndarray
+    groups: np.ndarray
+    columns: list[Column]
+
+
+def columns_of(entries: list[tuple[str, float | None]]) -> list[Column]:
+    return [Column(f, a, s) for f, s in entries for a in AXLES]
+
+
+@dataclass
+class Selection:
+    """The stable dependences: per (feature, axle) its selection frequency, chosen shape value, fitted
+    coefficient [N] and share of the fitted force's variance; ``order`` strongest first."""
+
+    frequency: dict[tuple[str, str], float]
+    stable: list[Column]
+    coef: np.ndarray
+    share: np.ndarray
+    resamples: int
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def dependences(self) -> list[str]:
+        """Feature names, strongest first, each once (interface.md ``unlisted_force.dependences``)."""
+        seen: list[str] = []
+        for k in np.argsort(-self.share):
+            if self.stable[k].feature not in seen:
+                seen.append(self.stable[k].feature)
+        return seen
+
+    @property
+    def axles(self) -> list[str]:
+        return sorted({c.axle for c in self.stable}, key=AXLES.index)
+
+    def listed_rivals(self) -> list[str]:
+        """The listed TERMs that stand for every stable dependence (empty when one has none)."""
+        rivals = [LISTED_FOR.get(c.feature) for c in self.stable]
+        return [] if any(r is None for r in rivals) else sorted(set(r for r in rivals if r))
+
+    def description(self) -> str:
+        """One sentence in words, strongest dependence first, each with its axles, sense and share."""
+        parts = []
+        for feature in self.dependences:
+            ks = [k for k in np.argsort(-self.share) if self.stable[k].feature == feature]
+            c = self.stable[ks[0]]
+            w = WORDS[feature].format(knee=c.shape or 0.0, gap_mm=1e3 * (c.shape or 0.0))
+            more, less = SENSE[feature]
+            where = ", ".join(f"{self.stable[k].axle} {more if self.coef[k] > 0 else less} "
+                              f"{100 * self.share[k]:.0f} %" for k in ks)
+            parts.append(f"{w} ({where})")
+        axles = self.axles
+        return f"A force the model lacks: {'; '.join(parts)}; " \
+               f"{f'{axles[0]} axle only' if len(axles) == 1 else 'both axles'}."
+
+
+def _omp_cv(X: np.ndarray, y: np.ndarray, groups: np.ndarray, max_features: int) -> np.ndarray:
+    """Columns selected by OMP (scikit-learn's ``orthogonal_mp`` path, columns scaled to unit norm as
+    OMP assumes) with the count, from none up to ``max_features``, chosen on held-out drives: leave one
+    drive out, and of the counts within one standard error of the smallest mean squared prediction
+    error the smallest (the one-standard-error rule; Hastie, Tibshirani and Friedman, The Elements of
+    Statistical Learning, 2009, 7.10). "None" is a count: a target the features do not predict on
+    other drives selects nothing."""
+    from sklearn.linear_model import orthogonal_mp
+    norms = np.linalg.norm(X, axis=0)
+    keep = np.flatnonzero(norms > 0)
+    Xs = X[:, keep] / norms[keep]
+    K = min(max_features, len(keep))
+    folds = []
+    for g in np.unique(groups):
+        test = groups == g
+        path = orthogonal_mp(Xs[~test], y[~test], n_nonzero_coefs=K, return_path=True)
+        path = path.reshape(len(keep), -1)
+        pred = np.column_stack([np.zeros(int(test.sum())), Xs[test] @ path])
+        mse = np.mean((y[test, None] - pred) ** 2, axis=0)
+        folds.append(np.pad(mse, (0, K + 1 - len(mse)), mode="edge"))
+    err = np.array(folds)
+    mean, se = err.mean(axis=0), err.std(axis=0, ddof=1) / math.sqrt(len(err))
+    best = int(np.argmin(mean))
+    k = int(np.flatnonzero(mean <= mean[best] + se[best])[0])
+    sel = np.zeros(X.shape[1], bool)
+    if k:
+        coef = orthogonal_mp(Xs, y, n_nonzero_coefs=k)
+        sel[keep[np.abs(np.asarray(coef).ravel()) > 0]] = True
+    return sel
+
+
+def select(design: Design, cfg: dict | None = None) -> Selection | None:
+    """Stability selection over drive-bootstrap resamples (module docstring); None when fewer than two
+    drives have rows or nothing is stable."""
+    cfg = settings() if cfg is None else cfg
+    drives = np.unique(design.groups)
+    if len(drives) < 2:
+        return None
+    rng = np.random.default_rng(int(cfg["selection.seed"]))
+    B, max_f = int(cfg["selection.resamples"]), int(cfg["selection.max_features"])
+    counts: Counter = Counter()
+    shapes: dict[tuple[str, str], Counter] = {}
+    done = 0
+    for _ in range(B):
+        pick = rng.choice(drives, size=len(drives), replace=True)
+        if len(np.unique(pick)) < 2:
+            continue
+        rows = np.concatenate([np.flatnonzero(design.groups == g) for g in pick])
+        # a drive drawn twice is one group: leave-one-drive-out must not keep its copy in the training set
+        sel = _omp_cv(design.X[rows], design.y[rows], design.groups[rows], max_f)
+        done += 1
+        for k in set(design.columns[j].key for j in np.flatnonzero(sel)):
+            counts[k] += 1
+        for j in np.flatnonzero(sel):
+            shapes.setdefault(design.columns[j].key, Counter())[design.columns[j].shape] += 1
+    if done == 0:
+        return None
+    freq = {k: n / done for k, n in counts.items()}
+    stable_keys = [k for k, q in freq.items() if q >= float(cfg["selection.min_frequency"])]
+    if not stable_keys:
+        return Selection(freq, [], np.zeros(0), np.zeros(0), done)
+    cols = [Column(f, a, shapes[(f, a)].most_common(1)[0][0]) for f, a in stable_keys]
+    idx = [design.columns.index(c) for c in cols]
+    A = design.X[:, idx]
+    coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+    contrib = A * coef
+    var = np.var(contrib, axis=0)
+    share = var / max(float(np.var(contrib.sum(axis=1))), 1e-300) if len(idx) > 1 else np.ones(1)
+    share = share / max(float(share.sum()), 1e-300)
+    keep = share >= float(cfg["selection.min_share"])
+    cols = [c for c, k in zip(cols, keep) if k]
+    coef, share = coef[keep], share[keep]
+    return Selection(freq, cols, coef, share, done)
+
+
+def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
+    """The learned term as a finder candidate: one coefficient [N] per stable (feature, axle), neutral 0,
+    and the knee / free play it selected as a free shape value (neutral: the selected value)."""
+    cfg = settings() if cfg is None else cfg
+    bound = float(cfg["fit.coefficient_bound_N"])
+    params = []
+    axle_of: list[str | None] = []
+    for c, v in zip(sel.stable, sel.coef):
+        step = max(abs(float(v)) / 5.0, 1.0)
+        params.append(CandParam(f"{c.feature}_{c.axle}", "N", 0.0, -bound, bound, step,
+                                f"coefficient of {c.feature}, {c.axle} axle"))
+        axle_of.append(c.axle)
+    shapes: dict[str, float] = {}
+    for c in sel.stable:
+        if c.shape is not None:
+            name = "knee_velocity" if c.feature == "velocity_beyond_knee" else "free_play"
+            shapes.setdefault(name, c.shape)
+    for name, value in shapes.items():
+        p = LEARNED_FORCE.params[LEARNED_FORCE.param_index(name)]
+        params.append(CandParam(name, p.unit, value, max(p.lower, value / 4), min(p.upper, value * 4),
+                                value / 5, p.meaning))
+        axle_of.append(None)
+    stable = list(sel.stable)
+
+    def apply(P, P0, x, model):
+        for j, c in enumerate(stable):
+            sl = model.term_param_slice(TERM, f"c_{c.feature}")
+            a = sl.start + 2 * AXLES.index(c.axle)
+            P[:, a:a + 2] = x[j]
+        for j, name in enumerate(shapes, start=len(stable)):
+            P[:, model.term_param_slice(TERM, name)] = x[j]
+
+    def term_params(x, vp):
+        vals: dict[str, dict] = {}
+        for j, c in enumerate(stable):
+            e = vals.setdefault(f"c_{c.feature}", {"front": 0.0, "rear": 0.0})
+            e[c.axle] += float(x[j])
+        out = {k: axle_map(v["front"], v["rear"]) for k, v in vals.items()}
+        for j, name in enumerate(shapes, start=len(stable)):
+            out[name] = axle_map(x[j], x[j])
+        return out
+
+    return Candidate(TERM, PHYSICS, sel.description(), tuple(params), apply, tuple(axle_of),
+                     "drives that excite the dependences it names: " + ", ".join(sel.dependences), "any",
+                     "susp_sim_ros.model.learned_force", term_params=term_params)
+
+
+def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
+    """One library column as a one-parameter candidate (its coefficient [N]); the shape value is set
+    only while the coefficient acts, so the columns of one feature's knees do not overwrite each other."""
+    shape_name = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play"}.get(col.feature)
+
+    def apply(P, P0, x, model):
+        if x[0] == 0.0:
+            return
+        sl = model.term_param_slice(TERM, f"c_{col.feature}")
+        a = sl.start + 2 * AXLES.index(col.axle)
+        P[:, a:a + 2] = x[0]
+        if shape_name is not None and col.shape is not None:
+            P[:, model.term_param_slice(TERM, shape_name)] = col.shape
+
+    return Candidate(f"{TERM}[{col.feature}:{col.axle}:{col.shape}]", PHYSICS, WORDS[col.feature],
+                     (CandParam("coef", "N", 0.0, -bound, bound, step),), apply, (col.axle,))
+
+
+def design_for(f, st0, x0: np.ndarray, idx, cfg: dict | None = None) -> Design:
+    """The regression problem of the fitted finder ``f`` at the model ``st0`` / ``x0`` over the drives
+    ``idx``: the whitened residual
+    (measured - simulated, every compared signal and drive, as the finder's criteria see it) against each
+    library column's effect on it (the forward-difference Jacobian of the residual in the column's
+    coefficient, one batch of simulations). The missing force is thus regressed through the model's own
+    dynamics rather than on its smoothed estimate (:mod:`.missing_force`), whose body-mode band and
+    uncertainty blur the fast forces of a bump impact (a valve blowing off)."""
+    cfg = settings() if cfg is None else cfg
+    entries = library(cfg)
+    cols = columns_of(entries)
+    bound = float(cfg["fit.coefficient_bound_N"])
+    lib = [_column_candidate(c, float(cfg["library.step_N"]), bound) for c in cols]
+    ev = f.evaluator_
+    st = st0.with_(*lib)
+    x = st.embed(st0, x0)
+    j = np.arange(len(x0), len(x))
+    r0, J = fd_jacobian(ev, st, x, idx, cols=j)
+    if st0.bias:
+        r0, J = debias(ev, r0, idx), debias(ev, J, idx)
+    groups = np.concatenate([np.full(ev.n_res[r], r) for r in idx])
+    return Design(J, -r0, groups, cols)

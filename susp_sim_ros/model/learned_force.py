@@ -1,0 +1,193 @@
+"""A learned suspension force: physics no listed term describes, written from the dependences the
+discrepancy finder read off the missing force (issue 26, items 3-4).
+
+The force at corner ``i`` (positive up on the body, like every term) is a sum of coefficients [N] times
+dimensionless features of the corner's state::
+
+    F_i = sum_k  coef_k * phi_k(i)
+
+with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dependences``):
+
+==========================  =======================================================================
+``constant``                1: a force offset
+``deflection``              d / d_ref: a spring
+``deflection_cubed``        (d / d_ref)^3: a progressive spring (elastomer, gas volume)
+``deflection_velocity``     v / v_ref: viscous damping
+``velocity_squared``        (v / v_ref) |v / v_ref|: orifice-like damping
+``velocity_beyond_knee``    sign(v) max(|v| - v_knee, 0) / v_ref: a damper whose slope changes above a
+                            knee velocity (a blow-off valve opening, a valve closing)
+``sign_velocity``           z: friction-like (``z`` a unit Dahl element, -1..1, presliding travel x_p)
+``stroke_amplitude``        z A / d_ref: friction growing with the deflection amplitude (``A`` the peak
+                            |d|, forgotten with time constant ``memory``)
+``lateral_force``           z |Fy| / F_ref: friction growing with the lateral wheel force
+``longitudinal_force``      z |Fx| / F_ref: friction growing with the longitudinal wheel force
+``roll_deflection``         (d - d_o) / d_ref: a force on the left-right deflection difference (an
+                            anti-roll bar; ``d_o`` the other wheel of the axle)
+``roll_free_play``          clip(d - d_o, -g, g) / d_ref: a force only within a free play ``g`` of the
+                            left-right deflection difference (an anti-roll bar with play)
+==========================  =======================================================================
+
+Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
+reference scales make every coefficient a force [N] at a typical excursion; they and the shape values
+(knee, free play, presliding travel, memory) are parameters with declared defaults like any term's.
+
+States per corner: 0 the unit Dahl element ``z``, 1 the deflection (the sum of the step increments: the
+other wheel's deflection is read from it, since the corner context of the other wheel may not be filled
+yet in the step), 2 the amplitude ``A`` [m].
+
+:func:`feature_series` evaluates the same features along simulated corner series, for the regression
+that selects them (``analysis/discrepancy/force_shape.py``).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .inline_math import TINY, expm1_nonpos
+from .layout import C_INDEX
+from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
+
+FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
+            "velocity_beyond_knee", "sign_velocity", "stroke_amplitude", "lateral_force", "longitudinal_force",
+            "roll_deflection", "roll_free_play")
+N_FEATURES = len(FEATURES)
+#: the shape parameters after the coefficients, in this order
+SHAPES = ("deflection_ref", "velocity_ref", "force_ref", "knee_velocity", "free_play", "presliding", "memory")
+_O_SHAPE = 4 * N_FEATURES
+_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
+_Z, _DEF, _AMP = 0, 4, 8
+_C_D, _C_DD, _C_FX, _C_FY, _C_DT = C_INDEX["D"], C_INDEX["DD"], C_INDEX["FX"], C_INDEX["FY"], C_INDEX["DT"]
+
+
+@njit(cache=True, inline="always")
+def corner_feature(k, d, d_other, v, fx, fy, z, amp, dref, vref, fref, knee, gap):
+    """Feature ``k`` of :data:`FEATURES` at one corner (module docstring)."""
+    x = d / dref
+    u = v / vref
+    sgn = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+    roll = d - d_other
+    if k == 0:
+        return 1.0
+    if k == 1:
+        return x
+    if k == 2:
+        return x * x * x
+    if k == 3:
+        return u
+    if k == 4:
+        return u * abs(u)
+    if k == 5:
+        return sgn * max(abs(v) - knee, 0.0) / vref
+    if k == 6:
+        return z
+    if k == 7:
+        return z * amp / dref
+    if k == 8:
+        return z * abs(fy) / fref
+    if k == 9:
+        return z * abs(fx) / fref
+    if k == 10:
+        return roll / dref
+    return min(max(roll, -gap), gap) / dref
+
+
+@njit(cache=True, inline="always")
+def learned_force_force(p, po, s, so, i, c):
+    """The sum of coefficients times features, written out without branches (selects only), so the
+    kernel's loop over the vehicles of a block stays vectorised while every coefficient is zero."""
+    o = i + 1 if i % 2 == 0 else i - 1
+    dref, vref, fref = p[po + _DREF + i], p[po + _VREF + i], p[po + _FREF + i]
+    d, v = c[i, _C_D], c[i, _C_DD]
+    x, u = d / dref, v / vref
+    z = s[so + _Z + i]
+    sgn = (1.0 if v > 0.0 else 0.0) - (1.0 if v < 0.0 else 0.0)
+    roll = d - s[so + _DEF + o]
+    gap = p[po + _GAP + i]
+    q = po + i
+    return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * u * abs(u)
+            + p[q + 20] * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
+            + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
+                   + p[q + 36] * abs(c[i, _C_FX]) / fref)
+            + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref)
+
+
+@njit(cache=True, inline="always")
+def advance_states(z, deflection, amp, dx, presliding, memory, dt):
+    """The unit Dahl element, the deflection and the amplitude one step on over the increment ``dx`` [m]."""
+    z_new = dahl_exact(z, 1.0, 1.0 / max(presliding, TINY), dx)
+    d_new = deflection + dx
+    decay = 1.0 + expm1_nonpos(-dt / max(memory, TINY))
+    amp_new = max(amp * decay, abs(d_new))
+    return z_new, d_new, amp_new
+
+
+@njit(cache=True, inline="always")
+def learned_force_update(p, po, s, so, i, c, dx):
+    z, d, a = advance_states(s[so + _Z + i], s[so + _DEF + i], s[so + _AMP + i], dx, p[po + _XP + i],
+                             p[po + _MEM + i], c[i, _C_DT])
+    s[so + _Z + i] = z
+    s[so + _DEF + i] = d
+    s[so + _AMP + i] = a
+
+
+@njit(cache=True)
+def _series(D, V, FX, FY, dt, k, dref, vref, fref, knee, gap, presliding, memory, out):
+    n = D.shape[0]
+    z = np.zeros(4)
+    amp = np.zeros(4)
+    for t in range(n):
+        for i in range(4):
+            o = i + 1 if i % 2 == 0 else i - 1
+            out[t, i] = corner_feature(k, D[t, i], D[t, o], V[t, i], FX[t, i], FY[t, i], z[i], amp[i],
+                                       dref, vref, fref, knee, gap)
+        if t + 1 < n:
+            for i in range(4):
+                z[i], _, amp[i] = advance_states(z[i], D[t, i], amp[i], D[t + 1, i] - D[t, i], presliding,
+                                                 memory, dt)
+
+
+def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: np.ndarray, fy: np.ndarray,
+                   dt: float, shape: dict | None = None) -> np.ndarray:
+    """Feature ``name`` (n, 4) along simulated corner series (n, 4) of deflection [m], its velocity
+    [m/s] and the wheel forces [N] at step ``dt`` [s]; ``shape``: values of :data:`SHAPES` (defaults
+    where missing). The states start at rest, as the kernel's do."""
+    if name not in FEATURES:
+        raise ValueError(f"unknown learned-force feature {name!r}; known: {', '.join(FEATURES)}")
+    sh = shape_defaults() | dict(shape or {})
+    out = np.empty(deflection.shape)
+    D, V, FX, FY = (np.ascontiguousarray(a, float) for a in (deflection, velocity, fx, fy))
+    _series(D, V, FX, FY, float(dt), FEATURES.index(name), float(sh["deflection_ref"]), float(sh["velocity_ref"]),
+            float(sh["force_ref"]), float(sh["knee_velocity"]), float(sh["free_play"]), float(sh["presliding"]),
+            float(sh["memory"]), out)
+    return out
+
+
+_COEF_MEANING = {
+    "constant": "force offset", "deflection": "spring force at d = d_ref",
+    "deflection_cubed": "progressive spring force at d = d_ref", "deflection_velocity": "viscous force at v = v_ref",
+    "velocity_squared": "orifice force at v = v_ref", "velocity_beyond_knee": "force change v_ref beyond the knee",
+    "sign_velocity": "friction level", "stroke_amplitude": "friction level at amplitude d_ref",
+    "lateral_force": "friction level at |Fy| = F_ref", "longitudinal_force": "friction level at |Fx| = F_ref",
+    "roll_deflection": "force at a left-right difference d_ref",
+    "roll_free_play": "force at a left-right difference d_ref within the play"}
+
+LEARNED_FORCE = register_term(PhysicsTerm(
+    name="unlisted_force", component="axle",
+    meaning="a force learned from the shape of the missing force: coefficients times features of the corner's "
+            "state (model/learned_force.py)",
+    params=tuple(TermParam(f"c_{f}", "N", _COEF_MEANING[f], 0.0, -1e5, 1e5) for f in FEATURES) + (
+        TermParam("deflection_ref", "m", "deflection scale of the features", 0.01, 1e-4, 1.0),
+        TermParam("velocity_ref", "m/s", "deflection-velocity scale of the features", 0.1, 1e-3, 10.0),
+        TermParam("force_ref", "N", "wheel-force scale of the features", 1000.0, 1.0, 1e5),
+        TermParam("knee_velocity", "m/s", "deflection velocity where velocity_beyond_knee sets in", 0.2, 0.0, 5.0),
+        TermParam("free_play", "m", "half width of the left-right free play of roll_free_play", 0.004, 0.0, 0.1),
+        TermParam("presliding", "m", "presliding travel of the friction-like features' unit Dahl element",
+                  1e-4, 1e-7, 0.01),
+        TermParam("memory", "s", "time constant with which stroke_amplitude forgets the peak deflection",
+                  1.0, 1e-3, 100.0)),
+    n_states=3, force=learned_force_force, update=learned_force_update))
+
+
+def shape_defaults() -> dict:
+    """The declared default of every shape parameter (:data:`SHAPES`)."""
+    return {p.name: p.default for p in LEARNED_FORCE.params if p.name in SHAPES}

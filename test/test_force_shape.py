@@ -1,0 +1,159 @@
+"""Reading physics off the shape of the missing force (issue 26, items 3-4): the learned term's features
+and kernel force, and the stability selection's behaviour on known regression problems."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from susp_sim_ros.analysis.discrepancy import force_shape as fs
+from susp_sim_ros.model import Model, load_variant, simulate
+from susp_sim_ros.model.extra_terms import DAMPER_GAS_PRELOAD, EXTRA_VISCOUS_DAMPING
+from susp_sim_ros.model.learned_force import FEATURES, LEARNED_FORCE, feature_series, shape_defaults
+from susp_sim_ros.model.maneuvers import build_maneuver
+from susp_sim_ros.model.params import TermSetting
+
+DT = 0.001
+
+
+def _series(n=400, seed=0):
+    rng = np.random.default_rng(seed)
+    t = DT * np.arange(n)
+    D = np.column_stack([0.02 * np.sin(2 * np.pi * (1.0 + 0.3 * i) * t + rng.uniform(0, 6)) for i in range(4)])
+    V = np.gradient(D, DT, axis=0)
+    F = rng.normal(0, 500, (n, 4))
+    return D, V, F, F[::-1].copy()
+
+
+def test_features_are_what_their_names_say():
+    D, V, FX, FY = _series()
+    sh = shape_defaults()
+    x = D / sh["deflection_ref"]
+    u = V / sh["velocity_ref"]
+    get = {f: feature_series(f, D, V, FX, FY, DT) for f in FEATURES}
+    np.testing.assert_allclose(get["constant"], 1.0)
+    np.testing.assert_allclose(get["deflection"], x)
+    np.testing.assert_allclose(get["deflection_cubed"], x ** 3)
+    np.testing.assert_allclose(get["deflection_velocity"], u)
+    np.testing.assert_allclose(get["velocity_squared"], u * np.abs(u))
+    knee = sh["knee_velocity"]
+    np.testing.assert_allclose(get["velocity_beyond_knee"],
+                               np.sign(V) * np.maximum(np.abs(V) - knee, 0) / sh["velocity_ref"])
+    other = D[:, [1, 0, 3, 2]]
+    np.testing.assert_allclose(get["roll_deflection"], (D - other) / sh["deflection_ref"])
+    gap = sh["free_play"]
+    np.testing.assert_allclose(get["roll_free_play"], np.clip(D - other, -gap, gap) / sh["deflection_ref"])
+    z = get["sign_velocity"]
+    assert np.all(np.abs(z) <= 1.0 + 1e-12)
+    moving = np.abs(V) > 0.02   # past the presliding travel the unit friction element has slid
+    assert np.mean(np.sign(z[moving]) == np.sign(V[moving])) > 0.95
+    np.testing.assert_allclose(get["lateral_force"], z * np.abs(FY) / sh["force_ref"])
+
+
+def _bump_run(terms):
+    var = dataclasses.replace(load_variant("full"), terms=load_variant("full").terms + tuple(terms))
+    model = Model("passat_b8_like", var)
+    man = build_maneuver("bump_crossing", model.vehicle.wheelbase)
+    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, oil=(1.0, 1.0, 0.0, 0.0),
+                   outputs=["PITCH_RATE", "ROLL_RATE", "AZ_SF"])
+    return {k: res.values[:, j] for j, k in enumerate(("PITCH_RATE", "ROLL_RATE", "AZ_SF"))}
+
+
+def _learned(**coefs):
+    vals = {p.name: (p.default,) * 4 for p in LEARNED_FORCE.params}
+    for k, v in coefs.items():
+        vals[k] = tuple(v) if isinstance(v, (tuple, list)) else (v,) * 4
+    return TermSetting(LEARNED_FORCE, vals)
+
+
+def test_the_learned_viscous_and_spring_features_are_the_listed_terms_in_the_kernel():
+    """A learned force of deflection velocity and deflection is, in the compiled model, exactly the
+    listed extra viscous damping and gas-spring terms of the same size: the learned term runs wherever
+    a listed one does (node, lockstep runner, finder) with the same numbers."""
+    sh = shape_defaults()
+    c, k = (300.0, 300.0, 800.0, 800.0), (2000.0, 2000.0, -1500.0, -1500.0)
+    listed = _bump_run([TermSetting(EXTRA_VISCOUS_DAMPING, {"c": c}),
+                        TermSetting(DAMPER_GAS_PRELOAD, {"f0": (0.0,) * 4, "k": k})])
+    learned = _bump_run([_learned(c_deflection_velocity=[x * sh["velocity_ref"] for x in c],
+                                  c_deflection=[x * sh["deflection_ref"] for x in k])])
+    plain = _bump_run([])
+    for key in ("PITCH_RATE", "AZ_SF"):   # a symmetric bump: no roll
+        np.testing.assert_allclose(learned[key], listed[key], rtol=0, atol=1e-9 * np.max(np.abs(listed[key])))
+        assert np.max(np.abs(listed[key] - plain[key])) > 1e-3 * np.max(np.abs(plain[key]))
+
+
+def _design(n_drives=6, n=600, seed=1, truth=None, noise=1.0):
+    """A regression problem of the force_shape layout: per drive smooth random columns of every library
+    entry, the target their combination ``truth`` {(feature, axle): coef} plus white noise."""
+    rng = np.random.default_rng(seed)
+    entries = fs.library(fs.settings())
+    cols = fs.columns_of(entries)
+    t = np.arange(n) * 0.005
+    X, y, g = [], [], []
+    for r in range(n_drives):
+        Xr = np.column_stack([np.sin(2 * np.pi * rng.uniform(0.5, 4) * t + rng.uniform(0, 6)) *
+                              rng.uniform(0.5, 2) for _ in cols])
+        yr = rng.normal(0, noise, n)
+        for key, coef in (truth or {}).items():
+            yr = yr + coef * Xr[:, [c.key for c in cols].index(key)]
+        X.append(Xr)
+        y.append(yr)
+        g.append(np.full(n, r))
+    return fs.Design(np.vstack(X), np.concatenate(y), np.concatenate(g), cols)
+
+
+def test_a_stable_dependence_is_found_with_its_axle_and_sign():
+    truth = {("velocity_beyond_knee", "rear"): -3.0, ("sign_velocity", "rear"): 1.5}
+    sel = fs.select(_design(truth=truth))
+    assert sel is not None
+    assert {c.key for c in sel.stable} == set(truth)
+    assert sel.dependences[0] == "velocity_beyond_knee" and sel.axles == ["rear"]
+    assert "rear axle only" in sel.description() and "valve" in sel.description()
+    assert sel.listed_rivals() == []   # no listed term stands for a knee in the damper curve
+
+
+def test_noise_alone_gives_no_stable_dependence():
+    """The false-discovery side: a target of white noise has nothing stable in most seeds."""
+    found = [bool(fs.select(_design(seed=s)).stable) for s in range(6)]
+    assert sum(found) <= 1, found
+
+
+def test_dependences_a_listed_term_stands_for_name_it_as_the_rival():
+    sel = fs.select(_design(truth={("deflection_velocity", "front"): 4.0}))
+    assert sel is not None and [c.key for c in sel.stable] == [("deflection_velocity", "front")]
+    assert sel.listed_rivals() == ["extra_viscous_damping"]
+
+
+def test_the_learned_candidate_writes_its_coefficients_and_shape_into_the_term():
+    sel = fs.select(_design(truth={("roll_free_play", "front"): 5.0}))
+    cand = fs.learned_candidate(sel)
+    assert [p.name for p in cand.params][0] == "roll_free_play_front" and cand.params[-1].name == "free_play"
+    full = load_variant("full")
+    model = Model("passat_b8_like", dataclasses.replace(full, terms=full.terms + (_learned(),)))
+    P = np.stack([model.params((1, 1, 1, 1))])
+    x = np.array([120.0, 0.003])
+    cand.apply(P, P.copy(), x, model)
+    np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "c_roll_free_play")], [120, 120, 0, 0])
+    np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "free_play")], [0.003] * 4)
+    written = cand.term_params(x, None)
+    assert written["c_roll_free_play"] == {"front": 120.0, "rear": 0.0}
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.floats(-0.05, 0.05), st.floats(-2.0, 2.0))
+def test_feature_series_of_a_constant_state_is_finite_and_bounded(d, v):
+    D = np.full((5, 4), d)
+    V = np.full((5, 4), v)
+    F = np.zeros((5, 4))
+    for f in FEATURES:
+        y = feature_series(f, D, V, F, F, DT)
+        assert np.all(np.isfinite(y))
+    assert np.all(np.abs(feature_series("roll_free_play", D, V, F, F, DT)) <= 1.0)
+
+
+@pytest.mark.parametrize("bad", ["no_such_feature"])
+def test_an_unknown_feature_is_named(bad):
+    with pytest.raises(ValueError, match=bad):
+        feature_series(bad, *(np.zeros((3, 4)),) * 4, DT)
