@@ -169,33 +169,52 @@ class Selection:
                f"{f'{axles[0]} axle only' if len(axles) == 1 else 'both axles'}."
 
 
-def _omp_cv(X: np.ndarray, y: np.ndarray, groups: np.ndarray, max_features: int) -> np.ndarray:
-    """Columns selected by OMP (scikit-learn's ``orthogonal_mp`` path, columns scaled to unit norm as
-    OMP assumes) with the count, from none up to ``max_features``, chosen on held-out drives: leave one
-    drive out, and of the counts within one standard error of the smallest mean squared prediction
-    error the smallest (the one-standard-error rule; Hastie, Tibshirani and Friedman, The Elements of
-    Statistical Learning, 2009, 7.10). "None" is a count: a target the features do not predict on
-    other drives selects nothing."""
-    from sklearn.linear_model import orthogonal_mp
-    norms = np.linalg.norm(X, axis=0)
+@dataclass(frozen=True)
+class _DriveStats:
+    """One drive's sufficient statistics of the least-squares problem: ``X'X``, ``X'y``, ``y'y``, rows."""
+
+    G: np.ndarray
+    b: np.ndarray
+    c: float
+    n: int
+
+    @classmethod
+    def of(cls, X: np.ndarray, y: np.ndarray) -> "_DriveStats":
+        return cls(X.T @ X, X.T @ y, float(y @ y), len(y))
+
+
+def _omp_cv(stats: dict[int, _DriveStats], pick: np.ndarray, max_features: int) -> np.ndarray:
+    """Columns selected by OMP on the drives ``pick`` (a drive drawn twice counts twice; scikit-learn's
+    ``orthogonal_mp_gram`` path, columns scaled to unit norm as OMP assumes) with the count, from none
+    up to ``max_features``, chosen on held-out drives: leave one drive (all its copies) out, and of the
+    counts within one standard error of the smallest mean squared prediction error the smallest (the
+    one-standard-error rule; Hastie, Tibshirani and Friedman, The Elements of Statistical Learning, 2009,
+    7.10). "None" is a count: a target the features do not predict on other drives selects nothing.
+    Everything from the drives' sufficient statistics, so a resample costs no pass over the samples."""
+    from sklearn.linear_model import orthogonal_mp_gram
+    uniq, copies = np.unique(pick, return_counts=True)
+    G = sum(m * stats[g].G for g, m in zip(uniq, copies))
+    b = sum(m * stats[g].b for g, m in zip(uniq, copies))
+    norms = np.sqrt(np.maximum(np.diag(G), 0.0))
     keep = np.flatnonzero(norms > 0)
-    Xs = X[:, keep] / norms[keep]
+    sc = np.outer(norms[keep], norms[keep])
     K = min(max_features, len(keep))
     folds = []
-    for g in np.unique(groups):
-        test = groups == g
-        path = orthogonal_mp(Xs[~test], y[~test], n_nonzero_coefs=K, return_path=True)
-        path = path.reshape(len(keep), -1)
-        pred = np.column_stack([np.zeros(int(test.sum())), Xs[test] @ path])
-        mse = np.mean((y[test, None] - pred) ** 2, axis=0)
+    for g, m in zip(uniq, copies):
+        t = stats[g]
+        Gt = (G - m * t.G)[np.ix_(keep, keep)] / sc
+        bt = (b - m * t.b)[keep] / norms[keep]
+        path = np.asarray(orthogonal_mp_gram(Gt, bt, n_nonzero_coefs=K, return_path=True)).reshape(len(keep), -1)
+        Gg, bg = t.G[np.ix_(keep, keep)] / sc, t.b[keep] / norms[keep]
+        mse = [t.c / t.n] + [float(t.c - 2 * w @ bg + w @ Gg @ w) / t.n for w in path.T]
         folds.append(np.pad(mse, (0, K + 1 - len(mse)), mode="edge"))
     err = np.array(folds)
     mean, se = err.mean(axis=0), err.std(axis=0, ddof=1) / math.sqrt(len(err))
     best = int(np.argmin(mean))
     k = int(np.flatnonzero(mean <= mean[best] + se[best])[0])
-    sel = np.zeros(X.shape[1], bool)
+    sel = np.zeros(len(norms), bool)
     if k:
-        coef = orthogonal_mp(Xs, y, n_nonzero_coefs=k)
+        coef = orthogonal_mp_gram(G[np.ix_(keep, keep)] / sc, b[keep] / norms[keep], n_nonzero_coefs=k)
         sel[keep[np.abs(np.asarray(coef).ravel()) > 0]] = True
     return sel
 
@@ -207,6 +226,7 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
     drives = np.unique(design.groups)
     if len(drives) < 2:
         return None
+    stats = {int(g): _DriveStats.of(design.X[design.groups == g], design.y[design.groups == g]) for g in drives}
     rng = np.random.default_rng(int(cfg["selection.seed"]))
     B, max_f = int(cfg["selection.resamples"]), int(cfg["selection.max_features"])
     counts: Counter = Counter()
@@ -216,9 +236,7 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
         pick = rng.choice(drives, size=len(drives), replace=True)
         if len(np.unique(pick)) < 2:
             continue
-        rows = np.concatenate([np.flatnonzero(design.groups == g) for g in pick])
-        # a drive drawn twice is one group: leave-one-drive-out must not keep its copy in the training set
-        sel = _omp_cv(design.X[rows], design.y[rows], design.groups[rows], max_f)
+        sel = _omp_cv(stats, pick, max_f)
         done += 1
         for k in set(design.columns[j].key for j in np.flatnonzero(sel)):
             counts[k] += 1
