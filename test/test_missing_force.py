@@ -13,6 +13,7 @@ import pytest
 
 from susp_sim_ros.analysis.discrepancy import missing_force as mf
 from susp_sim_ros.model import load_variant, load_vehicle
+from susp_sim_ros.model.layout import P_INDEX
 from susp_sim_ros.model.linear import linearise
 from susp_sim_ros.model.vehicle import Model, make_inputs, simulate
 from truth_generators.hidden_force import hidden_axle_friction
@@ -137,3 +138,50 @@ def test_suspension_force_along_a_run_reproduces_the_kernels_own_force():
     np.testing.assert_allclose(ch[:, 0], cf.corner[:, 0] + cf.corner[:, 1])
     np.testing.assert_allclose(ch[:, 2], cf.corner @ mf.Corners.of(P).y)
     assert mf.calibration_force(model.kernel, P, P, traj, own).check_N < 1e-6
+
+
+def test_body_accelerations_are_the_kernels_and_the_body_part_is_their_inertial_force_by_statics():
+    """The calibration's body part (:func:`~.missing_force.body_force`): heave ``AZ_SF - g`` and the step-wise
+    difference of the rates are the kernel's own body accelerations (its heave, roll and pitch equations
+    hold with them along a run, to rounding); the (front, rear, roll) triple of a mass and inertia change
+    acts on heave, roll and pitch as ``-dm z''``, ``-dIxx phi''``, ``-dIyy theta''``; a mass change alone
+    splits onto the axles as the static load (rear share ``a / (a + b)``)."""
+    model = Model(load_vehicle(), load_variant("full"))
+    P = model.params((1.0, 1.0, 0.0, 0.0))
+    n, dt = 4000, 0.001
+    t = dt * np.arange(n)
+    wh = np.column_stack([0.02 * np.sin(2 * np.pi * 1.3 * t), 0.01 * np.sin(2 * np.pi * 1.7 * t + 0.5),
+                          0.015 * np.sin(2 * np.pi * 0.9 * t + 1.0), 0.01 * np.sin(2 * np.pi * 2.1 * t)])
+    U = make_inputs(n, 10.0, 0.05 * np.sin(0.5 * t), 0.3 * np.sin(0.7 * t), wh)
+    body = ("AZ_SF", "ROLL_RATE", "PITCH_RATE", "AX_SF", "AY_SF", "VEL_Y", "YAW_RATE", "ROLL", "PITCH")
+    forces = ("F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")
+    r = simulate(model, U, dt=dt, P=P, outputs=list(body) + [f"{o}_{w}" for o in forces
+                                                             for w in ("FL", "FR", "RL", "RR")])
+    Y = {o: r.values[:, k] for k, o in enumerate(body)}
+    fs = sum(r.values[:, len(body) + 4 * k:len(body) + 4 * k + 4] for k in range(len(forces)))
+    acc = mf.body_accelerations(P, Y["AZ_SF"], Y["ROLL_RATE"], Y["PITCH_RATE"], dt)
+    v = {k: float(P[P_INDEX[k]]) for k in ("G", "M_S", "IXX", "IYY", "H_CG", "H_RC", "H_PC")}
+    c = mf.Corners.of(P)
+    before = lambda x: np.concatenate([[0.0], x[:-1]])   # the kernel's angles at the step's start
+    ax = Y["AX_SF"] + Y["VEL_Y"] * Y["YAW_RATE"] + v["G"] * Y["PITCH"]
+    ay = Y["AY_SF"] - v["G"] * Y["ROLL"]
+    np.testing.assert_allclose(v["M_S"] * acc[:, 0], fs.sum(axis=1), atol=1e-6 * np.abs(fs.sum(axis=1)).max())
+    roll = fs @ c.y + v["M_S"] * (v["H_CG"] - v["H_RC"]) * (ay + v["G"] * before(Y["ROLL"]))
+    pitch = -(fs @ c.x) + v["M_S"] * (v["H_CG"] - v["H_PC"]) * (v["G"] * before(Y["PITCH"]) - ax)
+    np.testing.assert_allclose(v["IXX"] * acc[:, 1], roll, atol=1e-6 * np.abs(roll).max())
+    np.testing.assert_allclose(v["IYY"] * acc[:, 2], pitch, atol=1e-6 * np.abs(pitch).max())
+    # a calibrated row: sprung mass +100 kg, roll inertia +50, pitch inertia -200 kg*m^2
+    P2 = P.copy()
+    for k, dv in (("M_S", 100.0), ("IXX", 50.0), ("IYY", -200.0)):
+        P2[P_INDEX[k]] += dv
+    d = mf.body_force(P2, P, acc, c)
+    gen = mf.input_matrix(c)[:3] @ d.T
+    np.testing.assert_allclose(gen.T, acc * [-100.0, -50.0, 200.0], atol=1e-9 * np.abs(acc * 200.0).max())
+    P3 = P.copy()
+    P3[P_INDEX["M_S"]] += 100.0
+    d = mf.body_force(P3, P, acc, c)
+    to_front, to_rear = c.x[0], -c.x[2]   # the centre of gravity to the front and the rear axle [m]
+    np.testing.assert_allclose(d[:, 1], -100.0 * acc[:, 0] * to_front / (to_front + to_rear),
+                               atol=1e-6 * np.abs(100.0 * acc[:, 0]).max())
+    np.testing.assert_allclose(d[:, 2], 0.0, atol=1e-9 * np.abs(100.0 * acc[:, 0]).max())
+    assert not np.any(mf.body_force(P, P, acc, c))

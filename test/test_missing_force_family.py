@@ -8,37 +8,42 @@ the sign of the suspension force (positive pushes the body up and the wheels dow
 ``DiscrepancyFinder`` fitted on the recording (vehicle ``passat_b8_like``, the finder's default, as
 ``benchmarks/bench_discrepancy.py`` runs the family's cases; base variant of the form; no forward
 selection, no held-out runs), then ``missing_force_report.estimate_drives(..., calibration=True)`` against
-its ``calibrated_fit_``. Compared, per axle: the force the *base* model (the vehicle file's values) lacks
-at the corners, i.e. what the calibration supplied as corner force (calibrated minus base model's spring,
-damper, friction and anti-roll bar force along the calibrated run) plus the estimate against the calibrated
-model. Both it and the hidden force are band-passed the same way (``missing_force.band_passed``, 0.5-4 Hz)
-on the estimate's grid.
+its ``calibrated_fit_``. Compared, per axle: the force the *base* model (the vehicle file's values) lacks,
+i.e. three parts: what the calibration supplied as corner force (calibrated minus base model's spring,
+damper, friction and anti-roll bar force along the calibrated run), the calibration's body part (the
+inertial force of the calibrated sprung-mass and inertia change, ``-(m_cal - m_file) z''`` and
+``-(Iyy_cal - Iyy_file) theta''`` along the calibrated run, split onto the axles by statics) and the
+estimate against the calibrated model. Both it and the hidden force are band-passed the same way
+(``missing_force.band_passed``, 0.5-4 Hz) on the estimate's grid.
 
 The issue's target, per axle: correlation >= 0.9 and RMS within 20 %. Measured (seed 1; the rear-empty
 and the front-empty bump crossing, the drives where each effect shows most; finder fitted on that drive),
-correlation / RMS ratio in the band, front axle; rear axle:
+correlation / RMS ratio in the band, front axle; rear axle: the calibrated estimate alone; corner part plus
+estimate (without the body part, as before it was added) -> the three-part total:
 
-- viscous/linear, rear-empty: calibrated estimate -0.06/0.34; 0.29/0.24 -> base-model total 0.96/1.66;
-  0.91/1.00 (rear met)
-- viscous/linear, front-empty: 0.33/0.20; 0.17/0.22 -> 0.89/0.79; 0.98/1.18 (rear met)
-- gas/linear_rate, rear-empty: -0.15/0.05; 0.10/0.02 -> 0.94/0.80; 0.94/0.87 (rear met)
-- gas/linear_rate, front-empty: 0.22/0.03; -0.03/0.07 -> 0.44/0.54; 0.55/0.82
-- amplitude/peak_saturating_axle, rear-empty: 0.41/0.62; 0.11/0.29 -> -0.42/6.71; -0.22/3.46
-- amplitude/peak_saturating_axle, front-empty: 0.08/0.48; 0.48/0.52 -> -0.38/5.53; -0.24/2.29
+- viscous/linear, rear-empty: -0.06/0.34; 0.29/0.24 | 0.96/1.66; 0.91/1.00 -> 0.95/1.04; 0.98/0.80
+  (both met; the rear's ratio 0.803 is 0.003 inside the target: it was 1.00 without the body part)
+- viscous/linear, front-empty: 0.33/0.20; 0.17/0.22 | 0.89/0.79; 0.98/1.18 -> 0.96/0.64; 0.98/0.95 (rear met)
+- gas/linear_rate, rear-empty: -0.15/0.05; 0.10/0.02 | 0.94/0.80; 0.94/0.87 -> 0.98/0.90; 0.96/0.99 (both met)
+- gas/linear_rate, front-empty: 0.22/0.03; -0.03/0.07 | 0.44/0.54; 0.55/0.82 -> 0.94/0.95; 0.98/0.96 (both met)
+- amplitude/peak_saturating_axle, rear-empty: 0.41/0.62; 0.11/0.29 | -0.42/6.71; -0.22/3.46 -> 0.57/0.99;
+  0.23/0.52
+- amplitude/peak_saturating_axle, front-empty: 0.08/0.48; 0.48/0.52 | -0.38/5.53; -0.24/2.29 -> -0.54/1.25;
+  0.79/0.88
 
 The calibrated estimate alone meets the target nowhere: the calibration takes up the hidden force where it
-lies in the span of a corner value (extra viscous damping in a measured-damper scale, a gas spring's rate in
-the wheel rates). The calibration's part gives that back, so the base-model total meets it on three
-case/axle pairs; the others are ``xfail(strict=True)`` with their figures and reasons (the target is not
-loosened). What limits them: the calibration also moves body-level values (sprung mass, pitch inertia,
-by -9 to +6 %) that are no corner force and stay out of the total, and trades them against the wheel rates
-and damper scales (the body IMU sees a mass-rate pair mostly as their ratio); the corner side of such a
-trade is in the calibration's part, its body side is not. Where the hidden force is small (the amplitude
-friction, 7-18 N band RMS) that trade swamps it. For the record (a diagnostic, not in the product): adding
-the body side, the inertial force ``-(m_cal - m_file) z'' `` and ``-(Iyy_cal - Iyy_file) theta''`` split
-onto the axles, gives 0.95/1.03 (viscous rear-empty front), 0.96/0.64 (viscous front-empty front),
-0.98/0.90 (gas rear-empty front), 0.94/0.96 and 0.99/0.96 (gas front-empty), 0.59/0.98 and 0.27/0.49
-(amplitude rear-empty).
+lies in the span of its values (extra viscous damping in a measured-damper scale, a gas spring's rate in the
+wheel rates, and some of either in the sprung mass and pitch inertia, which the body IMU sees mostly through
+their ratio to the rates). The corner and body parts give that back, so the total meets the target on seven
+of the twelve case/axle pairs (three with the corner part alone; none lost). The others are
+``xfail(strict=True)`` with their figures and reasons (the target is not loosened). What limits them: on the
+amplitude form the calibration scales sprung mass, pitch inertia, wheel rates and damper scales together by
+-7 to -11 % (a common scale the body IMU hardly sees; the tyre rate does not follow it): its corner and
+body sides, 25-60 N band RMS each, cancel to 5-11 N, while the hidden friction is 7-18 N and the estimate's
+sd 18-20 N, so what is left is the size of the hidden force but not its shape. On the viscous front-empty
+front axle the body part (sprung mass +2 %, pitch inertia +4 %) works against the front damper scale's
+part (correlation -0.30 with the hidden force) and the estimate's 11 N band RMS, at its floor, does not make
+up the rest: RMS ratio 0.64.
 """
 from __future__ import annotations
 
@@ -60,44 +65,35 @@ FORMS = ("amplitude/peak_saturating_axle", "viscous/linear", "gas/linear_rate")
 AXLES = ("front_N", "rear_N")
 MIN_CORRELATION = 0.9      # issue 26
 RMS_TOLERANCE = 0.2        # issue 26: estimate RMS within 20 % of the truth's
-_TRADE = ("the calibration moved the sprung mass {m} (not a corner force) with the wheel rates {k} "
-          "(a corner force, in the total)")
+_TRADE = ("the calibration scaled sprung mass, pitch inertia, wheel rates and damper scales together ({m}): "
+          "its corner and body sides cancel to {left} band RMS, the estimate sees {est} N (its sd {sd} N)")
 #: measured (correlation, RMS ratio base-model total / truth) per form, drive and axle where the target is
 #: not met, in the band, with a reason
 SHORT = {
     ("amplitude/peak_saturating_axle", "bump_rear_empty", "front_N"): (
-        (-0.42, 6.71), "hidden extra friction 7 N band RMS; " + _TRADE.format(m="-9.5 %", k="-10 / -11 %")
-        + ": the rate and damper-scale side of that trade is 47 N band RMS; the estimate's floor is 16 N"),
+        (0.57, 0.99), "hidden extra friction 7 N band RMS; "
+        + _TRADE.format(m="-9.5 / -9.8 / -10 / -10 %", left="5 N", est="4", sd="20")
+        + ": the right size, not the shape"),
     ("amplitude/peak_saturating_axle", "bump_rear_empty", "rear_N"): (
-        (-0.22, 3.46), "hidden extra friction 18 N band RMS; " + _TRADE.format(m="-9.5 %", k="-10 / -11 %")
-        + ": the rate side of that trade is 61 N band RMS; the estimate's floor is 24 N"),
+        (0.23, 0.52), "hidden extra friction 18 N band RMS; "
+        + _TRADE.format(m="-9.5 / -9.8 / -11 / -11 %", left="8 N", est="5", sd="18")),
     ("amplitude/peak_saturating_axle", "bump_front_empty", "front_N"): (
-        (-0.38, 5.53), "hidden extra friction 10 N band RMS; " + _TRADE.format(m="-7 %", k="-8 %")
-        + ": the rate side of that trade is 52 N band RMS"),
+        (-0.54, 1.25), "hidden extra friction 10 N band RMS; "
+        + _TRADE.format(m="-7 / -7 / -8 / -14 %", left="11 N (anti-correlated)", est="5", sd="20")),
     ("amplitude/peak_saturating_axle", "bump_front_empty", "rear_N"): (
-        (-0.24, 2.29), "hidden extra friction 11 N band RMS; " + _TRADE.format(m="-7 %", k="-8 %")
-        + ": the rate side of that trade is 22 N band RMS"),
-    ("viscous/linear", "bump_rear_empty", "front_N"): (
-        (0.96, 1.66), "shape right, size not: the front intact damper scale 1.17 comes with the sprung mass "
-        "+6 % (not a corner force); the damper part alone is 1.7x the hidden damping"),
+        (0.79, 0.88), "hidden extra friction 11 N band RMS; "
+        + _TRADE.format(m="-7 / -7 / -8 / -6 %", left="7 N", est="6", sd="18")
+        + ": size right, correlation short"),
     ("viscous/linear", "bump_front_empty", "front_N"): (
-        (0.89, 0.79), "the front oil-empty damper scale 1.27 takes two thirds of the hidden damping; the "
-        "estimate adds 11 N band RMS of the rest, at its floor"),
-    ("gas/linear_rate", "bump_rear_empty", "front_N"): (
-        (0.94, 0.80), "the front wheel rate takes +1770 N/m of the 2500 N/m gas rate, the sprung mass "
-        "(-1.6 %, not a corner force) some of the rest: RMS ratio 0.796, just outside 20 %"),
-    ("gas/linear_rate", "bump_front_empty", "front_N"): (
-        (0.44, 0.54), "the calibration puts the gas rate into the sprung mass (-5.5 %, not a corner force) "
-        "rather than the front wheel rate (+560 N/m) and lowers the front oil-empty damper scale (0.81)"),
-    ("gas/linear_rate", "bump_front_empty", "rear_N"): (
-        (0.55, 0.82), "as the front: the sprung mass (-5.5 %) stands in for most of the gas rate, the rear "
-        "wheel rate takes +940 N/m of 2500 and the rear intact damper scale moves to 0.94"),
+        (0.96, 0.64), "shape right, size short: the front oil-empty damper scale 1.27 takes 0.72 of the hidden "
+        "damping, the body part (sprung mass +2 %, pitch inertia +4 %) works against it (correlation -0.30), "
+        "corner and body parts together 0.58; the estimate adds 11 N band RMS, at its floor"),
 }
 
 
 def _fit(form_name: str, drive: str, calibrate: bool = True):
     """The finder fitted on ``drive`` of the form's case, its drive's :class:`~.missing_force_report.DriveForce`
-    (with the calibration's part) and the hidden force per axle (n, 2) on the estimate's grid."""
+    (with the calibration's corner and body parts) and the hidden force per axle (n, 2) on the estimate's grid."""
     form = family.FORMS[form_name]
     recording = dict(family.make_case(form, SEED))[drive]
     f = DiscrepancyFinder(variant=form.base, heldout=False, max_steps=0, calibrate=calibrate).fit([recording])
@@ -111,11 +107,13 @@ def _fit(form_name: str, drive: str, calibrate: bool = True):
 
 def _figures(d, hidden: np.ndarray) -> dict[str, dict[str, tuple[float, float]]]:
     """(correlation, RMS ratio part / truth) per part (``estimate``: against the calibrated model,
-    ``calibration``: the calibration's part, ``base_total``: their sum) and axle, band-passed."""
+    ``calibration``: the calibration's corner part, ``body``: its body part, ``base_total``: the three
+    together) and axle, band-passed."""
     dt = float(d.est.t[1] - d.est.t[0])
     b, v = mf.band_passed(hidden, dt), d.est.valid
     out = {}
-    for part, x in (("estimate", d.est.force), ("calibration", d.calibration), ("base_total", d.base_total)):
+    for part, x in (("estimate", d.est.force), ("calibration", d.calibration), ("body", d.body),
+                    ("base_total", d.base_total)):
         a = mf.band_passed(x[:, :2], dt)
         out[part] = {ch: (float(np.corrcoef(a[v, j], b[v, j])[0, 1]) if np.std(a[v, j]) > 0 else 0.0,
                           float(np.std(a[v, j]) / np.std(b[v, j]))) for j, ch in enumerate(AXLES)}
@@ -169,28 +167,44 @@ def test_the_calibration_takes_up_the_hidden_force_and_its_part_gives_it_back(fi
         assert corr_c >= 0.85 and ratio_c >= 0.75, (ch, corr_c, ratio_c)
 
 
+def test_the_body_part_gives_back_what_the_calibration_put_in_the_sprung_mass(fitted):
+    """The gas spring of the front-empty bump crossing: the calibration takes its rate mostly into the sprung
+    mass and pitch inertia (-5.5 / -5.2 %) rather than the wheel rates, so the corner part alone follows the
+    hidden force poorly (measured correlation 0.43 / 0.56, RMS ratio 0.54 / 0.83, front / rear); the body
+    part, the inertial force of that mass and inertia change, follows it (measured 0.97 / 0.64 correlation,
+    RMS ratio 0.67 / 0.77) and with it the total meets the target on both axles (the parametrised test)."""
+    fig = fitted("gas/linear_rate", "bump_front_empty")[3]
+    assert fig["calibration"]["front_N"][0] < 0.6, fig["calibration"]
+    corr, ratio = fig["body"]["front_N"]
+    assert corr >= 0.9 and ratio >= 0.5, (corr, ratio)
+    assert fig["body"]["rear_N"][0] >= 0.5, fig["body"]
+
+
 def test_without_calibration_the_estimate_follows_the_hidden_viscous_force(fitted):
     """Not the issue's target: the comparison's own check. With nothing calibrated (the model at the
     vehicle file's values) the rear extra damping of the rear-empty bump crossing is seen with the right
     sign, size and timing (measured: correlation 0.90, RMS ratio 0.99), so the shortfalls above come from
     the calibration and the estimate's floor, not from the grid, the sign convention or the axle sums;
-    and with nothing calibrated the calibration's part is zero: the base-model total is the estimate."""
+    and with nothing calibrated the calibration's corner and body parts are zero: the base-model total is
+    the estimate."""
     _, d, _, fig = fitted("viscous/linear", calibrate=False)
     corr, ratio = fig["estimate"]["rear_N"]
     assert corr >= 0.85 and abs(ratio - 1.0) <= RMS_TOLERANCE, (corr, ratio)
     assert d.calibration is not None and not np.any(d.calibration)
+    assert d.body is not None and not np.any(d.body)
     np.testing.assert_array_equal(d.base_total, d.est.force)
 
 
 def test_the_calibrations_part_is_written_beside_the_missing_force(fitted, tmp_path):
     """CSV (the interface's seven columns first, then the parts), JSON ``per_drive`` keys and the loop
-    plot; the re-evaluated calibrated force reproduces the kernel's own along the run."""
+    plot; the re-evaluated calibrated force reproduces the kernel's own along the run; the base-model total
+    is the corner part, the body part and the estimate."""
     f, d, _, _ = fitted("viscous/linear")
     out = mfr.write(f, tmp_path, "case", plots=True)
     (name,) = out["per_drive"]
     entry = out["per_drive"][name]
     assert entry["calibration"]["check_N"] < 1e-6
-    for part in ("calibration", "base_model"):
+    for part in ("calibration", "calibration_body", "base_model"):
         assert set(mf.CHANNELS) <= set(entry[part])
     assert entry["base_model"]["rear_N"]["loop_half_height_N"] is not None
     for key in ("front_N", "rear_N", "roll_Nm", "intensity_N2_s", "unmeasured_input"):  # the existing keys
@@ -199,11 +213,12 @@ def test_the_calibrations_part_is_written_beside_the_missing_force(fitted, tmp_p
     rows = list(csv.reader(open(path)))
     head = rows[0]
     assert head[:7] == ["t", "front_N", "front_sd_N", "rear_N", "rear_sd_N", "roll_Nm", "roll_sd_Nm"]
-    assert head[-6:] == ["front_calibration_N", "rear_calibration_N", "roll_calibration_Nm",
-                         "front_base_N", "rear_base_N", "roll_base_Nm"]
+    assert head[-9:] == ["front_calibration_N", "rear_calibration_N", "roll_calibration_Nm",
+                         "front_base_N", "rear_base_N", "roll_base_Nm", "front_body_N", "rear_body_N", "roll_body_Nm"]
     x = np.array(rows[1:], float)
     col = {h: x[:, k] for k, h in enumerate(head)}
     for ch, unit in (("front", "N"), ("rear", "N"), ("roll", "Nm")):
-        np.testing.assert_allclose(col[f"{ch}_base_{unit}"], col[f"{ch}_{unit}"] + col[f"{ch}_calibration_{unit}"],
+        parts = col[f"{ch}_{unit}"] + col[f"{ch}_calibration_{unit}"] + col[f"{ch}_body_{unit}"]
+        np.testing.assert_allclose(col[f"{ch}_base_{unit}"], parts,
                                    rtol=1e-4, atol=1e-3 * max(1.0, float(np.abs(col[f"{ch}_base_{unit}"]).max())))
     assert any(p.endswith(".png") for p in out["files"])

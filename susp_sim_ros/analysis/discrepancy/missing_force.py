@@ -343,12 +343,56 @@ def calibration_force(kernel, P_calibrated: np.ndarray, P_base: np.ndarray, traj
     """:class:`CalibrationForce` along ``trajectory`` (:data:`TRAJECTORY` names -> (n_steps, 4) outputs of
     the calibrated run); ``kernel_force`` (n_steps, 4) the run's ``F_SPRING + F_DAMPER + F_FRICTION +
     F_ARB``, to check the re-evaluation against. Body-level values (masses, inertias, centre of gravity,
-    tyres) are no corner force: they shape the trajectory but their difference is not in here."""
+    tyres) are no corner force: they shape the trajectory but their difference is not in here (the mass and
+    inertia change's inertial force is :func:`body_force`)."""
     args = [trajectory[k] for k in TRAJECTORY]
     cal = suspension_force_along(kernel, P_calibrated, *args)
     base = suspension_force_along(kernel, P_base, *args) if not np.array_equal(P_calibrated, P_base) else cal
     check = float(np.max(np.abs(cal - kernel_force))) if kernel_force is not None and len(cal) else 0.0
     return CalibrationForce(cal - base, check)
+
+
+#: body-level values of the parameter row whose calibration is no corner force, with the body coordinate
+#: (of ``model/linear.py``: 0 heave, 1 roll, 2 pitch) whose inertia they are: sprung mass [kg], roll and
+#: pitch inertia [kg*m^2]
+BODY_VALUES = (("M_S", 0), ("IXX", 1), ("IYY", 2))
+#: kernel outputs the body's accelerations are read from (:func:`body_accelerations`)
+BODY_OUTPUTS = ("AZ_SF", "ROLL_RATE", "PITCH_RATE")
+
+
+def body_accelerations(P: np.ndarray, az_sf: np.ndarray, roll_rate: np.ndarray, pitch_rate: np.ndarray,
+                       dt: float) -> np.ndarray:
+    """(n_steps, 3) the body's accelerations of a run of the parameter row ``P`` at step ``dt`` [s], from its
+    per-step kernel outputs: heave [m/s^2] ``AZ_SF - G`` (the kernel writes the vertical specific force at
+    the centre of gravity as ``g + z''`` of the step), roll and pitch [rad/s^2] the backward difference of
+    ``ROLL_RATE`` and ``PITCH_RATE`` over the step, from rest before the first (the kernel integrates the
+    rates by semi-implicit Euler, ``rate[k] = rate[k-1] + acc[k] dt``, so the difference is the step's
+    angular acceleration itself, not an approximation of it)."""
+    P = np.asarray(P, float).ravel()
+    zdd = np.asarray(az_sf, float) - P[P_INDEX["G"]]
+    rates = np.column_stack([roll_rate, pitch_rate]).astype(float)
+    angular = np.diff(rates, axis=0, prepend=np.zeros((1, 2))) / dt
+    return np.column_stack([zdd, angular])
+
+
+def body_force(P_calibrated: np.ndarray, P_base: np.ndarray, accelerations: np.ndarray,
+               corners: Corners) -> np.ndarray:
+    """(n, 3) the :data:`CHANNELS` (front, rear [N], roll moment [N*m]) of the body-level part of a
+    calibration: the inertial force of its sprung-mass and inertia change (:data:`BODY_VALUES`) along the
+    calibrated run's body ``accelerations`` (n, 3: heave, roll, pitch; :func:`body_accelerations`),
+    ``-(m_cal - m_file) z''``, ``-(Ixx_cal - Ixx_file) phi''``, ``-(Iyy_cal - Iyy_file) theta''``: what the
+    base model's body, with the file's mass and inertias, lacks to move as the calibrated one does. Split
+    onto the channels by statics: the (front, rear, roll) triple whose generalised force on heave, roll
+    and pitch (:func:`input_matrix`, as the estimate's ``d`` acts on the body) equals that inertial force.
+    Left out: the mass change's share of the kernel's pendulum terms (``m (h_cg - h_rc) a_y`` in roll,
+    ``m (h_cg - h_pc) (g theta - a_x)`` in pitch) and a calibrated centre-of-gravity height, a few N*m on
+    a bump crossing against hundreds of the inertia term."""
+    dP = np.asarray(P_calibrated, float).ravel() - np.asarray(P_base, float).ravel()
+    acc = np.asarray(accelerations, float)
+    gen = np.zeros_like(acc)
+    for name, j in BODY_VALUES:
+        gen[:, j] = -dP[P_INDEX[name]] * acc[:, j]
+    return np.linalg.solve(input_matrix(corners)[:3], gen.T).T
 
 
 def axle_channels(corner: np.ndarray, corners: Corners) -> np.ndarray:

@@ -3,14 +3,25 @@ physics term is added: what the calibration could not explain), seen: time serie
 (``missing_force`` in the JSON) and a report section (issue 26, items 1-2; estimation in
 :mod:`.missing_force`).
 
-Two parts make the force the *base* model (the vehicle file's values) lacks at the corners: what the
-calibration supplied as corner force (the calibrated model's suspension force -- spring, damper, friction,
-anti-roll bar -- minus the base model's at the same deflections, velocities and wheel forces, along the
-calibrated model's run; :func:`~.missing_force.calibration_force`), plus the estimate against the calibrated
-model. The calibration takes up what lies in the span of its corner values (extra viscous damping in a
-damper-curve scale, a gas spring's rate in the wheel rate); the first part gives it back. Body-level values
-(sprung mass, inertias, centre of gravity, tyres) are not corner forces and stay out of it: their
-calibration only shapes the trajectory both parts are read along.
+Three parts make the force the *base* model (the vehicle file's values) lacks, per axle and roll moment:
+
+1. the calibration's corner part: what the calibration supplied as corner force (the calibrated model's
+   suspension force -- spring, damper, friction, anti-roll bar -- minus the base model's at the same
+   deflections, velocities and wheel forces, along the calibrated model's run;
+   :func:`~.missing_force.calibration_force`);
+2. the calibration's body part: the inertial force of the calibrated sprung-mass and inertia change,
+   ``-(m_cal - m_file) z''``, ``-(Ixx_cal - Ixx_file) phi''``, ``-(Iyy_cal - Iyy_file) theta''`` along the
+   calibrated run, split onto the axles and the roll moment by statics as the estimate's channels act on
+   the body (:func:`~.missing_force.body_force`): the base model's body, with the file's mass, lacks it to
+   move as the calibrated body does. Accelerations from the calibrated run's kernel outputs: heave
+   ``AZ_SF - g``, roll and pitch the step-wise difference of ``ROLL_RATE``/``PITCH_RATE``
+   (:func:`~.missing_force.body_accelerations`);
+3. the estimate against the calibrated model.
+
+The calibration takes up what lies in the span of its values (extra viscous damping in a damper-curve
+scale, a gas spring's rate in the wheel rate, and some of either in the sprung mass: the body IMU sees a
+mass and a rate mostly through their ratio); the first two parts give it back. Tyre values and the
+centre-of-gravity height stay out: they only shape the trajectory the parts are read along.
 
 Per drive the calibrated model (base structure, calibration and measurement chain as fitted) is
 simulated to the drive's end; the residual measured - simulated of roll rate, pitch rate and vertical
@@ -42,7 +53,8 @@ CSV_COLUMNS = ("t", "front_N", "front_sd_N", "rear_N", "rear_sd_N", "roll_Nm", "
                "front_deflection_m", "rear_deflection_m", "front_deflection_velocity_m_s",
                "rear_deflection_velocity_m_s", "front_model_force_N", "rear_model_force_N",
                "front_calibration_N", "rear_calibration_N", "roll_calibration_Nm",
-               "front_base_N", "rear_base_N", "roll_base_Nm")
+               "front_base_N", "rear_base_N", "roll_base_Nm",
+               "front_body_N", "rear_body_N", "roll_body_Nm")
 
 
 @dataclass
@@ -51,7 +63,9 @@ class DriveForce:
     lacks) with the model's own axle deflection [m], deflection velocity [m/s] and suspension force [N]
     (n, 2: front, rear) on its grid; ``calibration`` (n, 3 in :data:`~.missing_force.CHANNELS`): what the
     calibration supplied as corner force (module docstring; None when not computed, zero without a
-    calibration), ``calibration_check_N`` how closely the re-evaluation reproduced the kernel's force."""
+    calibration), ``calibration_check_N`` how closely the re-evaluation reproduced the kernel's force;
+    ``body`` (n, 3, same channels): the body-level part, the inertial force of the calibration's
+    sprung-mass and inertia change (:func:`~.missing_force.body_force`; None when not computed)."""
 
     drive: str
     est: mf.MissingForce
@@ -61,11 +75,15 @@ class DriveForce:
     unmeasured_input: bool
     calibration: np.ndarray | None = None
     calibration_check_N: float | None = None
+    body: np.ndarray | None = None
 
     @property
     def base_total(self) -> np.ndarray | None:
-        """(n, 3) the force the base model lacks: the calibration's part plus the estimate."""
-        return None if self.calibration is None else self.est.force + self.calibration
+        """(n, 3) the force the base model lacks: the calibration's corner part, its body part (when
+        computed) and the estimate against the calibrated model."""
+        if self.calibration is None:
+            return None
+        return self.est.force + self.calibration + (0.0 if self.body is None else self.body)
 
 
 def _corner(Y: np.ndarray, name: str) -> np.ndarray:
@@ -102,18 +120,22 @@ def _base_x(st, x: np.ndarray) -> np.ndarray | None:
     return xb
 
 
-def _calibration_part(f, fit, r: int, Y: np.ndarray) -> tuple[np.ndarray, float]:
-    """Per-corner force (n_steps, 4) [N] the calibration supplied along drive ``r``'s calibrated run ``Y``
-    and the re-evaluation's check [N] (:func:`~.missing_force.calibration_force`)."""
+def _calibration_part(f, fit, r: int, Y: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """Along drive ``r``'s calibrated run ``Y``: the per-corner force (n_steps, 4) [N] the calibration
+    supplied, the re-evaluation's check [N] (:func:`~.missing_force.calibration_force`) and the body-level
+    part (n_steps, 3 channels; :func:`~.missing_force.body_force` of the calibrated row's mass and inertias
+    against the file's, with the run's body accelerations)."""
     ev, st, x = f.evaluator_, fit.structure, fit.x
     xb = _base_x(st, x)
     if xb is None:
-        return np.zeros((len(Y), 4)), 0.0
+        return np.zeros((len(Y), 4)), 0.0, np.zeros((len(Y), len(mf.CHANNELS)))
     P_cal, P_base = ev.rows(st, x, [r])[0], ev.rows(st, xb, [r])[0]
     traj = {k: _corner(Y, k) for k in mf.TRAJECTORY}
     own = np.sum([_corner(Y, n) for n in ("F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")], axis=0)
     cf = mf.calibration_force(ev.model.kernel, P_cal, P_base, traj, own)
-    return cf.corner, cf.check_N
+    az, roll_rate, pitch_rate = (Y[:, _OUTPUTS.index(o)] for o in mf.BODY_OUTPUTS)
+    acc = mf.body_accelerations(P_cal, az, roll_rate, pitch_rate, float(ev.dt))
+    return cf.corner, cf.check_N, mf.body_force(P_cal, P_base, acc, mf.Corners.of(P_cal))
 
 
 def _per_axle(t: np.ndarray, t_sim: np.ndarray, corners: np.ndarray, combine) -> np.ndarray:
@@ -142,11 +164,12 @@ def estimate_drives(f, fit, cfg: dict | None = None, *, calibration: bool = Fals
                        _per_axle(est.t, c.t_sim_s, vel, np.mean),
                        _per_axle(est.t, c.t_sim_s, force, np.sum), not has_road_input(c))
         if calibration:
-            corner, d.calibration_check_N = _calibration_part(f, fit, r, Y)
+            corner, d.calibration_check_N, body = _calibration_part(f, fit, r, Y)
             ch = mf.axle_channels(corner, mf.Corners.of(P))
             # on the estimate's grid as the residual takes the simulation: the measurement at t is the run at t - lag
             tq = est.t - st.lag(x)
             d.calibration = np.column_stack([np.interp(tq, c.t_sim_s, ch[:, j]) for j in range(ch.shape[1])])
+            d.body = np.column_stack([np.interp(tq, c.t_sim_s, body[:, j]) for j in range(body.shape[1])])
         out[c.name] = d
     return out
 
@@ -174,6 +197,8 @@ def summary(forces: dict[str, DriveForce], cfg: dict | None = None) -> dict:
             entry["calibration"] = _channel_figures(d.calibration, v, e.t, cfg)
             entry["calibration"]["check_N"] = _finite(d.calibration_check_N if d.calibration_check_N is not None
                                                       else math.nan)
+            if d.body is not None:
+                entry["calibration_body"] = _channel_figures(d.body, v, e.t, cfg)
             entry["base_model"] = _channel_figures(d.base_total, v, e.t, cfg, d.velocity)
         per[name] = entry
     return per
@@ -199,10 +224,13 @@ def _finite(x: float) -> float | None:
 def write_csv(d: DriveForce, path: Path) -> None:
     """The time series of one drive (:data:`CSV_COLUMNS`; SI units as the column names say)."""
     e = d.est
-    cal = d.calibration if d.calibration is not None else np.full_like(e.force, np.nan)
+    nan = np.full_like(e.force, np.nan)
+    cal = d.calibration if d.calibration is not None else nan
+    body = d.body if d.body is not None else nan
+    total = d.base_total if d.base_total is not None else nan
     cols = [e.t, e.force[:, 0], e.sd[:, 0], e.force[:, 1], e.sd[:, 1], e.force[:, 2], e.sd[:, 2],
             d.deflection[:, 0], d.deflection[:, 1], d.velocity[:, 0], d.velocity[:, 1],
-            d.model_force[:, 0], d.model_force[:, 1], *cal.T, *(e.force + cal).T]
+            d.model_force[:, 0], d.model_force[:, 1], *cal.T, *total.T, *body.T]
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(CSV_COLUMNS)
@@ -212,9 +240,11 @@ def write_csv(d: DriveForce, path: Path) -> None:
 
 def plot(d: DriveForce, path: Path, title: str) -> None:
     """Loops of one drive: per axle the missing force against deflection and against deflection
-    velocity, the calibration's part (the corner force the calibration supplied, when computed) beside it
-    on the same axis, the model's own suspension force (less its mean) on the right axis; below, the three
-    channels over time with their 95 % band and the calibration's parts dashed."""
+    velocity, the calibration's corner part (the corner force the calibration supplied, when computed) and
+    its body part (the inertial force of the calibrated mass and inertia change, which the base model's
+    body with its file mass lacks) beside it on the same axis, the model's own suspension force (less its
+    mean) on the right axis; below, the three channels over time with their 95 % band, the calibration's
+    corner parts dashed and its body parts dotted."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -227,7 +257,10 @@ def plot(d: DriveForce, path: Path, title: str) -> None:
             a.plot(x[v], e.force[v, row], color="C3", lw=1.0, label="missing force (calibrated model)")
             if d.calibration is not None:
                 a.plot(x[v], d.calibration[v, row], color="C0", lw=0.8,
-                       label="calibration's part (calibrated - base model)")
+                       label="calibration's corner part (calibrated - base model)")
+                if d.body is not None:
+                    a.plot(x[v], d.body[v, row], color="C2", lw=0.8,
+                           label="calibration's body part (-(mass, inertia change) x acceleration)")
                 a.legend(loc="upper left", fontsize=7)
             a.set_xlabel(label)
             a.set_ylabel(f"{axle} axle missing force [N]", color="C3")
@@ -247,7 +280,10 @@ def plot(d: DriveForce, path: Path, title: str) -> None:
         a.fill_between(e.t, e.force[:, j] - 2 * e.sd[:, j], e.force[:, j] + 2 * e.sd[:, j], alpha=0.2)
         if d.calibration is not None:
             a.plot(e.t, np.where(v, d.calibration[:, j], np.nan), lw=0.8, ls="--", color=f"C{j}",
-                   label=f"{ch[:-2].rstrip('_')}: calibration's part")
+                   label=f"{ch[:-2].rstrip('_')}: calibration's corner part")
+        if d.body is not None:
+            a.plot(e.t, np.where(v, d.body[:, j], np.nan), lw=0.8, ls=":", color=f"C{j}",
+                   label=f"{ch[:-2].rstrip('_')}: calibration's body part (mass, inertia)")
     a.set_xlabel("time [s]")
     a.set_ylabel("missing force, +-2 sd")
     a.legend(loc="upper right", fontsize=7, ncol=2)
@@ -270,8 +306,8 @@ def write(f, out: Path, name: str, *, plots: bool = True) -> dict:
         files.append(str(p))
         if plots:
             p = out / f"{name}_missing_force_{drive}.png"
-            plot(d, p, f"{drive}: the force the calibrated model lacks (estimated from the recording) "
-                       "and the calibration's part")
+            plot(d, p, f"{drive}: the force the calibrated model lacks (estimated from the recording)\n"
+                       "and the calibration's corner and body parts (their sum is what the base model lacks)")
             files.append(str(p))
     return {"per_drive": summary(forces, cfg), "files": files}
 
@@ -285,15 +321,18 @@ def markdown(mf_json: dict) -> list[str]:
              "specific force). Read its shape in the loop plots: friction is a rectangle in the force-"
              "velocity plot (a jump at zero velocity) and a loop of constant height against deflection; "
              "viscous damping a line through the origin against velocity; a spring a line against deflection. "
-             "The loop half height is the friction-like level of the axle (both wheels). The calibration's "
-             "part is the corner force the calibration supplied (calibrated minus base model's spring, damper, "
-             "friction and anti-roll bar force along the calibrated run; body-level values such as mass and "
-             "inertia are not corner forces and stay out): plus the missing force, it is the force the base "
-             "model (the vehicle file's values) lacks at the corners.", "",
+             "The loop half height is the friction-like level of the axle (both wheels). The force the base "
+             "model (the vehicle file's values) lacks has three parts: the calibration's corner part (the "
+             "corner force the calibration supplied: calibrated minus base model's spring, damper, friction "
+             "and anti-roll bar force along the calibrated run), the calibration's body part (the inertial "
+             "force of the calibrated sprung-mass and inertia change along the calibrated run, split onto the "
+             "axles by statics: the base model's body, with its file mass, lacks it) and the missing force "
+             "against the calibrated model.", "",
              "| drive | front RMS [N] | rear RMS [N] | roll RMS [N*m] | front loop half height [N] | "
-             "rear loop half height [N] | mean sd front / rear [N] | calibration's part band RMS front / rear [N] "
+             "rear loop half height [N] | mean sd front / rear [N] | calibration's corner part band RMS front / "
+             "rear [N] | calibration's body part band RMS front / rear [N] "
              "| base model's lack band RMS front / rear [N] |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for drive, e in mf_json["per_drive"].items():
         def num(x):
             return "-" if x is None else f"{x:.0f}"
@@ -301,7 +340,8 @@ def markdown(mf_json: dict) -> list[str]:
                      f"{e['front_N']['rms']:.0f} | {e['rear_N']['rms']:.0f} | {e['roll_Nm']['rms']:.0f} | "
                      f"{num(e['front_N']['loop_half_height_N'])} | {num(e['rear_N']['loop_half_height_N'])} | "
                      f"{e['front_N']['sd_mean']:.0f} / {e['rear_N']['sd_mean']:.0f} | "
-                     f"{_pair(e.get('calibration'))} | {_pair(e.get('base_model'))} |")
+                     f"{_pair(e.get('calibration'))} | {_pair(e.get('calibration_body'))} | "
+                     f"{_pair(e.get('base_model'))} |")
     lines += ["", "Files: " + ", ".join(Path(p).name for p in mf_json["files"]), ""]
     return lines
 
