@@ -248,7 +248,10 @@ def run_case(name: str, spec: dict, noise: float, tmp: Path) -> dict:
 
 def _zero_interval(term: dict) -> bool:
     """Does every 95 % interval of the term contain zero effect (a finding that may be nothing)?"""
-    cis = [v for v in (term.get("ci95") or {}).values() if isinstance(v, (list, tuple)) and len(v) == 2]
+    # the learned term's knee and free play are shapes, not effects: only its coefficients say "no effect"
+    shapes = ("knee_velocity", "free_play") if term.get("name") == "unlisted_force" else ()
+    cis = [v for k, v in (term.get("ci95") or {}).items() if isinstance(v, (list, tuple)) and len(v) == 2
+           and k not in shapes]
     if not cis:
         return False
     return all(lo is not None and hi is not None and lo <= 0.0 <= hi for lo, hi in cis)
@@ -369,6 +372,7 @@ def _diagnostics(f) -> dict:
                       for o in (getattr(f, "ranking_", None) or [])]
     out["not_identifiable_why"] = [{"name": s.get("name"), "why": s.get("why")}
                                    for s in (getattr(f, "skipped_", None) or [])]
+    out["force_shape"] = getattr(f, "force_shape_", [])   # the shape regression at each step (issue 26)
     return out
 
 

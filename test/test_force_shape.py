@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from susp_sim_ros.analysis.discrepancy import force_shape as fs
-from susp_sim_ros.model import Model, load_variant, simulate
+from susp_sim_ros.model import Model, load_variant, load_vehicle, simulate
 from susp_sim_ros.model.extra_terms import DAMPER_GAS_PRELOAD, EXTRA_VISCOUS_DAMPING
 from susp_sim_ros.model.learned_force import FEATURES, LEARNED_FORCE, feature_series, shape_defaults
 from susp_sim_ros.model.maneuvers import build_maneuver
@@ -52,13 +52,45 @@ def test_features_are_what_their_names_say():
     np.testing.assert_allclose(get["lateral_force"], z * np.abs(FY) / sh["force_ref"])
 
 
-def _bump_run(terms):
-    var = dataclasses.replace(load_variant("full"), terms=load_variant("full").terms + tuple(terms))
-    model = Model("passat_b8_like", var)
-    man = build_maneuver("bump_crossing", model.vehicle.wheelbase)
+def _run(terms, maneuver="bump_crossing", variant="full", vehicle=None):
+    base = load_variant(variant)
+    model = Model(vehicle or load_vehicle("passat_b8_like"), dataclasses.replace(base, terms=base.terms + tuple(terms)))
+    man = build_maneuver(maneuver, model.vehicle.wheelbase)
     res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, oil=(1.0, 1.0, 0.0, 0.0),
                    outputs=["PITCH_RATE", "ROLL_RATE", "AZ_SF"])
     return {k: res.values[:, j] for j, k in enumerate(("PITCH_RATE", "ROLL_RATE", "AZ_SF"))}
+
+
+def _bump_run(terms):
+    return _run(terms)
+
+
+def test_the_learned_roll_and_friction_features_are_the_models_own_elements_in_the_kernel():
+    """The state-based features against exact identities: ``roll_deflection`` with coefficient
+    ``dK d_ref`` is an anti-roll bar dK stiffer (the other wheel's deflection read from the term's state
+    is the one the bar sees), and ``sign_velocity`` of level F with presliding travel F / sigma is the axle
+    friction element of level F (the paper's Dahl element, no scalings in ``dahl_only``)."""
+    sh = shape_defaults()
+    vp = load_vehicle("passat_b8_like")
+    dk = (4000.0, 2500.0)
+    stiffer = dataclasses.replace(vp, arb_rate=(vp.arb_rate[0] + dk[0], vp.arb_rate[1] + dk[1]))
+    coef = [dk[0] * sh["deflection_ref"]] * 2 + [dk[1] * sh["deflection_ref"]] * 2
+    learned = _run([_learned(c_roll_deflection=coef)], "sine_steer", vehicle=vp)
+    listed = _run([], "sine_steer", vehicle=stiffer)
+    plain = _run([], "sine_steer", vehicle=vp)
+    scale = np.max(np.abs(listed["ROLL_RATE"]))
+    np.testing.assert_allclose(learned["ROLL_RATE"], listed["ROLL_RATE"], rtol=0, atol=1e-9 * scale)
+    assert np.max(np.abs(listed["ROLL_RATE"] - plain["ROLL_RATE"])) > 1e-2 * scale
+    level = 150.0
+    no_axle = dataclasses.replace(vp, axle_friction=(0.0, 0.0))
+    with_axle = dataclasses.replace(vp, axle_friction=(level, level))
+    learned = _run([_learned(c_sign_velocity=level, presliding=level / vp.dahl_stiffness)], variant="dahl_only",
+                   vehicle=no_axle)
+    listed = _run([], variant="dahl_only", vehicle=with_axle)
+    plain = _run([], variant="dahl_only", vehicle=no_axle)
+    scale = np.max(np.abs(listed["PITCH_RATE"]))
+    np.testing.assert_allclose(learned["PITCH_RATE"], listed["PITCH_RATE"], rtol=0, atol=1e-9 * scale)
+    assert np.max(np.abs(listed["PITCH_RATE"] - plain["PITCH_RATE"])) > 1e-2 * scale
 
 
 def _learned(**coefs):
@@ -142,15 +174,21 @@ def test_the_learned_candidate_writes_its_coefficients_and_shape_into_the_term()
 
 
 @settings(max_examples=20, deadline=None)
-@given(st.floats(-0.05, 0.05), st.floats(-2.0, 2.0))
-def test_feature_series_of_a_constant_state_is_finite_and_bounded(d, v):
-    D = np.full((5, 4), d)
-    V = np.full((5, 4), v)
-    F = np.zeros((5, 4))
+@given(st.lists(st.floats(-0.05, 0.05), min_size=8, max_size=8), st.floats(-2.0, 2.0))
+def test_feature_series_is_finite_and_the_free_play_bounded(ds, v):
+    """Any corner deflections (two steps, the wheels of an axle apart): every feature finite, the free-play
+    feature within +-free play / d_ref, the roll features antisymmetric between the wheels of an axle."""
+    D = np.array(ds).reshape(2, 4)
+    V = np.full((2, 4), v)
+    F = np.ones((2, 4))
+    sh = shape_defaults()
     for f in FEATURES:
-        y = feature_series(f, D, V, F, F, DT)
-        assert np.all(np.isfinite(y))
-    assert np.all(np.abs(feature_series("roll_free_play", D, V, F, F, DT)) <= 1.0)
+        assert np.all(np.isfinite(feature_series(f, D, V, F, F, DT)))
+    fp = feature_series("roll_free_play", D, V, F, F, DT)
+    assert np.all(np.abs(fp) <= sh["free_play"] / sh["deflection_ref"] + 1e-12)
+    for name in ("roll_free_play", "roll_deflection"):
+        y = feature_series(name, D, V, F, F, DT)
+        np.testing.assert_allclose(y[:, [0, 2]], -y[:, [1, 3]])
 
 
 @pytest.mark.parametrize("bad", ["no_such_feature"])

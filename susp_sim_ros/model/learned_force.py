@@ -17,7 +17,7 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
 ``velocity_beyond_knee``    sign(v) max(|v| - v_knee, 0) / v_ref: a damper whose slope changes above a
                             knee velocity (a blow-off valve opening, a valve closing)
 ``sign_velocity``           z: friction-like (``z`` a unit Dahl element, -1..1, presliding travel x_p)
-``stroke_amplitude``        z A / d_ref: friction growing with the deflection amplitude (``A`` the peak
+``peak_deflection``         z A / d_ref: friction growing with the deflection amplitude (``A`` the peak
                             |d|, forgotten with time constant ``memory``)
 ``lateral_force``           z |Fy| / F_ref: friction growing with the lateral wheel force
 ``longitudinal_force``      z |Fx| / F_ref: friction growing with the longitudinal wheel force
@@ -31,12 +31,12 @@ Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velo
 reference scales make every coefficient a force [N] at a typical excursion; they and the shape values
 (knee, free play, presliding travel, memory) are parameters with declared defaults like any term's.
 
-States per corner: 0 the unit Dahl element ``z``, 1 the deflection (the sum of the step increments: the
-other wheel's deflection is read from it, since the corner context of the other wheel may not be filled
-yet in the step), 2 the amplitude ``A`` [m].
+States per corner: 0 the unit Dahl element ``z``, 1 the deflection at the start of the step (the context's
+deflection plus the step's increment, stored after each step: the other wheel's deflection is read from
+it, since the other wheel's corner context may not be filled yet in the step), 2 the amplitude ``A`` [m].
 
-:func:`feature_series` evaluates the same features along simulated corner series, for the regression
-that selects them (``analysis/discrepancy/force_shape.py``).
+:func:`feature_series` evaluates the same features along simulated corner series (tests hold the kernel's
+force to it).
 """
 from __future__ import annotations
 
@@ -48,7 +48,7 @@ from .layout import C_INDEX
 from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 
 FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
-            "velocity_beyond_knee", "sign_velocity", "stroke_amplitude", "lateral_force", "longitudinal_force",
+            "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
             "roll_deflection", "roll_free_play")
 N_FEATURES = len(FEATURES)
 #: the shape parameters after the coefficients, in this order
@@ -115,7 +115,7 @@ def learned_force_force(p, po, s, so, i, c):
 def advance_states(z, deflection, amp, dx, presliding, memory, dt):
     """The unit Dahl element, the deflection and the amplitude one step on over the increment ``dx`` [m]."""
     z_new = dahl_exact(z, 1.0, 1.0 / max(presliding, TINY), dx)
-    d_new = deflection + dx
+    d_new = deflection + dx   # the kernel passes the context's deflection: no drift, right after a model switch
     decay = 1.0 + expm1_nonpos(-dt / max(memory, TINY))
     amp_new = max(amp * decay, abs(d_new))
     return z_new, d_new, amp_new
@@ -123,7 +123,7 @@ def advance_states(z, deflection, amp, dx, presliding, memory, dt):
 
 @njit(cache=True, inline="always")
 def learned_force_update(p, po, s, so, i, c, dx):
-    z, d, a = advance_states(s[so + _Z + i], s[so + _DEF + i], s[so + _AMP + i], dx, p[po + _XP + i],
+    z, d, a = advance_states(s[so + _Z + i], c[i, _C_D], s[so + _AMP + i], dx, p[po + _XP + i],
                              p[po + _MEM + i], c[i, _C_DT])
     s[so + _Z + i] = z
     s[so + _DEF + i] = d
@@ -166,7 +166,7 @@ _COEF_MEANING = {
     "constant": "force offset", "deflection": "spring force at d = d_ref",
     "deflection_cubed": "progressive spring force at d = d_ref", "deflection_velocity": "viscous force at v = v_ref",
     "velocity_squared": "orifice force at v = v_ref", "velocity_beyond_knee": "force change v_ref beyond the knee",
-    "sign_velocity": "friction level", "stroke_amplitude": "friction level at amplitude d_ref",
+    "sign_velocity": "friction level", "peak_deflection": "friction level at amplitude d_ref",
     "lateral_force": "friction level at |Fy| = F_ref", "longitudinal_force": "friction level at |Fx| = F_ref",
     "roll_deflection": "force at a left-right difference d_ref",
     "roll_free_play": "force at a left-right difference d_ref within the play"}
@@ -183,7 +183,7 @@ LEARNED_FORCE = register_term(PhysicsTerm(
         TermParam("free_play", "m", "half width of the left-right free play of roll_free_play", 0.004, 0.0, 0.1),
         TermParam("presliding", "m", "presliding travel of the friction-like features' unit Dahl element",
                   1e-4, 1e-7, 0.01),
-        TermParam("memory", "s", "time constant with which stroke_amplitude forgets the peak deflection",
+        TermParam("memory", "s", "time constant with which peak_deflection forgets the peak deflection",
                   1.0, 1e-3, 100.0)),
     n_states=3, force=learned_force_force, update=learned_force_update))
 

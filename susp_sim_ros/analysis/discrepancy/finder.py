@@ -223,6 +223,9 @@ class DiscrepancyFinder:
         self.refused_: list[tuple] = []  # (fit before, option, its fit, checks) of terms refused after the criterion
         self.force_shape_: list[dict] = []  # what the shape regression saw at each forward step (force_shape)
         self.learned_: dict[str, dict] = {}  # the learned term's dependences and description
+        if force_shape.TERM in self.candidates and force_shape.learned_in(self.base_variant_):
+            in_base.append(force_shape.TERM)   # a variant the finder wrote: its learned force is the base model's
+        self.learnable_ = force_shape.TERM in self.candidates and force_shape.TERM not in in_base
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
         self.base_fit_ = fit_structure(ev, Structure([]))
         return ev
@@ -240,19 +243,19 @@ class DiscrepancyFinder:
             if math.sqrt(cur.rss / n) <= FLOOR_STOP:
                 break
             remaining = [c for c in testable if c not in cur.structure.names]
-            if not remaining:
+            learnable = self.learnable_ and force_shape.TERM not in cur.structure.names
+            if not remaining and not learnable:
                 break
-            opts = screen(ev, cur, remaining, pairs=True, heldout=ranking is None)
-            if ranking is None:
+            opts = screen(ev, cur, remaining, pairs=True, heldout=ranking is None) if remaining else []
+            if ranking is None and remaining:
                 ranking = [o for o in opts if len(o.add) == 1]
                 _skip_masked(ranking, testable, skipped)
                 remaining = [c for c in testable if c not in cur.structure.names]
                 opts = [o for o in opts if all(a in remaining for a in o.add)]
-                if not opts:
-                    break
             excess = max(cur.rss - n, 1e-12)
-            learned = None if (force_shape.TERM not in self.candidates or force_shape.TERM in cur.structure.names) \
-                else self._learned_trial(ev, cur, step)
+            learned = self._learned_trial(ev, cur, step) if learnable else None
+            if not opts and learned is None:
+                break
             best, best_fit, ok, checks = self._first_passing(ev, cur, opts, recalibrations, step, learned)
             gain = cur.rss - best_fit.rss
             per_before = self._per_drive_rmse(ev, cur)
@@ -544,7 +547,7 @@ class DiscrepancyFinder:
         (:meth:`_recalibration` of this ``step``); else the best-BIC trial with ``passed`` False."""
         allidx = tuple(range(len(ev.cases)))
         best, best_fit = None, None
-        checks: dict = {}
+        best_checks: dict = {}
         for size in (1, 2):
             trials = []
             for o in [o for o in opts if len(o.add) == size][:TRIALS]:
@@ -555,16 +558,18 @@ class DiscrepancyFinder:
             # every trial in BIC order until one passes: the best-BIC term failing its held-out test
             # must not hide a runner-up that passes; on a tie the listed term goes first
             for o, f in sorted(trials, key=lambda t: (t[1].bic, force_shape.TERM in t[0].add)):
-                if best_fit is None or f.bic < best_fit.bic:
-                    best, best_fit = o, f
                 ok, in_sample, checks = self._passes(ev, cur, f, recalibrations, step)
+                if force_shape.TERM in o.add and self.force_shape_:   # the learned trial's outcome, kept
+                    self.force_shape_[-1]["trial"] = {"delta_bic": cur.bic - f.bic, "passed": ok, **checks}
+                if best_fit is None or f.bic < best_fit.bic:
+                    best, best_fit, best_checks = o, f, checks
                 if ok:
                     return o, f, True, checks
                 if in_sample and size == 1 and force_shape.TERM not in o.add:  # clear in the drives, refused by
                     #                                                            a later test
                     self.refused_.append((cur, o, f, dict(checks)))
-        assert best is not None and best_fit is not None  # opts is not empty: a trial was fitted
-        return best, best_fit, False, checks
+        assert best is not None and best_fit is not None  # opts or the learned trial: a trial was fitted
+        return best, best_fit, False, best_checks
 
     def _passes(self, ev: Evaluator, cur: FitResult, f: FitResult, recalibrations: dict[int, FitResult],
                 step: int) -> tuple[bool, bool, dict]:
@@ -604,8 +609,8 @@ class DiscrepancyFinder:
             "selection_frequency": {f"{k[0]}:{k[1]}": q for k, q in sorted(sel.frequency.items())},
             "stable": [f"{c.feature}:{c.axle}" for c in sel.stable], "dependences": sel.dependences,
             "description": sel.description() if sel.stable else "", "listed_rivals": sel.listed_rivals()})
-        if not sel.stable:
-            return None
+        if not sel.stable or sel.listed_rivals():
+            return None   # nothing stable, or listed terms stand for every dependence: they compete already
         cand = force_shape.learned_candidate(sel)
         st = cur.structure.with_(cand)
         x0 = st.embed(cur.structure, cur.x)
@@ -613,8 +618,9 @@ class DiscrepancyFinder:
         lo, hi = st.bounds()
         k = len(sel.coef)
         x0[a:a + k] = np.clip(sel.coef, lo[a:a + k], hi[a:a + k])
-        fit = fit_structure(ev, st, x0, tuple(range(len(ev.cases))), max_nfev=2 * TRIAL_NFEV)
+        fit = fit_structure(ev, st, x0, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
         self.learned_[cand.name] = {"dependences": sel.dependences, "description": sel.description()}
+        self.learned_selection_ = sel
         return Option((cand.name,), math.nan, math.nan, np.zeros(0)), fit
 
     def _backward(self, ev: Evaluator, cur: FitResult, path: list, accepted: list) -> FitResult:

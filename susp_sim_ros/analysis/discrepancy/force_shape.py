@@ -14,18 +14,21 @@ attributed to dependences without first estimating it as a smoothed series (:mod
 picture an engineer reads), whose body-mode band and uncertainty blur the fast forces of a bump impact.
 
 Selection is sparse and held out by drive: orthogonal matching pursuit (scikit-learn's
-``orthogonal_mp``; Pati, Rezaiifar and Krishnaprasad 1993) with the number of dependences, none
-included, chosen on left-out drives by the one-standard-error rule, repeated on drive-bootstrap
-resamples; a dependence is *stable* when it is selected in most resamples (stability selection,
-Meinshausen and Buehlmann 2010). Why scikit-learn rather than PySINDy: PySINDy regresses measured state
-derivatives on a library; here the library's columns are simulated effects, so only its optimizers would
-be used, and scikit-learn's OMP is that optimizer.
+``orthogonal_mp_gram`` on each drive's sufficient statistics; Pati, Rezaiifar and Krishnaprasad 1993)
+with the number of dependences, none included, chosen on left-out drives by the one-standard-error rule,
+repeated on drive-bootstrap resamples; a dependence is *stable* when it is selected in most resamples
+(stability selection, Meinshausen and Buehlmann 2010). Why scikit-learn rather than PySINDy: PySINDy
+regresses measured state derivatives on a library; here the library's columns are simulated effects, so
+only its optimizers would be used, and scikit-learn's OMP is that optimizer.
 
 The stable set is then a learned physics term (:data:`~susp_sim_ros.model.learned_force.LEARNED_FORCE`,
 TERM ``unlisted_force``) with one coefficient per dependence (and the knee or free play it selected,
 freed), which the finder fits and tests like every listed candidate (criterion, decoys, held-out
-drives, recalibration) and which competes with them on the criterion. When a listed term stands for
-every stable dependence (:data:`LISTED_FOR`), that term is named as its rival.
+drives, recalibration) and which competes with them on the criterion. When listed terms stand for
+every stable dependence (:data:`LISTED_FOR`), the learned term is not offered: those listed terms are
+in the competition already (``listed_rivals`` in the record). Limits: the dependences and the offered
+knee or free play are selected on all drives, so the held-out test refits the learned term's values, not
+its choice of dependences; one knee and one free play serve both axles.
 """
 from __future__ import annotations
 
@@ -44,7 +47,7 @@ TERM = LEARNED_FORCE.name
 AXLES = tuple(AXLE_CORNERS)  # ("front", "rear")
 #: the listed TERM that stands for a dependence (None: none does)
 LISTED_FOR = {"constant": "damper_gas_preload", "deflection": "damper_gas_preload",
-              "deflection_velocity": "extra_viscous_damping", "stroke_amplitude": "friction_amplitude",
+              "deflection_velocity": "extra_viscous_damping", "peak_deflection": "friction_amplitude",
               "lateral_force": "friction_lateral_force", "longitudinal_force": "friction_longitudinal_force"}
 #: plain words per dependence (the description's parts)
 WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grows with the deflection)",
@@ -53,7 +56,7 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
          "velocity_squared": "grows with the square of the deflection velocity (orifice-like)",
          "velocity_beyond_knee": "changes slope above a deflection velocity of {knee:.2f} m/s (a valve opening)",
          "sign_velocity": "friction-like (a jump when the deflection reverses)",
-         "stroke_amplitude": "friction-like, growing with the stroke amplitude",
+         "peak_deflection": "friction-like, growing with the remembered peak deflection",
          "lateral_force": "friction-like, growing with the lateral wheel force",
          "longitudinal_force": "friction-like, growing with the longitudinal wheel force",
          "roll_deflection": "acts on the left-right deflection difference (anti-roll-bar-like)",
@@ -66,8 +69,17 @@ SENSE = {"constant": ("pushes the body up", "pulls the body down"),
          **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play")},
          **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
                                                            "velocity_beyond_knee")},
-         **{f: ("more friction", "less friction") for f in ("sign_velocity", "stroke_amplitude", "lateral_force",
+         **{f: ("more friction", "less friction") for f in ("sign_velocity", "peak_deflection", "lateral_force",
                                                              "longitudinal_force")}}
+
+
+#: the shape parameter of the features that have one
+_SHAPE_OF = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play"}
+
+
+def learned_in(variant) -> bool:
+    """Whether ``variant`` (a FrictionVariant) already has a learned term (one the finder wrote)."""
+    return any(s.term.name == TERM for s in variant.terms)
 
 
 def settings(path=None) -> dict:
@@ -100,12 +112,6 @@ def library(cfg: dict) -> list[tuple[str, float | None]]:
         else:
             out.append((f, None))
     return out
-
-
-def _shape_of(feature: str, value: float | None) -> dict:
-    if value is None:
-        return {}
-    return {"knee_velocity": value} if feature == "velocity_beyond_knee" else {"free_play": value}
 
 
 @dataclass
@@ -153,15 +159,17 @@ class Selection:
         rivals = [LISTED_FOR.get(c.feature) for c in self.stable]
         return [] if any(r is None for r in rivals) else sorted(set(r for r in rivals if r))
 
-    def description(self) -> str:
-        """One sentence in words, strongest dependence first, each with its axles, sense and share."""
+    def description(self, coef: np.ndarray | None = None) -> str:
+        """One sentence in words, strongest dependence first, each with its axles, sense (from ``coef``,
+        the fitted coefficients in :attr:`stable` order, when given; else the regression's) and share."""
+        coef = self.coef if coef is None else np.asarray(coef, float)
         parts = []
         for feature in self.dependences:
             ks = [k for k in np.argsort(-self.share) if self.stable[k].feature == feature]
             c = self.stable[ks[0]]
             w = WORDS[feature].format(knee=c.shape or 0.0, gap_mm=1e3 * (c.shape or 0.0))
             more, less = SENSE[feature]
-            where = ", ".join(f"{self.stable[k].axle} {more if self.coef[k] > 0 else less} "
+            where = ", ".join(f"{self.stable[k].axle} {more if coef[k] > 0 else less} "
                               f"{100 * self.share[k]:.0f} %" for k in ks)
             parts.append(f"{w} ({where})")
         axles = self.axles
@@ -185,11 +193,12 @@ class _DriveStats:
 
 def _omp_cv(stats: dict[int, _DriveStats], pick: np.ndarray, max_features: int) -> np.ndarray:
     """Columns selected by OMP on the drives ``pick`` (a drive drawn twice counts twice; scikit-learn's
-    ``orthogonal_mp_gram`` path, columns scaled to unit norm as OMP assumes) with the count, from none
-    up to ``max_features``, chosen on held-out drives: leave one drive (all its copies) out, and of the
-    counts within one standard error of the smallest mean squared prediction error the smallest (the
-    one-standard-error rule; Hastie, Tibshirani and Friedman, The Elements of Statistical Learning, 2009,
-    7.10). "None" is a count: a target the features do not predict on other drives selects nothing.
+    ``orthogonal_mp_gram`` path, columns scaled to unit norm over each fit's rows as OMP assumes) with
+    the count, from none up to ``max_features``, chosen on held-out drives: leave one drive (all its
+    copies) out, and of the counts within one standard error of the smallest mean squared prediction
+    error the smallest (the one-standard-error rule; Hastie, Tibshirani and Friedman, The Elements of
+    Statistical Learning, 2009, 7.10). "None" is a count: a target the features do not predict on other
+    drives selects nothing.
     Everything from the drives' sufficient statistics, so a resample costs no pass over the samples."""
     from sklearn.linear_model import orthogonal_mp_gram
     uniq, copies = np.unique(pick, return_counts=True)
@@ -202,10 +211,11 @@ def _omp_cv(stats: dict[int, _DriveStats], pick: np.ndarray, max_features: int) 
     folds = []
     for g, m in zip(uniq, copies):
         t = stats[g]
-        Gt = (G - m * t.G)[np.ix_(keep, keep)] / sc
-        bt = (b - m * t.b)[keep] / norms[keep]
-        path = np.asarray(orthogonal_mp_gram(Gt, bt, n_nonzero_coefs=K, return_path=True)).reshape(len(keep), -1)
-        Gg, bg = t.G[np.ix_(keep, keep)] / sc, t.b[keep] / norms[keep]
+        Gt, bt = (G - m * t.G)[np.ix_(keep, keep)], (b - m * t.b)[keep]
+        nt = np.sqrt(np.maximum(np.diag(Gt), 1e-300))   # unit norm over the fold's training rows
+        path = np.asarray(orthogonal_mp_gram(Gt / np.outer(nt, nt), bt / nt, n_nonzero_coefs=K,
+                                             return_path=True)).reshape(len(keep), -1) / nt[:, None]
+        Gg, bg = t.G[np.ix_(keep, keep)], t.b[keep]
         mse = [t.c / t.n] + [float(t.c - 2 * w @ bg + w @ Gg @ w) / t.n for w in path.T]
         folds.append(np.pad(mse, (0, K + 1 - len(mse)), mode="edge"))
     err = np.array(folds)
@@ -277,13 +287,13 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     shapes: dict[str, float] = {}
     for c in sel.stable:
         if c.shape is not None:
-            name = "knee_velocity" if c.feature == "velocity_beyond_knee" else "free_play"
-            shapes.setdefault(name, c.shape)
+            shapes.setdefault(_SHAPE_OF[c.feature], c.shape)
     for name, value in shapes.items():
         p = LEARNED_FORCE.params[LEARNED_FORCE.param_index(name)]
         params.append(CandParam(name, p.unit, value, max(p.lower, value / 4), min(p.upper, value * 4),
-                                value / 5, p.meaning))
-        axle_of.append(None)
+                                value / 5, p.meaning + " (one value for both axles)"))
+        users = {c.axle for c in sel.stable if c.shape is not None and _SHAPE_OF.get(c.feature) == name}
+        axle_of.append(users.pop() if len(users) == 1 else None)
     stable = list(sel.stable)
 
     def apply(P, P0, x, model):
@@ -312,7 +322,7 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
 def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
     """One library column as a one-parameter candidate (its coefficient [N]); the shape value is set
     only while the coefficient acts, so the columns of one feature's knees do not overwrite each other."""
-    shape_name = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play"}.get(col.feature)
+    shape_name = _SHAPE_OF.get(col.feature)
 
     def apply(P, P0, x, model):
         if x[0] == 0.0:
@@ -329,8 +339,8 @@ def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
 
 def design_for(f, st0, x0: np.ndarray, idx, cfg: dict | None = None) -> Design:
     """The regression problem of the fitted finder ``f`` at the model ``st0`` / ``x0`` over the drives
-    ``idx``: the whitened residual
-    (measured - simulated, every compared signal and drive, as the finder's criteria see it) against each
+    ``idx``: the whitened residual (the target is measured - simulated, every compared signal and drive,
+    as the finder's criteria see it) against each
     library column's effect on it (the forward-difference Jacobian of the residual in the column's
     coefficient, one batch of simulations). The missing force is thus regressed through the model's own
     dynamics rather than on its smoothed estimate (:mod:`.missing_force`), whose body-mode band and

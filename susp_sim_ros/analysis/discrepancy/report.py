@@ -78,8 +78,11 @@ def term_entries(f) -> list[dict]:
         entry = {"name": name, "where": _where(cand, x, lo[a:b], hi[a:b]) if cand.n_params else "all",
                  "params": params, "ci95": ci, "evidence": ev}
         if name == force_shape.TERM:  # interface.md: what the learned force depends on, in words
+            sel = getattr(f, "learned_selection_", None)
             entry["dependences"] = ev.get("dependences", [])
-            entry["description"] = ev.get("description", cand.meaning)
+            # the sense of each dependence from the fitted coefficients (the joint fit may flip a sign)
+            entry["description"] = sel.description(x[:len(sel.stable)]) if sel is not None else cand.meaning
+            ev["description"] = entry["description"]
         out.append(entry)
     return out
 
