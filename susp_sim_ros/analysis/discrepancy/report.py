@@ -135,7 +135,8 @@ def verdict(f) -> tuple[str, str]:
     # what remains is judged on the pooled signals or on the maneuvers' own gyro signals, whichever keeps
     # more: a residual in the pitch rate of a bump crossing is not diluted by clean accelerometer channels
     before, after = max(_pooled_noise_ratio(f), _primary_noise_ratio(f), key=lambda ba: ba[1])
-    phys = [c.name for c in f.result_.structure.cands if c.kind == PHYSICS]
+    phys = [n for n in f.result_.structure.names
+            if n == force_shape.TERM or (n in BY_NAME and BY_NAME[n].kind == PHYSICS)]
     significant = bool(f.windows_)
     excess_before = max(before ** 2 - 1.0, 0.0)
     excess_after = max(after ** 2 - 1.0, 0.0)
