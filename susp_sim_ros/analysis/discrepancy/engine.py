@@ -88,6 +88,16 @@ class Structure:
         return (idx, np.array([ps[j].neutral for j in idx], float),
                 np.array([ps[j].prior_sd for j in idx], float))
 
+    def at_neutral(self, x: np.ndarray, name: str) -> np.ndarray:
+        """A copy of ``x`` with the part of ``name`` at its neutral values (the calibration: the vehicle
+        file's); ``x`` itself when the structure has no ``name``."""
+        if name not in self.names:
+            return x
+        k = self.names.index(name)
+        out = np.array(x, float, copy=True)
+        out[self.offsets[k]:self.offsets[k + 1]] = self.cands[k].neutral()
+        return out
+
     def embed(self, other: "Structure", x_other: np.ndarray) -> np.ndarray:
         """This structure's vector with values taken from ``x_other`` where ``other`` has the term."""
         x = self.neutral()

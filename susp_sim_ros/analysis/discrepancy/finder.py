@@ -222,7 +222,7 @@ class DiscrepancyFinder:
         testable, skipped, in_base = self._testable(cases, self.base_variant_)
         self.refused_: list[tuple] = []  # (fit before, option, its fit, checks) of terms refused after the criterion
         self.force_shape_: list[dict] = []  # what the shape regression saw at each forward step (force_shape)
-        self.learned_: dict[str, dict] = {}  # the learned term's dependences and description
+        self.learned_selection_: force_shape.Selection | None = None  # of the last learned trial offered
         if force_shape.TERM in self.candidates and force_shape.learned_in(self.base_variant_):
             in_base.append(force_shape.TERM)   # a variant the finder wrote: its learned force is the base model's
         self.learnable_ = force_shape.TERM in self.candidates and force_shape.TERM not in in_base
@@ -267,7 +267,9 @@ class DiscrepancyFinder:
             if not ok:
                 break
             for name in best.add:
-                accepted.append({"name": name, "step": step, **self.learned_.get(name, {}),
+                sel = self.learned_selection_ if name == force_shape.TERM else None
+                learned_words = {"dependences": sel.dependences, "description": sel.description()} if sel else {}
+                accepted.append({"name": name, "step": step, **learned_words,
                                  "delta_bic": cur.bic - best_fit.bic,
                                  "explained_fraction_of_excess": gain / excess,
                                  "explained_fraction_of_base_excess":
@@ -597,11 +599,9 @@ class DiscrepancyFinder:
         fitted on every drive: an extra trial of the forward step, tested like every listed candidate
         (:meth:`_passes`) and competing with them on the criterion. None when no dependence is stable.
         Records what the regression saw per step in ``force_shape_``."""
-        st, x = cur.structure, cur.x.copy()
-        if CALIBRATION in st.names:  # proposed against the file's values; the joint fit then weighs both
-            k = st.names.index(CALIBRATION)
-            x[st.offsets[k]:st.offsets[k + 1]] = st.cands[k].neutral()
-        sel = force_shape.select(force_shape.design_for(self, st, x, cur.idx))
+        # proposed against the file's values; the joint fit then weighs calibration and learned force
+        st = cur.structure
+        sel = force_shape.select(force_shape.design_for(self, st, st.at_neutral(cur.x, CALIBRATION), cur.idx))
         if sel is None:
             return None
         self.force_shape_.append({
@@ -619,7 +619,6 @@ class DiscrepancyFinder:
         k = len(sel.coef)
         x0[a:a + k] = np.clip(sel.coef, lo[a:a + k], hi[a:a + k])
         fit = fit_structure(ev, st, x0, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
-        self.learned_[cand.name] = {"dependences": sel.dependences, "description": sel.description()}
         self.learned_selection_ = sel
         return Option((cand.name,), math.nan, math.nan, np.zeros(0)), fit
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -139,7 +139,6 @@ class Selection:
     coef: np.ndarray
     share: np.ndarray
     resamples: int
-    notes: list[str] = field(default_factory=list)
 
     @property
     def dependences(self) -> list[str]:

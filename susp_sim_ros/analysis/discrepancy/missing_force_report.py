@@ -110,26 +110,15 @@ def _residual(f, fit, r: int, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     return c.t_raw_s, resid, sd
 
 
-def _base_x(st, x: np.ndarray) -> np.ndarray | None:
-    """``x`` with the calibration's values back at the vehicle file's (its neutral); None without one."""
-    if CALIBRATION not in st.names:
-        return None
-    k = st.names.index(CALIBRATION)
-    xb = np.array(x, float, copy=True)
-    xb[st.offsets[k]:st.offsets[k + 1]] = st.neutral()[st.offsets[k]:st.offsets[k + 1]]
-    return xb
-
-
 def _calibration_part(f, fit, r: int, Y: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     """Along drive ``r``'s calibrated run ``Y``: the per-corner force (n_steps, 4) [N] the calibration
     supplied, the re-evaluation's check [N] (:func:`~.missing_force.calibration_force`) and the body-level
     part (n_steps, 3 channels; :func:`~.missing_force.body_force` of the calibrated row's mass and inertias
     against the file's, with the run's body accelerations)."""
     ev, st, x = f.evaluator_, fit.structure, fit.x
-    xb = _base_x(st, x)
-    if xb is None:
+    if CALIBRATION not in st.names:
         return np.zeros((len(Y), 4)), 0.0, np.zeros((len(Y), len(mf.CHANNELS)))
-    P_cal, P_base = ev.rows(st, x, [r])[0], ev.rows(st, xb, [r])[0]
+    P_cal, P_base = ev.rows(st, x, [r])[0], ev.rows(st, st.at_neutral(x, CALIBRATION), [r])[0]
     traj = {k: _corner(Y, k) for k in mf.TRAJECTORY}
     own = np.sum([_corner(Y, n) for n in ("F_SPRING", "F_DAMPER", "F_FRICTION", "F_ARB")], axis=0)
     cf = mf.calibration_force(ev.model.kernel, P_cal, P_base, traj, own)
