@@ -89,7 +89,8 @@ _W_V, _W_AX, _W_DELTA, _W_ZDD, _W_AY, _W_OK = 36, 37, 38, 39, 40, 41
 _W_CMD = 42  # 4: the valve command of the step per corner, limited to [0, 1]
 # accelerations of the step (:func:`body_accelerations`): roll, pitch, lateral velocity, yaw, then per wheel
 _W_PHIDD, _W_THDD, _W_VYD, _W_RD, _W_ZWDD = 46, 47, 48, 49, 50
-N_SCRATCH = 54
+_W_FT, _W_DX = 54, 58  # 4 each: the physics terms' force and the deflection increment of the step
+N_SCRATCH = 62
 
 # reciprocals of constant parameters, computed once per run (:func:`derive`): the step then
 # multiplies instead of dividing, and a parameter changed between runs is always seen
@@ -153,6 +154,22 @@ def terms_force(p, s, i, c, mask):
 
 @njit(cache=True)
 def terms_update(p, s, i, c, dx, mask):
+    pass
+
+
+@njit(cache=True)
+def active_terms(P, nl):
+    return 0
+
+
+@njit(cache=True)
+def terms_force_lanes(P, S, C, W, r, i, nl, act):
+    for l in range(nl):
+        W[r, l] = 0.0
+
+
+@njit(cache=True)
+def terms_update_lanes(P, S, C, W, r, i, nl, act):
     pass
 # @@END TERMS@@
 
@@ -328,21 +345,24 @@ def corner_kinematics(P, DV, S, W, nl):
 
 
 @njit(cache=True, inline="always")
-def suspension_forces(P, DV, S, C, W, Y, nl, out):
+def suspension_forces(P, DV, S, C, W, Y, nl, out, act):
     """Force of each suspension on the body [N], positive up: wheel-rate spring and stops, hydraulic
     damper (passive curve by oil level, or the semi-active family at the lagged valve setting, which
     this stage advances: ``S[_VALVE]``), the physics terms (the paper's friction elements with their
     scalings, added terms; context filled by :func:`fill_context`) and the anti-roll bar. Writes
-    ``_W_FS``, the corner context ``C`` and, when ``out``, the force outputs of ``Y``."""
+    ``_W_FS``, the corner context ``C`` and, when ``out``, the force outputs of ``Y``. ``act``: the
+    terms the block runs (:func:`active_terms`), each in its own loop over the lanes."""
     for i in range(4):
         j = i + 1 if i % 2 == 0 else i - 1
         for l in range(nl):
+            fill_context(P[:, l], DV[:, l], i, C[:, :, l], W[_W_D + i, l], W[_W_DD + i, l], W[_W_FX + i, l],
+                         S[_FYT + i, l], W[_W_FZ + i, l], W[_W_V, l])
+        terms_force_lanes(P, S, C, W, _W_FT + i, i, nl, act)
+        for l in range(nl):
             p = P[:, l]
             dv = DV[:, l]
-            c = C[:, :, l]
             d = W[_W_D + i, l]
             dd = W[_W_DD + i, l]
-            fill_context(p, dv, i, c, d, dd, W[_W_FX + i, l], S[_FYT + i, l], W[_W_FZ + i, l], W[_W_V, l])
             f_spring = spring_force(p, dv, i, d)
             if SEMI_ACTIVE_CODE and p[P_SEMI_ACTIVE] > 0.5:
                 # first-order valve lag, exact over the step; the force uses the setting at the step's end
@@ -351,7 +371,7 @@ def suspension_forces(P, DV, S, C, W, Y, nl, out):
                 f_damper = semi_active_force(p, dv, i, dd, grid_cell(p, dd), valve)
             else:
                 f_damper = hydraulic_force(p, dv, i, dd, grid_cell(p, dd))
-            f_terms = terms_force(p, S[:, l], i, c, MASK_ALL)
+            f_terms = W[_W_FT + i, l]
             f_arb = P[_K_ARB + i, l] * (d - W[_W_D + j, l])
             W[_W_FS + i, l] = f_spring + f_damper + f_terms + f_arb
             if out:
@@ -472,12 +492,13 @@ def _deflection(P, S, i, l):
 
 
 @njit(cache=True, inline="always")
-def update_term_states(P, S, C, W, nl):
+def update_term_states(P, S, C, W, nl, act):
     """The physics terms' own states (e.g. Dahl elements) over the deflection increment of the step:
     from the deflection at its start (``_W_D``) to the one of the integrated state."""
     for i in range(4):
         for l in range(nl):
-            terms_update(P[:, l], S[:, l], i, C[:, :, l], _deflection(P, S, i, l) - W[_W_D + i, l], MASK_ALL)
+            W[_W_DX + i, l] = _deflection(P, S, i, l) - W[_W_D + i, l]
+        terms_update_lanes(P, S, C, W, _W_DX + i, i, nl, act)
 
 
 @njit(cache=True, inline="always")
@@ -531,7 +552,7 @@ def imu_outputs(P, S, W, Y, nl):
 
 
 @njit(cache=True, inline="always")
-def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, out):
+def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, out, act):
     """Advance the ``nl`` vehicles of a block by one step ``dt`` [s] with the inputs of row ``k`` of
     ``U[urow[l]]`` (layout.U_INDEX); writes outputs ``Y`` when ``out`` (skipped on steps whose outputs
     nobody reads).
@@ -542,14 +563,15 @@ def step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, C, W, Y, nl, ou
     arithmetic for each vehicle, so the compiler runs it on several vehicles per SIMD instruction; a
     single vehicle is a block of one. Road: tracks ``RS``/``RZL``/``RZR`` row ``rrow[l]`` with ``RN``
     valid samples (``mode`` 0), or per-wheel road heights from the inputs (``mode`` 1). ``W[_W_OK, l]``
-    becomes 0 when lane ``l``'s state stopped being finite.
+    becomes 0 when lane ``l``'s state stopped being finite. ``act``: the physics terms the block runs
+    (:func:`active_terms`).
     """
     road_under_wheels(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mode, dt, W, nl)
     corner_kinematics(P, DV, S, W, nl)
-    suspension_forces(P, DV, S, C, W, Y, nl, out)
+    suspension_forces(P, DV, S, C, W, Y, nl, out, act)
     body_accelerations(P, DV, S, W, nl)
     integrate(P, DV, S, W, dt, nl)
-    update_term_states(P, S, C, W, nl)
+    update_term_states(P, S, C, W, nl, act)
     state_is_finite(S, W, nl)
     if out:
         corner_outputs(P, S, C, W, Y, nl)
@@ -599,6 +621,9 @@ def _run_block(Pv, Sv, b0, nl, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, d
         rrow[l] = road_row[b]
         mrow[l] = mode[b]
         done[b] = U.shape[1]
+    # the terms this block runs: a term at zero gain in every lane is skipped (its force is zero then);
+    # most runs of a diagnosis carry most candidate terms at zero
+    act = active_terms(P, nl)
     n_sel = sel.shape[0]
     row = 0
     count = 0
@@ -606,7 +631,7 @@ def _run_block(Pv, Sv, b0, nl, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, d
     for k in range(U.shape[1]):
         count += 1
         out = count == decim
-        step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mrow, dt, C, W, Y, nl, out)
+        step(P, DV, S, U, urow, k, RS, RZL, RZR, RN, rrow, mrow, dt, C, W, Y, nl, out, act)
         if out:
             count = 0
             if row < Yv.shape[1]:
@@ -697,6 +722,6 @@ def accelerations(P, S):
         for i in range(4):
             fill_context_const(P[:, v], i, C[:, :, v], 0.0)
     corner_kinematics(P, DV, S, W, nl)
-    suspension_forces(P, DV, S, C, W, Y, nl, False)
+    suspension_forces(P, DV, S, C, W, Y, nl, False, active_terms(P, nl))
     body_accelerations(P, DV, S, W, nl)
     return W[VERTICAL_ACCELERATION_ROWS, :].copy()

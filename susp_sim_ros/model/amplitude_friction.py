@@ -107,5 +107,5 @@ FRICTION_AMPLITUDE = register_term(PhysicsTerm(
             TermParam("stroke_weight", "1", "with memory > 0: the amplitude is this weight times the stroke "
                       "amplitude plus (1 - weight) times the remembered peak deflection (0: the peak only)",
                       0.0, 0.0, 1.0)),
-    n_states=7, force=friction_amplitude_force, update=friction_amplitude_update,
+    n_states=7, force=friction_amplitude_force, update=friction_amplitude_update, gains=("extra_level",),
     stored_energy=_amplitude_energy))

@@ -28,7 +28,7 @@ EXTRA_VISCOUS_DAMPING = register_term(PhysicsTerm(
     name="extra_viscous_damping", component="damper",
     meaning="additional linear damping c*v in parallel with the damper (e.g. bushings, residual oil)",
     params=(TermParam("c", "N s/m", "viscous coefficient", 0.0, -2000.0, 5000.0),),
-    n_states=0, force=viscous_force, update=no_update))
+    n_states=0, force=viscous_force, update=no_update, gains=("c",)))
 
 
 @njit(cache=True, inline="always")
@@ -42,4 +42,4 @@ DAMPER_GAS_PRELOAD = register_term(PhysicsTerm(
     params=(TermParam("f0", "N", "force change at static deflection (positive pushes the body up)",
                       0.0, -500.0, 500.0),
             TermParam("k", "N/m", "gas stiffness over deflection", 0.0, -20000.0, 20000.0)),
-    n_states=0, force=gas_force, update=no_update))
+    n_states=0, force=gas_force, update=no_update, gains=("f0", "k")))

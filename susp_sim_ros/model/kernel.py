@@ -58,6 +58,7 @@ def _terms_block(terms: tuple[PhysicsTerm, ...], layout: KernelLayout) -> str:
             py = fn.py_func
             lines.append(f"from {py.__module__} import {py.__name__} as _{kind}{k}")
     lines += ["", f"N_P = {layout.n_p}", f"N_S = {layout.n_s}"]
+    # one vehicle, terms selected by component (the rig)
     lines += ["", "", "@njit(cache=True, inline=\"always\")", "def terms_force(p, s, i, c, mask):", "    f = 0.0"]
     for k, t in enumerate(terms):
         po, so = layout.param_offsets[k], layout.state_offsets[k]
@@ -70,7 +71,43 @@ def _terms_block(terms: tuple[PhysicsTerm, ...], layout: KernelLayout) -> str:
         lines.append(f"        _u{k}(p, {po}, s, {so}, i, c, dx)")
     if not terms:
         lines.append("    pass")
+    lines += _lane_lines(terms, layout)
     return "\n".join(lines)
+
+
+def _lane_lines(terms: tuple[PhysicsTerm, ...], layout: KernelLayout) -> list[str]:
+    """The block's terms, each in its own loop over the lanes, behind a test of the block's active-term
+    mask: ``active_terms(P, nl)`` sets bit ``k`` when term ``k`` declares no gains
+    (:attr:`PhysicsTerm.gains`) or one of them is non-zero at some corner of some lane. A term at zero gain
+    in every lane of the block is skipped (its force is zero then; its states rest as unloaded). The test
+    sits outside the lane loops, so each loop still runs its vehicles on SIMD instructions. The forces are
+    summed in the terms' order, as :func:`terms_force` sums them."""
+    if len(terms) > 62:
+        raise ValueError(f"{len(terms)} physics terms: the kernel's active-term mask holds at most 62")
+    lines = ["", "", "@njit(cache=True, inline=\"always\")", "def active_terms(P, nl):", "    act = 0"]
+    for k, t in enumerate(terms):
+        if not t.gains:
+            lines.append(f"    act |= {1 << k}  # {t.name}: always")
+            continue
+        rows = [layout.param_offsets[k] + 4 * t.param_index(g) + i for g in t.gains for i in range(4)]
+        lines += [f"    g = 0.0  # {t.name}: {', '.join(t.gains)}", "    for l in range(nl):"]
+        lines += [f"        g += abs(P[{r}, l])" for r in rows]
+        lines += ["    if g != 0.0:  # NaN counts as acting", f"        act |= {1 << k}"]
+    lines += ["    return act", "", "", "@njit(cache=True, inline=\"always\")",
+              "def terms_force_lanes(P, S, C, W, r, i, nl, act):",
+              "    for l in range(nl):", "        W[r, l] = 0.0"]
+    for k, t in enumerate(terms):
+        po, so = layout.param_offsets[k], layout.state_offsets[k]
+        lines += [f"    if act & {1 << k}:  # {t.name}", "        for l in range(nl):",
+                  f"            W[r, l] += _f{k}(P[:, l], {po}, S[:, l], {so}, i, C[:, :, l])"]
+    lines += ["", "", "@njit(cache=True, inline=\"always\")", "def terms_update_lanes(P, S, C, W, r, i, nl, act):"]
+    for k, t in enumerate(terms):
+        po, so = layout.param_offsets[k], layout.state_offsets[k]
+        lines += [f"    if act & {1 << k}:  # {t.name}", "        for l in range(nl):",
+                  f"            _u{k}(P[:, l], {po}, S[:, l], {so}, i, C[:, :, l], W[r, l])"]
+    if not terms:
+        lines.append("    pass")
+    return lines
 
 
 def _dependency_digest(terms: tuple[PhysicsTerm, ...]) -> str:

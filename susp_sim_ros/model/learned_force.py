@@ -185,7 +185,8 @@ LEARNED_FORCE = register_term(PhysicsTerm(
                   1e-4, 1e-7, 0.01),
         TermParam("memory", "s", "time constant with which peak_deflection forgets the peak deflection",
                   1.0, 1e-3, 100.0)),
-    n_states=3, force=learned_force_force, update=learned_force_update))
+    n_states=3, force=learned_force_force, update=learned_force_update,
+    gains=tuple(f"c_{f}" for f in FEATURES)))
 
 
 def shape_defaults() -> dict:

@@ -76,6 +76,10 @@ class PhysicsTerm:
     force: Dispatcher[Callable[..., float]] = field(repr=False)
     update: Dispatcher[Callable[..., None]] = field(repr=False)
     stored_energy: Callable | None = field(default=None, repr=False)
+    #: parameters whose being zero at every corner makes the term's force zero whatever its states: the
+    #: kernel then skips the term (:func:`~.kernel.load_kernel`'s ``active_terms``; most runs of a
+    #: diagnosis carry candidate terms at zero). Empty: the term always runs.
+    gains: tuple[str, ...] = ()
 
     def __post_init__(self):
         if self.component not in ("axle", "damper"):
@@ -84,6 +88,8 @@ class PhysicsTerm:
         for fn in (self.force, self.update):
             if not hasattr(fn, "py_func"):
                 raise TypeError(f"term {self.name}: {fn!r} must be a numba @njit function")
+        for g in self.gains:
+            self.param_index(g)  # a gain must be one of the term's parameters
 
     def param_index(self, name: str) -> int:
         for j, p in enumerate(self.params):

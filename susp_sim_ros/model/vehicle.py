@@ -59,8 +59,23 @@ def hydraulic_curves(vp: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
     damper friction at that velocity is subtracted (model-spec 1; the paper does this). The result is
     zero for |v| <= the 1 mm/s reference speed and never changes sign against the velocity.
     """
-    return (hydraulic_from_measured(vp, vp.damper_velocity, vp.damper_measured_intact, vp.damper_friction_intact),
+    def flat(v):
+        return tuple(flat(x) for x in v) if isinstance(v, (tuple, list, np.ndarray)) else float(v)
+    key = flat((vp.damper_velocity, vp.damper_measured_intact, vp.damper_measured_empty, vp.damper_friction_intact,
+                vp.damper_friction_empty, vp.sv_reference, vp.sv_plateau, vp.sv_speed))
+    h = _HYDRAULIC.get(key)
+    if h is None:
+        if len(_HYDRAULIC) > 256:
+            _HYDRAULIC.clear()
+        h = _HYDRAULIC[key] = (
+            hydraulic_from_measured(vp, vp.damper_velocity, vp.damper_measured_intact, vp.damper_friction_intact),
             hydraulic_from_measured(vp, vp.damper_velocity, vp.damper_measured_empty, vp.damper_friction_empty))
+    return h[0].copy(), h[1].copy()
+
+
+#: :func:`hydraulic_curves` by the vehicle values they are built from: a calibration builds the parameter
+#: vector once per value tried, and most values tried leave the damper untouched
+_HYDRAULIC: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
 
 def hydraulic_from_measured(vp: VehicleParams, velocity, measured, levels,

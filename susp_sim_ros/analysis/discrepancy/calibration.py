@@ -218,24 +218,20 @@ def calibration_candidate(model: Model, params: Sequence[CalParam]) -> Candidate
     parameter row from the vehicle at the calibrated values (the model's own path from a vehicle to the
     kernel's parameter vector), keeping the row's oil levels and the extended model's terms."""
     vp0 = model.vehicle
-    cache: dict[bytes, Model] = {}
+    cache: dict[bytes, np.ndarray] = {}
+    k = P_INDEX["OIL"]
 
     def apply(P, P0, x, _model):
         key = np.asarray(x, float).tobytes()
-        m = cache.get(key)
-        if m is None:
+        row = cache.get(key)
+        if row is None:
             if len(cache) > 64:
                 cache.clear()
             m = copy.copy(model)  # the same terms and kernel; only the vehicle differs
             m.vehicle = vehicle_at(vp0, params, x)
-            cache[key] = m
-        k = P_INDEX["OIL"]
-        rows = {}
-        for r in range(P.shape[0]):
-            oil = tuple(P0[r, k:k + 4])
-            if oil not in rows:
-                rows[oil] = m.params(oil)
-            P[r] = rows[oil]
+            row = cache[key] = m.params()
+        P[:] = row  # the oil levels enter the parameter vector in their own slots only (Model.params)
+        P[:, k:k + 4] = P0[:, k:k + 4]
         P[:] = neutral_base(P)
 
     cps = tuple(CandParam(p.name, p.unit, p.prior, *p.bounds, STEP_OF_SD * p.sd, p.reason, prior_sd=p.sd)

@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..render import FigureRenderer
 from ...model.params import AXLE_CORNERS, CORNER_NAMES
 from . import missing_force as mf
 from .data import SIGNAL_OF_OUTPUT, SIGNALS, has_road_input
@@ -283,9 +284,9 @@ def plot(d: DriveForce, path: Path, title: str) -> None:
     plt.close(fig)
 
 
-def write(f, out: Path, name: str, *, plots: bool = True) -> dict:
-    """Estimate, write ``missing_force_<drive>.csv`` (and ``<name>_missing_force_<drive>.png``) into
-    ``out``; returns the interface's ``missing_force`` object."""
+def write(f, out: Path, name: str, *, plots: bool = True, renderer: FigureRenderer | None = None) -> dict:
+    """Estimate, write ``missing_force_<drive>.csv`` (and ``<name>_missing_force_<drive>.png``, drawn by
+    ``renderer`` when given) into ``out``; returns the interface's ``missing_force`` object."""
     cfg = mf.settings()
     forces = estimate_drives(f, f.calibrated_fit_, cfg, calibration=True)
     files = []
@@ -295,8 +296,12 @@ def write(f, out: Path, name: str, *, plots: bool = True) -> dict:
         files.append(str(p))
         if plots:
             p = out / f"{name}_missing_force_{drive}.png"
-            plot(d, p, f"{drive}: the force the calibrated model lacks (estimated from the recording)\n"
-                       "and the calibration's corner and body parts (their sum is what the base model lacks)")
+            title = (f"{drive}: the force the calibrated model lacks (estimated from the recording)\n"
+                     "and the calibration's corner and body parts (their sum is what the base model lacks)")
+            if renderer is None:
+                plot(d, p, title)
+            else:
+                renderer.submit(str(p), plot, d, p, title)
             files.append(str(p))
     return {"per_drive": summary(forces, cfg), "files": files}
 

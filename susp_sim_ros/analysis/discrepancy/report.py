@@ -11,6 +11,7 @@ import yaml
 
 from ...io.drive import write_drive
 from ...model.layout import DAMPER_GRID
+from ..render import FigureRenderer
 from ...model.params import PARAMETER_TABLE, load_settings, load_vehicle
 from ...model.vehicle import hydraulic_curves, hydraulic_from_measured, velocity_scaling
 from .calibration import outside_statement
@@ -429,13 +430,15 @@ def write_outputs(f, out_dir, name: str, *, plots: bool = True) -> dict:
         pv.write_text(head + f"# Use it together with the variant {p.name} (vehicle:={pv.resolve()}).\n"
                       + yaml.safe_dump(veh, sort_keys=False))
         paths["vehicle"] = str(pv)
-    if plots:
-        paths["plots"] = plot_overlays(f, out, name)
-    roads = write_estimated_roads(f, out, name)
-    if roads:
-        paths["estimated_roads"] = roads
-    f.missing_force_ = missing_force_report.write(f, out, name, plots=plots)
-    paths["missing_force"] = f.missing_force_["files"]
+    with FigureRenderer() as renderer:  # the figures drawn beside the missing-force estimate
+        if plots:
+            paths["plots"] = plot_overlays(f, out, name, renderer)
+            renderer.flush()
+        roads = write_estimated_roads(f, out, name)
+        if roads:
+            paths["estimated_roads"] = roads
+        f.missing_force_ = missing_force_report.write(f, out, name, plots=plots, renderer=renderer)
+        paths["missing_force"] = f.missing_force_["files"]
     rep = f.report()
     detail = {"result": rep, "path": f.path_, "noise": f.noise_, "heldout": f.heldout_,
               "ranking": ranking_table(f), "tested": f.testable_, "in_base_model": f.in_base_,
@@ -476,48 +479,59 @@ def ranking_table(f) -> list[dict]:
              "accepted": any(a["name"] == o.add[0] for a in f.accepted_)} for o in f.ranking_]
 
 
-def plot_overlays(f, out: Path, name: str) -> list[str]:
+def plot_overlays(f, out: Path, name: str, renderer: FigureRenderer | None = None) -> list[str]:
     """One PNG per drive: one row per compared signal, measured against the base and the final
-    (calibrated, extended) model on the left, their residuals with the signal's noise band on the right."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    (calibrated, extended) model on the left, their residuals with the signal's noise band on the right.
+    Drawn by ``renderer`` (beside the caller's further work) when given."""
     ev = f.evaluator_
     st, x = f.result_.structure, f.result_.x
     after = ev.case_residuals(st, x)
     paths = []
     for r, c in enumerate(f.cases_):
-        e_after, e_before = after[r], f.base_residuals_[r]
-        t = c.t_grid_s
-        n = len(c.signals)
-        fig, ax = plt.subplots(n, 2, figsize=(12, 2.3 * n + 0.8), sharex=True, squeeze=False)
-        for j, sig in enumerate(c.signals):
-            unit = SIGNAL_UNIT[SIGNALS.index(sig)]
-            a0, a1 = ax[j]
-            a0.plot(t, c.y_meas[:, j], color="0.2", lw=0.7, label="measured")
-            a0.plot(t, c.y_meas[:, j] + e_before[:, j], color="tab:red", lw=1, label="base model")
-            a0.plot(t, c.y_meas[:, j] + e_after[:, j], color="tab:blue", lw=1, label="calibrated + found terms")
-            a1.plot(t, e_before[:, j], color="tab:red", lw=0.7, label="base - measured")
-            a1.plot(t, e_after[:, j], color="tab:blue", lw=0.7, label="final - measured")
-            sd = 1.0 / ev.weights[r][0, j]
-            a1.axhspan(-sd, sd, color="0.85", label="noise (+-1 sigma)")
-            for w in f.windows_:
-                if w["drive"] == c.name and w["signal"] == sig:
-                    a1.axvspan(w["start_s"], w["end_s"], color="tab:orange", alpha=0.15)
-            a0.set_ylabel(f"{sig} [{unit}]")
-            a1.set_ylabel(f"residual [{unit}]")
-            if j == 0:
-                a0.legend(fontsize=7, loc="upper right")
-                a1.legend(fontsize=7, loc="upper right")
-        ax[-1][0].set_xlabel("time since first input [s]")
-        ax[-1][1].set_xlabel("time since first input [s]")
-        fig.suptitle(f"{c.name} ({c.window.name} window)")
-        fig.tight_layout()
         p = out / f"{name}_{c.name}.png"
-        fig.savefig(p, dpi=80)
-        plt.close(fig)
+        windows = [(w["signal"], w["start_s"], w["end_s"]) for w in f.windows_ if w["drive"] == c.name]
+        args = (p, f"{c.name} ({c.window.name} window)", c.t_grid_s, list(c.signals), c.y_meas,
+                f.base_residuals_[r], after[r], 1.0 / ev.weights[r][0], windows)
+        if renderer is None:
+            _draw_overlay(*args)
+        else:
+            renderer.submit(str(p), _draw_overlay, *args)
         paths.append(str(p))
     return paths
+
+
+def _draw_overlay(path: Path, title: str, t: np.ndarray, signals: list[str], y_meas: np.ndarray,
+                  e_before: np.ndarray, e_after: np.ndarray, sd: np.ndarray, windows: list[tuple]) -> None:
+    """The figure of :func:`plot_overlays` for one drive (``sd``: each signal's noise sd, native units;
+    ``windows``: (signal, start [s], end [s]) of the windows above noise)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    n = len(signals)
+    fig, ax = plt.subplots(n, 2, figsize=(12, 2.3 * n + 0.8), sharex=True, squeeze=False)
+    for j, sig in enumerate(signals):
+        unit = SIGNAL_UNIT[SIGNALS.index(sig)]
+        a0, a1 = ax[j]
+        a0.plot(t, y_meas[:, j], color="0.2", lw=0.7, label="measured")
+        a0.plot(t, y_meas[:, j] + e_before[:, j], color="tab:red", lw=1, label="base model")
+        a0.plot(t, y_meas[:, j] + e_after[:, j], color="tab:blue", lw=1, label="calibrated + found terms")
+        a1.plot(t, e_before[:, j], color="tab:red", lw=0.7, label="base - measured")
+        a1.plot(t, e_after[:, j], color="tab:blue", lw=0.7, label="final - measured")
+        a1.axhspan(-sd[j], sd[j], color="0.85", label="noise (+-1 sigma)")
+        for w_sig, start, end in windows:
+            if w_sig == sig:
+                a1.axvspan(start, end, color="tab:orange", alpha=0.15)
+        a0.set_ylabel(f"{sig} [{unit}]")
+        a1.set_ylabel(f"residual [{unit}]")
+        if j == 0:
+            a0.legend(fontsize=7, loc="upper right")
+            a1.legend(fontsize=7, loc="upper right")
+    ax[-1][0].set_xlabel("time since first input [s]")
+    ax[-1][1].set_xlabel("time since first input [s]")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
 
 
 def _md_header(f, rep: dict, paths: dict, name: str) -> list[str]:
