@@ -36,7 +36,11 @@ damper (a wheel's own figures where the drive tells left from right, else its ax
 mean truth), per speed band, per bump band and overall: share with |error| <= 0.10,
 mean (signed) error, 95 % interval coverage, wrong states (a called state ``ok``/``degraded``/``empty``
 whose band misses the truth by more than 0.10; ``unknown`` is never wrong), the peak damper velocity and
-the model-form sd the inspection used.
+the model-form sd the inspection used. The left-against-right comparison per axle (issue 27 item 1,
+``left_right``): ``false_asymmetry_rate`` (axles whose two dampers hold the same oil level, flagged
+``asymmetric``) and ``asymmetry_detection_rate`` (axles whose sides differ by >= 0.4, flagged; an axle the
+drive does not tell left from right counts as missed), with counts, the difference's error and coverage
+under ``left_right``.
 
     PYTHONPATH=. .venv/bin/python benchmarks/bench_inspect.py --family development [--cars 3] [--json]
         [--effects all] [--inspection-config FILE]
@@ -208,6 +212,47 @@ def family_rows(res, cr: dict) -> list[dict]:
     return rows
 
 
+DETECT_DIFFERENCE = 0.4   # the issue's left-right difference an axle comparison must detect [oil fraction]
+
+
+def family_left_right(res, cr: dict) -> list[dict]:
+    """One row per axle of the crossing ``cr``: the true left-minus-right oil level against the inspection's
+    left-right comparison (``left_right``: difference, interval, ``asymmetric``)."""
+    d = res.to_json()
+    by_axle = {e["axle"]: e for e in d.get("left_right", [])}
+    rows = []
+    for axle, (l, r) in (("front", (0, 1)), ("rear", (2, 3))):
+        e = by_axle.get(axle, {})
+        rows.append({"form": cr["form"], "seed": cr["seed"], "axle": axle,
+                     "truth_difference": cr["oil"][l] - cr["oil"][r], "difference": e.get("difference"),
+                     "ci": e.get("ci95"), "asymmetric": bool(e.get("asymmetric", False)),
+                     "kind": d["axles"][axle]["identifiable"], "speed_kmh": cr["speed_kmh"],
+                     "height_m": cr["height_m"]})
+    return rows
+
+
+def left_right_scores(rows: list[dict]) -> dict:
+    """False asymmetry (axles whose two dampers hold the same oil level, flagged) and detection (axles whose
+    sides differ by >= :data:`DETECT_DIFFERENCE`, flagged; an axle without a comparison counts as missed)."""
+    same = [r for r in rows if r["truth_difference"] == 0.0]
+    differ = [r for r in rows if abs(r["truth_difference"]) >= DETECT_DIFFERENCE - 1e-12]
+    dd = [r for r in rows if r["difference"] is not None]
+    err = np.array([r["difference"] - r["truth_difference"] for r in dd]) if dd else np.zeros(0)
+    cover = [r["ci"][0] - 1e-9 <= r["truth_difference"] <= r["ci"][1] + 1e-9 for r in dd]
+    return {"same_axles": len(same), "false_asymmetry": sum(r["asymmetric"] for r in same),
+            "differing_axles": len(differ), "detected": sum(r["asymmetric"] for r in differ),
+            "without_comparison": sum(r["difference"] is None for r in rows),
+            "difference_mean_abs_error": float(np.abs(err).mean()) if err.size else None,
+            "difference_max_abs_error": float(np.abs(err).max()) if err.size else None,
+            "difference_coverage_95": float(np.mean(cover)) if cover else None,
+            "flagged_same": [(r["form"], r["seed"], r["axle"], round(r["difference"], 3)) for r in same
+                             if r["asymmetric"]],
+            "missed_differing": [(r["form"], r["seed"], r["axle"], round(r["truth_difference"], 3),
+                                  None if r["difference"] is None else round(r["difference"], 3),
+                                  None if r["ci"] is None else [round(x, 3) for x in r["ci"]])
+                                 for r in differ if not r["asymmetric"]]}
+
+
 def family_scores(rows: list[dict], states_cfg: dict) -> dict:
     """The issue's scores over ``rows``: n, share |error| <= 0.10, mean and max |error|, mean error,
     95 % coverage, wrong states."""
@@ -225,7 +270,7 @@ def family_scores(rows: list[dict], states_cfg: dict) -> dict:
 def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | None = None) -> dict:
     """Inspect the split's crossings; scores overall, per speed band, per bump band, per form."""
     cfg = load_config() if cfg is None else cfg
-    rows, times = [], []
+    rows, times, lr_rows = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         for cr in family_crossings(split, cars, effects):
             drive = fam.bump_crossing(fam.FORMS[cr["form"]], cr["seed"], cr["oil"], cr["speed_kmh"],
@@ -238,6 +283,7 @@ def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | No
             times.append(time.perf_counter() - t0)
             new = family_rows(res, cr)
             rows += new
+            lr_rows += family_left_right(res, cr)
             print(cr["form"], cr["seed"], f"{cr['speed_kmh']:.1f} km/h {cr['height_m'] * 100:.1f} cm",
                   [(r["damper"], r["truth"], round(r["est"], 2), r["state"]) for r in new],
                   f"{times[-1]:.1f} s", file=sys.stderr, flush=True)
@@ -249,7 +295,14 @@ def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | No
     by_form = {f: family_scores([r for r in rows if r["form"] == f], st)
                for f in dict.fromkeys(r["form"] for r in rows)}
     intact = [r for r in rows if r["truth"] == 1.0]
-    return {"split": split, "forms": list(by_form), "effects": effects, "cars_per_form": cars,
+    lr = left_right_scores(lr_rows)
+    return {"false_asymmetry_rate": lr["false_asymmetry"] / lr["same_axles"] if lr["same_axles"] else None,
+            "asymmetry_detection_rate": lr["detected"] / lr["differing_axles"] if lr["differing_axles"] else None,
+            "left_right": dict(lr, detect_difference=DETECT_DIFFERENCE,
+                               asymmetric_min_difference=cfg.get("left_right", {}).get("asymmetric_min_difference")),
+            "left_right_rows": [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()}
+                                for r in lr_rows],
+            "split": split, "forms": list(by_form), "effects": effects, "cars_per_form": cars,
             "crossings": len(times), "overall": family_scores(rows, st),
             "intact_mean_error": float(np.mean([r["est"] - 1.0 for r in intact])) if intact else None,
             "by_speed_band": by_speed, "by_bump_band": by_bump, "by_form": by_form,
@@ -271,7 +324,7 @@ if __name__ == "__main__":
                           cfg=load_config(cfg_path) if cfg_path else None)
         out["inspection_config"] = cfg_path or "config/inspection.yaml"
         if "--json" not in sys.argv:
-            out = {k: v for k, v in out.items() if k != "rows"}
+            out = {k: v for k, v in out.items() if k not in ("rows", "left_right_rows")}
         print(json.dumps(out, indent=1))
     else:
         args = [a for a in sys.argv[1:] if not a.startswith("--")]

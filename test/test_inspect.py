@@ -278,3 +278,97 @@ def test_a_fast_high_crossing_of_a_development_form_reads_intact(tmp_path):
     old["estimator"].update(signal_model_form={}, curve_beyond_prior_sd=0.0)
     before = inspect_drives([p], cfg=old)
     assert max(e["oil_level"] for e in before.wheels_.values()) < 0.85
+
+
+@pytest.fixture(scope="module")
+def left_right_paths(tmp_path_factory):
+    """Independent-simulator crossings (not our model) of one perturbed car at 9 km/h over a 6 cm bump:
+    intact, and with the rear-left damper half filled (the others intact)."""
+    d = tmp_path_factory.mktemp("left_right")
+    car = ind.TruthCar().perturbed(11, 0.0, 0.08)
+    sensor = ind.TruthSensor(gyro_noise_deg_s=(0.1, 0.1, 0.1))
+    paths = {}
+    for name, oil in (("intact", (1.0, 1.0, 1.0, 1.0)), ("rl_half", (1.0, 1.0, 0.5, 1.0))):
+        drive = ind.make_drive(car, ind.TruthFriction().perturbed(12), None,
+                               ind.TruthManeuver.bump(speed_kmh=9.0, height_m=0.06, wheelbase_m=car.wheelbase),
+                               sensor, oil, seed=13)
+        paths[name] = d / f"{name}.mcap"
+        ind.write_drive(paths[name], drive, overwrite=True)
+    return paths
+
+
+def _lr(res) -> dict:
+    d = res.to_json()["left_right"]
+    assert [e["axle"] for e in d] == ["front", "rear"]
+    for e in d:
+        assert set(e) >= {"axle", "difference", "ci95", "asymmetric", "reason"}
+    return {e["axle"]: e for e in d}
+
+
+def test_one_half_filled_rear_damper_flags_the_rear_axle_asymmetric(left_right_paths, tmp_path):
+    """Issue 27 item 1: left against right per axle. Rear-left at half oil, the others intact: the rear's
+    left-minus-right difference is about -0.5 with an interval that excludes zero, flagged asymmetric and
+    said so in words; the front is not flagged. The report has the section, one line per axle."""
+    from susp_sim_ros.analysis.inspection.report import write_inspection_report
+    res = inspect_drives([left_right_paths["rl_half"]])
+    lr = _lr(res)
+    rear, front = lr["rear"], lr["front"]
+    assert rear["difference"] == pytest.approx(-0.5, abs=0.15)
+    assert rear["ci95"][1] < 0.0 and rear["asymmetric"]
+    assert abs(rear["difference"]) > CFG["left_right"]["asymmetric_min_difference"]
+    assert rear["reason"].startswith("rear: left (RL) ") and "lower than right (RR)" in rear["reason"]
+    assert "lost oil" in rear["reason"]
+    assert not front["asymmetric"] and front["ci95"][0] <= 0.0 <= front["ci95"][1]
+    # the difference is the wheels' own figures, its sd the joint one (tighter than either wheel's interval
+    # would suggest when their errors are correlated, never looser than the fit's own sds combined)
+    w = res.wheels_
+    assert rear["difference"] == pytest.approx(w["RL"]["oil_level"] - w["RR"]["oil_level"])
+    assert rear["sd"] <= w["RL"]["sd_fit"] + w["RR"]["sd_fit"] + 1e-12
+    md = write_inspection_report(res, tmp_path / "out", CFG, [left_right_paths["rl_half"]])
+    text = Path(md["report"]).read_text()
+    section = text.split("## Left against right", 1)[1].split("\n## ", 1)[0]
+    lines = [s for s in section.splitlines() if s.startswith("- ")]
+    assert len(lines) == 2 and "**asymmetric**" in lines[1] and "rear:" in lines[1] and "front:" in lines[0]
+    assert json.loads(Path(md["json"]).read_text())["left_right"][1]["asymmetric"] is True
+
+
+def test_an_intact_car_is_not_flagged_asymmetric(left_right_paths):
+    res = inspect_drives([left_right_paths["intact"]])
+    for axle, e in _lr(res).items():
+        assert not e["asymmetric"], axle
+        assert e["ci95"][0] <= 0.0 <= e["ci95"][1] and "alike" in e["reason"], axle
+
+
+def test_both_rear_dampers_empty_are_alike_not_asymmetric():
+    """Both rear dampers oil-empty (the bundled drive): each reads empty, and left against right they are
+    alike (the axle as a whole has lost its oil), so the rear is not flagged asymmetric."""
+    res = inspect_drives([BAGS / "bump_crossing_rear_empty.mcap"])
+    for w in ("RL", "RR"):
+        assert res.wheels_[w]["state"] == "empty" and res.wheels_[w]["oil_level"] < 0.15, w
+    lr = _lr(res)
+    assert not lr["rear"]["asymmetric"] and not lr["front"]["asymmetric"]
+    assert lr["rear"]["ci95"][0] <= 0.0 <= lr["rear"]["ci95"][1]
+    assert "alike" in lr["rear"]["reason"] and "lost" in lr["rear"]["reason"]
+
+
+def test_left_right_rule_without_a_fit():
+    """The comparison's rule on given figures: flagged only when the interval excludes zero AND the
+    difference exceeds the configured limit; an axle the drives do not tell apart has no difference; a
+    one-sided excitation adds the two sides' model-form sds as independent."""
+    import numpy as np
+    from susp_sim_ros.analysis.inspection.estimate import left_right
+    thr = CFG["left_right"]["asymmetric_min_difference"]
+    ident = {"front": {"identifiable": "wheel"}, "rear": {"identifiable": "wheel"}}
+    by_group = {w: (0.0, 0.0, 1.0, j) for j, w in enumerate(("FL", "FR", "RL", "RR"))}
+    cov = np.diag([0.01 ** 2] * 4)
+    sd_m = {"front": 0.05, "rear": 0.05}
+    x = np.array([1.0, 1.0 - 0.5 * thr, 1.0 - 2.0 * thr, 1.0])   # front: apart but small; rear: large
+    lr = {e["axle"]: e for e in left_right(ident, by_group, x, cov, sd_m, False, {}, CFG["left_right"])}
+    assert lr["front"]["ci95"][0] > 0.0 and not lr["front"]["asymmetric"]
+    assert lr["rear"]["asymmetric"] and lr["rear"]["sd"] == pytest.approx(0.01 * np.sqrt(2))
+    one_sided = left_right(ident, by_group, x, cov, sd_m, True, {}, CFG["left_right"])
+    assert one_sided[1]["sd"] == pytest.approx(np.sqrt(2 * 0.01 ** 2 + 2 * 0.05 ** 2))
+    none = left_right({"front": {"identifiable": "axle"}, "rear": {"identifiable": "no"}}, {}, x, cov, sd_m,
+                      False, {}, CFG["left_right"])
+    assert all(e["difference"] is None and e["ci95"] is None and not e["asymmetric"] for e in none)
+    assert "tell its left from its right" in none[0]["reason"] and "do not excite" in none[1]["reason"]

@@ -41,6 +41,8 @@ def run(args) -> dict:
                          f"{e['state']:8s} ({e['identifiable']})")
     for a, e in res.identifiability_.items():
         lines.append(f"  {a}: {e['why']}")
+    for e in res.left_right_:  # the axle's two dampers against each other
+        lines.append(f"  left against right: {'ASYMMETRIC ' if e['asymmetric'] else ''}{e['reason']}")
     lines += [f"  note: {n}" for n in res.notes_]
     if args.out:
         lines.append(f"  report: {out['written']['report']}")

@@ -27,6 +27,12 @@ that grows with its peak damper velocity (:func:`model_form_sd`), learned on the
 
 States (``config/inspection.yaml`` ``states``): ``ok`` from ``ok_from``, ``empty`` below
 ``empty_below``, ``degraded`` between; a 95 % interval that reaches into two of them is ``unknown``.
+
+Left against right (issue 27 item 1, :func:`left_right`): per axle whose sides the drives tell apart,
+the left-minus-right oil level with its 95 % interval from the fit's joint covariance of the two dampers
+(the per-axle model-form sd, common to both sides of a full-width crossing, cancels in it), flagged
+``asymmetric`` when the interval excludes zero and the difference exceeds ``left_right``
+``asymmetric_min_difference`` -- the workshop's comparison of an axle's two dampers.
 """
 from __future__ import annotations
 
@@ -171,13 +177,14 @@ class Inspection:
     vehicle_: str = ""
     notes_: list = field(default_factory=list)
     protocol_: dict = field(default_factory=dict)   # the crossings seen against the test protocol
+    left_right_: list = field(default_factory=list)  # per axle: left minus right oil level (left_right)
 
     def to_json(self) -> dict:
         """The interface object (interface.md, ``susp inspect``) plus details."""
         return {"wheels": self.wheels_, "axles": self.axles_, "elapsed_s": self.elapsed_s_,
                 "vehicle": self.vehicle_, "nuisance": self.nuisance_,
                 "identifiability": self.identifiability_, "noise": self.noise_, "notes": self.notes_,
-                "protocol": self.protocol_,
+                "protocol": self.protocol_, "left_right": self.left_right_,
                 "fit": {"success": self.fit_.success, "message": self.fit_.message, "nfev": self.fit_.nfev,
                         "rms_x_noise": math.sqrt(self.fit_.rss / max(self.fit_.n, 1))}}
 
@@ -490,6 +497,75 @@ def _wheel_and_axle_levels(ident: dict, by_group: dict, x: np.ndarray, cov: np.n
     return wheels, axles
 
 
+def left_right(ident: dict, by_group: dict, x: np.ndarray, cov: np.ndarray, sd_m: dict, tracks_differ: bool,
+               axles: dict, lr_cfg: dict) -> list[dict]:
+    """Per axle, the workshop's left-against-right comparison (the EUSAMA test's practice: an axle's
+    left-right difference is judged besides each wheel's value): ``{"axle", "difference", "ci95",
+    "sd", "asymmetric", "reason"}``, ``difference`` the left minus the right oil level [oil fraction].
+
+    The interval is ``difference +- 1.96 sd`` (clipped to [-1, 1]) with ``sd`` from the fit's joint
+    covariance of the two dampers (``var_l + var_r - 2 cov_lr``; Gauss-Newton posterior plus the
+    consider part, so whatever the nuisances, the curve-beyond factors and the oil-empty curve's slope
+    do to both sides alike cancels through their correlation).
+
+    How the model-form sd is treated: on a crossing that excites both tracks alike it is left out of
+    the difference. In the estimator it is one figure per axle (:func:`model_form_sd`, from the axle's
+    peak damper velocity, the same for both wheels), standing for what the drive cannot check on that
+    axle -- the damper curve beyond its measured points (fitted as ONE factor per axle,
+    :func:`curve_beyond_candidate`, applied to both corners alike), bump-stop contact, wheel hop, tyre
+    lift-off, the integrator's handling of the impact. A full-width bump strokes both dampers of an axle
+    alike, so these errors enter both sides' forces alike and move both oil levels together: they sit in
+    the axle's mean, which the pitch rate and the vertical specific force carry. The difference is read
+    from the roll a left-right damping difference causes (``wheel`` identifiability is decided on
+    exactly the posterior sd of this difference, :func:`oil_identifiability`), and an error common to
+    both sides rolls nothing. What differs between the sides (the sensor noise, the per-wheel oil and
+    consider parameters) is in the fit's covariance. When the drives excite the tracks differently
+    (a one-sided bump) the two dampers run at different velocities and the common-mode argument fails:
+    then the two sides' model-form errors are taken as independent, ``sd_m * sqrt(2)`` added in
+    quadrature. Flagged ``asymmetric`` when the interval excludes zero AND ``|difference|`` exceeds
+    ``lr_cfg["asymmetric_min_difference"]`` (``config/inspection.yaml`` ``left_right``). An axle whose
+    sides the drives do not tell apart (``axle``/``no`` identifiability) has no difference (None),
+    never flagged, with the reason."""
+    thr = float(lr_cfg["asymmetric_min_difference"])
+    out: list[dict] = []
+    for axle, (l, r) in AXLE_CORNERS.items():
+        kind = ident[axle]["identifiable"]
+        nl, nr = CORNER_NAMES[l], CORNER_NAMES[r]
+        if kind != "wheel":
+            why = ("the drives do not excite this axle" if kind == "no"
+                   else "the drives do not tell its left from its right damper (only their mean)")
+            out.append({"axle": axle, "difference": None, "ci95": None, "sd": None, "asymmetric": False,
+                        "reason": f"{axle}: no left-right comparison: {why}"})
+            continue
+        jl, jr = by_group[nl][3], by_group[nr][3]
+        d = float(x[jl] - x[jr])
+        var = max(float(cov[jl, jl] + cov[jr, jr] - 2.0 * cov[jl, jr]), 0.0)
+        if tracks_differ:
+            var += 2.0 * sd_m[axle] ** 2
+        sd = math.sqrt(var)
+        lo, hi = max(-1.0, d - 1.96 * sd), min(1.0, d + 1.96 * sd)
+        excludes_zero = lo > 0.0 or hi < 0.0
+        flag = bool(excludes_zero and abs(d) > thr)
+        ci = f"[{lo:.2f}, {hi:.2f}]"
+        # in words: the lower side, by how much, the interval of that gap (the difference's, sign turned)
+        lower, higher = (f"left ({nl})", f"right ({nr})") if d < 0 else (f"right ({nr})", f"left ({nl})")
+        gap = f"{abs(d):.2f} lower than {higher} [{min(abs(lo), abs(hi)):.2f}, {max(abs(lo), abs(hi)):.2f}]"
+        if flag:
+            reason = (f"{axle}: {lower} {gap}: one damper has lost oil against the other (asymmetric: more "
+                      f"than {thr:.2f} apart)")
+        elif excludes_zero:
+            reason = (f"{axle}: {lower} {gap}: a difference, but not more than {thr:.2f}: within what the "
+                      "workshop practice accepts")
+        else:
+            state = axles.get(axle, {}).get("state")
+            both = {"ok": ": both intact", "empty": ": both have lost their oil (the axle as a whole)",
+                    "degraded": ": both have lost oil alike (the axle as a whole)"}.get(state or "", "")
+            reason = f"{axle}: left and right alike, left minus right {d:+.2f} {ci}{both}"
+        out.append({"axle": axle, "difference": d, "ci95": [lo, hi], "sd": sd, "asymmetric": flag,
+                    "reason": reason})
+    return out
+
+
 def _nuisance_entries(cal, x: np.ndarray, se: np.ndarray) -> list[dict]:
     """The fitted nuisance parameters (in their own units) with prior, prior range and 95 % interval."""
     return [{"param": p.name, "unit": p.unit, "prior": p.prior, "prior_range": [p.lo, p.hi],
@@ -529,6 +605,8 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     oil_off: int = st.offsets[1] if groups else 0     # unused without groups
     by_group = _group_intervals(groups, oil_off, fit.x, se, sd_m)
     wheels, axles = _wheel_and_axle_levels(ident, by_group, fit.x, cov, sd_m, cfg["states"])
+    lr = (left_right(ident, by_group, fit.x, cov, sd_m, _tracks_differ(ev.cases), axles, cfg["left_right"])
+          if "left_right" in cfg else [])   # a settings file of before the comparison has no section
     nuis = _nuisance_entries(cal, fit.x, se)
     if "curve_beyond" in st.names:
         nuis += _curve_beyond_entries(st, fit.x, se)
@@ -536,7 +614,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
         notes.append(f"fit did not converge: {fit.message}")
     res = Inspection(wheels, axles, nuis, fit, ev, ident, 0.0, noise, model.vehicle.name, notes,
                      {"validated_for": dict(cfg["protocol"]), "seen": seen, "warnings": found,
-                      "model_form_sd": max(sd_m.values()), "model_form_sd_per_axle": sd_m})
+                      "model_form_sd": max(sd_m.values()), "model_form_sd_per_axle": sd_m}, lr)
     res.elapsed_s_ = time.perf_counter() - t_start
     return res
 

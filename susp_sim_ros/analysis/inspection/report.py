@@ -99,7 +99,9 @@ def write_inspection_report(res, out: str | Path, cfg: dict, drives) -> dict:
     lines += ["", "What the drives can tell:", ""]
     for a, e in d["identifiability"].items():
         lines.append(f"- {a}: **{e['identifiable']}**: {e['why']}")
-    lines += ["", f"![oil levels]({iv})", "", "## Vehicle parameters fitted alongside (nuisances)", "",
+    lines += ["", f"![oil levels]({iv})"]
+    lines += _left_right_lines(d.get("left_right") or [], cfg.get("left_right") or {})
+    lines += ["", "## Vehicle parameters fitted alongside (nuisances)", "",
               "| parameter | unit | prior | range | fitted | 95 % |", "|---|---|---|---|---|---|"]
     for n in d["nuisance"]:
         lines.append(f"| {n['param']} | {n['unit']} | {n['prior']:.4g} | {n['prior_range'][0]:.4g} - "
@@ -113,6 +115,22 @@ def write_inspection_report(res, out: str | Path, cfg: dict, drives) -> dict:
     (out / "inspection.md").write_text("\n".join(lines) + "\n")
     return {"report": str(out / "inspection.md"), "json": str(out / "inspection.json"),
             "plots": [str(out / p) for p in pngs + [iv]]}
+
+
+def _left_right_lines(lr: list, lr_cfg: dict) -> list[str]:
+    """The report's left-against-right section: one line per axle saying in words what its left-minus-right
+    oil level and 95 % interval mean (:func:`.estimate.left_right`)."""
+    if not lr:
+        return []
+    thr = lr_cfg.get("asymmetric_min_difference")
+    out = ["", "## Left against right", "",
+           "Per axle, the left minus the right damper's oil level with its 95 % interval (the workshop's "
+           "comparison of an axle's two dampers, as the EUSAMA test judges their difference besides each "
+           "wheel's value). Flagged **asymmetric** when the interval excludes zero and the two are more than "
+           + ("the configured limit" if thr is None else f"{thr:.2f}") + " apart.", ""]
+    for e in lr:
+        out.append(f"- {'**asymmetric** ' if e['asymmetric'] else ''}{e['reason']}")
+    return out
 
 
 def _protocol_lines(p: dict) -> list[str]:
