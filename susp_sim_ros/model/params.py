@@ -192,6 +192,9 @@ class VehicleParams:
     mu: float
     relaxation_length: float
     slip_fade_speed: float
+    #: dynamic rolling radius [m]: path / rolling_radius is the wheel's rotation angle [rad] (the discrepancy
+    #: finder's input features, :mod:`susp_sim_ros.model.input_force`); the dynamics do not use it
+    rolling_radius: float
     steering_ratio: float
     drive_front_share: float
     brake_front_share: float
@@ -261,6 +264,7 @@ PARAMETER_TABLE: tuple[tuple[str, str, str, str, str], ...] = (
     ("mu", "tyre", "friction_coefficient", "scalar", "positive"),
     ("relaxation_length", "tyre", "relaxation_length", "scalar", "positive"),
     ("slip_fade_speed", "tyre", "slip_fade_speed", "scalar", "positive"),
+    ("rolling_radius", "tyre", "rolling_radius", "scalar", "positive"),
     ("steering_ratio", "steering", "ratio", "scalar", "positive"),
     ("drive_front_share", "drivetrain", "drive_front_share", "scalar", "nonneg"),
     ("brake_front_share", "drivetrain", "brake_front_share", "scalar", "nonneg"),

@@ -137,6 +137,12 @@ def calibration_params(vp: VehicleParams, variant: FrictionVariant,
     return out
 
 
+#: vehicle-file values the model's dynamics never read (they serve the analysis: the rolling radius turns
+#: the path into the wheel's rotation angle for the finder's input features); their range is no
+#: uncertainty of a simulated signal, so they are neither calibrated nor considered
+NOT_IN_THE_DYNAMICS = frozenset({"rolling_radius"})
+
+
 def consider_params(vp: VehicleParams, variant: FrictionVariant) -> list[CalParam]:
     """The "consider" parameters: values the vehicle file gives a plausible range but does not let the
     calibration move (``calibrate: false``, e.g. tyre damping, unsprung mass, steering ratio). They stay
@@ -145,7 +151,7 @@ def consider_params(vp: VehicleParams, variant: FrictionVariant) -> list[CalPara
     speed) and damper tables are not uncertain in this sense."""
     out = []
     for fld, pr in vp.priors.items():
-        if pr.calibrate or pr.shape == "table":
+        if pr.calibrate or pr.shape == "table" or fld in NOT_IN_THE_DYNAMICS:
             continue
         sw = NEEDS_SWITCH.get(fld)
         if sw and not getattr(variant, sw):

@@ -18,7 +18,10 @@ calibration explains.
    recalibration within the priors explains is never named); a term is accepted only if it lowers the
    information criterion clearly, explains a real share of the residual above noise, improves the drives
    held out from its fit (leave-one-drive-out) and is selected in most of those refits; backward
-   elimination, then the measurement chain decided again on the model with its physics terms;
+   elimination, then the measurement chain decided again on the model with its physics terms. At each
+   step the shape regression (:mod:`.force_shape`) also offers input features (the road under the wheel,
+   the wheel's rotation); a residual led by one is an input the recording lacks: discovery stops there
+   and no physics is named for it (``unmeasured_input`` of that kind);
 5. leave-one-drive-out of the whole result (calibration included) against the base model;
 6. verdict: ``missing_physics``, ``unmeasured_input``, ``no_significant_discrepancy`` or
    ``unexplained_residual`` (:func:`.report.verdict`).
@@ -77,25 +80,31 @@ SHIFT_SD = 1.0              # a calibration value further than this (prior sd) f
                             # the drives of one vehicle state only, is a hypothesis: physics competes with it
 TERM_CANDIDATES = tuple(c for c in LIBRARY if c.term_module)  # candidates that are kernel terms
 LEARNED_MODULE = "susp_sim_ros.model.learned_force"  # the learned term (unlisted_force) of force_shape
+INPUT_MODULE = "susp_sim_ros.model.input_force"  # the input features' term of force_shape (never a candidate)
 
 
 def _ensure_terms_registered():
     for c in TERM_CANDIDATES:
         importlib.import_module(c.term_module)
     importlib.import_module(LEARNED_MODULE)
+    importlib.import_module(INPUT_MODULE)
 
 
 def extended_model(vehicle, variant) -> Model:
-    """The base model plus every registered candidate term at zero effect (one compiled kernel)."""
+    """The base model plus every registered candidate term at zero effect (one compiled kernel), and the
+    input features' term (:mod:`~susp_sim_ros.model.input_force`) at zero effect with the vehicle's rolling
+    radius [m]."""
     _ensure_terms_registered()
     vp = vehicle if not isinstance(vehicle, (str, Path)) else load_vehicle(vehicle)
     var = variant if not isinstance(variant, (str, Path)) else load_variant(variant)
     have = {s.term.name for s in var.terms}
     extra = []
-    for name in [c.name for c in TERM_CANDIDATES] + [force_shape.TERM]:
+    for name in [c.name for c in TERM_CANDIDATES] + [force_shape.TERM, force_shape.INPUT_TERM]:
         if name not in have:
             t = get_term(name)
             vals = {p.name: (p.default,) * 4 for p in t.params}  # every term's default is zero effect
+            if name == force_shape.INPUT_TERM:
+                vals["rolling_radius"] = (vp.rolling_radius,) * 4
             extra.append(TermSetting(t, vals))
     return Model(vp, dataclasses.replace(var, terms=var.terms + tuple(extra)))
 
@@ -188,8 +197,10 @@ class DiscrepancyFinder:
         # 4. discovery on the calibrated model: forward, backward, against the calibration shifts
         cur = self._forward(ev, cur, path, accepted)
         cur = self._backward(ev, cur, path, accepted)
-        cur, shift_competing = self._shift_competition(ev, cur, self.testable_, path, accepted)
-        shift_competing += self._refused_competition(cur, shift_competing)
+        shift_competing: list[dict] = []
+        if not self.input_led_:  # a residual that follows an input names no physics, not even as a rival
+            cur, shift_competing = self._shift_competition(ev, cur, self.testable_, path, accepted)
+            shift_competing += self._refused_competition(cur, shift_competing)
         if accepted:
             cur = self._measurement_chain(ev, cur, path)
         if any(c.kind == PHYSICS for c in cur.structure.cands):  # final polish, calibration jointly
@@ -226,6 +237,7 @@ class DiscrepancyFinder:
         if force_shape.TERM in self.candidates and force_shape.learned_in(self.base_variant_):
             in_base.append(force_shape.TERM)   # a variant the finder wrote: its learned force is the base model's
         self.learnable_ = force_shape.TERM in self.candidates and force_shape.TERM not in in_base
+        self.input_led_ = False  # set when the shape regression finds the residual led by an input feature
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
         self.base_fit_ = fit_structure(ev, Structure([]))
         return ev
@@ -253,7 +265,12 @@ class DiscrepancyFinder:
                 remaining = [c for c in testable if c not in cur.structure.names]
                 opts = [o for o in opts if all(a in remaining for a in o.add)]
             excess = max(cur.rss - n, 1e-12)
-            learned = self._learned_trial(ev, cur, step) if learnable else None
+            sel = self._shape_selection(ev, cur, step) if learnable else None
+            if sel is not None and sel.input_led:
+                # the missing force follows an input and no state: no physics is named for it (issue 26, 5)
+                self._input_finding(ev, sel, step)
+                break
+            learned = self._learned_trial(ev, cur, sel) if sel is not None else None
             if not opts and learned is None:
                 break
             best, best_fit, ok, checks = self._first_passing(ev, cur, opts, recalibrations, step, learned)
@@ -594,21 +611,50 @@ class DiscrepancyFinder:
         return bool(ok), bool(in_sample), checks
 
     # -- physics no candidate lists (issue 26, items 3-4) ---------------------------------------------
-    def _learned_trial(self, ev: Evaluator, cur: FitResult, step: int) -> tuple[Option, FitResult] | None:
-        """The missing force left by ``cur``, read off its shape (:mod:`.force_shape`), as a learned term
-        fitted on every drive: an extra trial of the forward step, tested like every listed candidate
-        (:meth:`_passes`) and competing with them on the criterion. None when no dependence is stable.
-        Records what the regression saw per step in ``force_shape_``."""
+    def _shape_selection(self, ev: Evaluator, cur: FitResult, step: int) -> force_shape.Selection | None:
+        """What the missing force left by ``cur`` depends on (:mod:`.force_shape`: the model's corner states
+        and, beside them, the input features). Records what the regression saw in ``force_shape_``; None
+        when fewer than two drives have rows."""
         # proposed against the file's values; the joint fit then weighs calibration and learned force
         st = cur.structure
         sel = force_shape.select(force_shape.design_for(self, st, st.at_neutral(cur.x, CALIBRATION), cur.idx))
         if sel is None:
             return None
+        phys = sel.physics()
         self.force_shape_.append({
             "step": step, "resamples": sel.resamples,
             "selection_frequency": {f"{k[0]}:{k[1]}": q for k, q in sorted(sel.frequency.items())},
             "stable": [f"{c.feature}:{c.axle}" for c in sel.stable], "dependences": sel.dependences,
-            "description": sel.description() if sel.stable else "", "listed_rivals": sel.listed_rivals()})
+            "description": sel.description() if sel.stable else "", "listed_rivals": phys.listed_rivals(),
+            "input_led": sel.input_led})
+        return sel
+
+    def _input_finding(self, ev: Evaluator, sel: force_shape.Selection, step: int) -> None:
+        """An ``unmeasured_input`` finding per drive from a selection led by an input feature: the missing
+        force follows the road under the wheel or the wheel's rotation, which the recording lacks."""
+        lead = sel.leading
+        assert lead is not None
+        ks = [k for k, c in enumerate(sel.stable) if force_shape.group_of(c.feature) == force_shape.group_of(lead)]
+        axles = sorted({sel.stable[k].axle for k in ks}, key=force_shape.AXLES.index)
+        freq = max(sel.frequency[force_shape.group_key(sel.stable[k].key)] for k in ks)
+        words = force_shape.WORDS[lead]
+        self.input_led_ = True
+        for c in ev.cases:
+            self.unmeasured_.append({
+                "kind": sel.input_kind, "drive": c.name, "signals": list(c.signals), "feature": lead,
+                "axles": axles, "step": step, "selection_frequency": freq,
+                "statement": (f"{c.name}: the force the model lacks {words} ({', '.join(axles)} "
+                              f"{'axle' if len(axles) == 1 else 'axles'}, selected in {100 * freq:.0f} % of drive "
+                              f"resamples): an input the recording lacks, not physics of the model's states; "
+                              f"no physics term is named for it")})
+
+    def _learned_trial(self, ev: Evaluator, cur: FitResult,
+                       sel: force_shape.Selection) -> tuple[Option, FitResult] | None:
+        """The missing force left by ``cur``, read off its shape (``sel``, :meth:`_shape_selection`; input
+        features left out), as a learned term fitted on every drive: an extra trial of the forward step,
+        tested like every listed candidate (:meth:`_passes`) and competing with them on the criterion.
+        None when no state dependence is stable or listed terms stand for every one."""
+        sel = sel.physics()
         if not sel.stable or sel.listed_rivals():
             return None   # nothing stable, or listed terms stand for every dependence: they compete already
         cand = force_shape.learned_candidate(sel)

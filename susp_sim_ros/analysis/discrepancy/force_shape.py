@@ -29,6 +29,16 @@ every stable dependence (:data:`LISTED_FOR`), the learned term is not offered: t
 in the competition already (``listed_rivals`` in the record). Limits: the dependences and the offered
 knee or free play are selected on all drives, so the held-out test refits the learned term's values, not
 its choice of dependences; one knee and one free play serve both axles.
+
+Input features (issue 26, item 5): beside the state features, the regression offers forces that follow
+an input and no state (:data:`~susp_sim_ros.model.input_force.INPUT_FEATURES`: the road height under
+each wheel and its rate, the wheel's rotation angle ``path / rolling radius`` as sine and cosine of
+harmonics 1 and 2), their columns the simulated effect of the term
+:data:`~susp_sim_ros.model.input_force.INPUT_FORCE` as every other column's. They compete in the same
+selection under the same stability rules, but they are never physics: a stable set led by an input
+feature (:attr:`Selection.input_led`) is an input the recording lacks (the finder's ``unmeasured_input``,
+its ``kind`` from :data:`~susp_sim_ros.model.input_force.INPUT_KIND`), and stable input features beside
+leading state ones are left out of the learned term (:meth:`Selection.physics`).
 """
 from __future__ import annotations
 
@@ -38,12 +48,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...model.input_force import INPUT_FEATURES, INPUT_FORCE, INPUT_KIND
 from ...model.learned_force import FEATURES, LEARNED_FORCE
 from ...model.params import AXLE_CORNERS, load_settings
 from .candidates import PHYSICS, CandParam, Candidate, axle_map
 from .fit import debias, fd_jacobian
 
 TERM = LEARNED_FORCE.name
+INPUT_TERM = INPUT_FORCE.name  # the input features' term: columns of the regression, never a candidate
 AXLES = tuple(AXLE_CORNERS)  # ("front", "rear")
 #: the listed TERM that stands for a dependence (None: none does)
 LISTED_FOR = {"constant": "damper_gas_preload", "deflection": "damper_gas_preload",
@@ -61,7 +73,11 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
          "longitudinal_force": "friction-like, growing with the longitudinal wheel force",
          "roll_deflection": "acts on the left-right deflection difference (anti-roll-bar-like)",
          "roll_free_play": "acts only within +-{gap_mm:.1f} mm of left-right deflection difference "
-                           "(free play in the anti-roll bar)"}
+                           "(free play in the anti-roll bar)",
+         "road_height": "follows the road height under the wheel (an input, not a state)",
+         "road_rate": "follows the rate of the road height under the wheel (an input, not a state)",
+         **{f"rotation_{t}{k}": f"follows the wheel's rotation, harmonic {k}, {part} part (an input, not a state)"
+            for t, part in (("sin", "sine"), ("cos", "cosine")) for k in (1, 2)}}
 
 
 #: what a positive and a negative coefficient of a dependence mean (the force is positive up on the body)
@@ -70,7 +86,23 @@ SENSE = {"constant": ("pushes the body up", "pulls the body down"),
          **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
                                                            "velocity_beyond_knee")},
          **{f: ("more friction", "less friction") for f in ("sign_velocity", "peak_deflection", "lateral_force",
-                                                             "longitudinal_force")}}
+                                                             "longitudinal_force")},
+         **{f: ("positive", "negative") for f in INPUT_FEATURES}}
+
+
+#: features that are one dependence together: the sine and cosine of a rotation harmonic (their ratio is the
+#: wheel's unknown phase, so a resample may pick either); selected, counted and kept as a pair
+GROUP_OF = {f"rotation_{t}{k}": f"rotation_{k}" for t in ("sin", "cos") for k in (1, 2)}
+
+
+def group_of(feature: str) -> str:
+    """The dependence a feature belongs to for stability: the feature itself, or its pair (:data:`GROUP_OF`)."""
+    return GROUP_OF.get(feature, feature)
+
+
+def group_key(key: tuple[str, str]) -> tuple[str, str]:
+    """:func:`group_of` a (feature, axle) key, with its axle."""
+    return group_of(key[0]), key[1]
 
 
 #: the shape parameter of the features that have one
@@ -102,7 +134,7 @@ class Column:
 
 def library(cfg: dict) -> list[tuple[str, float | None]]:
     """(feature, shape value) of every library entry: the knee and free-play features once per offered
-    value, the others once."""
+    value, the others once, then the input features offered (``library.input_features``), once each."""
     out: list[tuple[str, float | None]] = []
     for f in FEATURES:
         if f == "velocity_beyond_knee":
@@ -111,6 +143,11 @@ def library(cfg: dict) -> list[tuple[str, float | None]]:
             out += [(f, float(v)) for v in cfg["library.free_plays_m"]]
         else:
             out.append((f, None))
+    for f in cfg["library.input_features"]:
+        if f not in INPUT_FEATURES:
+            raise ValueError(f"force_shape.yaml: library.input_features: unknown input feature {f!r}; known: "
+                             f"{', '.join(INPUT_FEATURES)}")
+        out.append((f, None))
     return out
 
 
@@ -131,8 +168,9 @@ def columns_of(entries: list[tuple[str, float | None]]) -> list[Column]:
 
 @dataclass
 class Selection:
-    """The stable dependences: per (feature, axle) its selection frequency, chosen shape value, fitted
-    coefficient [N] and share of the fitted force's variance; ``order`` strongest first."""
+    """The stable dependences: per (feature, axle) its selection frequency (per :func:`group_key`: a
+    rotation harmonic's sine and cosine count together), chosen shape value, fitted coefficient [N] and
+    share of the fitted force's variance; ``order`` strongest first."""
 
     frequency: dict[tuple[str, str], float]
     stable: list[Column]
@@ -152,6 +190,37 @@ class Selection:
     @property
     def axles(self) -> list[str]:
         return sorted({c.axle for c in self.stable}, key=AXLES.index)
+
+    @property
+    def leading(self) -> str | None:
+        """The strongest stable dependence, a rotation harmonic's sine and cosine counted together (the
+        feature of the pair with the larger share); None when nothing is stable."""
+        if not self.stable:
+            return None
+        total: dict[str, float] = {}
+        for c, q in zip(self.stable, self.share):
+            total[group_of(c.feature)] = total.get(group_of(c.feature), 0.0) + float(q)
+        lead = max(total, key=lambda g: total[g])
+        return next(f for f in self.dependences if group_of(f) == lead)
+
+    @property
+    def input_led(self) -> bool:
+        """Whether the strongest stable dependence (:attr:`leading`) is an input feature (the road under the
+        wheel, the wheel's rotation): the missing force follows an input the recording lacks, not a state."""
+        return self.leading in INPUT_FEATURES
+
+    @property
+    def input_kind(self) -> str | None:
+        """What the leading input feature follows (``road``, ``wheel_rotation``), None when not input-led."""
+        lead = self.leading
+        return INPUT_KIND[lead] if lead in INPUT_FEATURES else None
+
+    def physics(self) -> "Selection":
+        """The selection without its input features (what a learned term may stand for), shares renormalised."""
+        keep = [k for k, c in enumerate(self.stable) if c.feature not in INPUT_FEATURES]
+        share = self.share[keep]
+        return Selection(self.frequency, [self.stable[k] for k in keep], self.coef[keep],
+                         share / max(float(share.sum()), 1e-300), self.resamples)
 
     def listed_rivals(self) -> list[str]:
         """The listed TERMs that stand for every stable dependence (empty when one has none)."""
@@ -230,7 +299,8 @@ def _omp_cv(stats: dict[int, _DriveStats], pick: np.ndarray, max_features: int) 
 
 def select(design: Design, cfg: dict | None = None) -> Selection | None:
     """Stability selection over drive-bootstrap resamples (module docstring); None when fewer than two
-    drives have rows or nothing is stable."""
+    drives have rows or nothing is stable. A dependence is counted per :func:`group_key` (a rotation
+    harmonic's sine and cosine once, as one), and a stable pair keeps both columns."""
     cfg = settings() if cfg is None else cfg
     drives = np.unique(design.groups)
     if len(drives) < 2:
@@ -247,7 +317,7 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
             continue
         sel = _omp_cv(stats, pick, max_f)
         done += 1
-        for k in set(design.columns[j].key for j in np.flatnonzero(sel)):
+        for k in set(group_key(design.columns[j].key) for j in np.flatnonzero(sel)):
             counts[k] += 1
         for j in np.flatnonzero(sel):
             shapes.setdefault(design.columns[j].key, Counter())[design.columns[j].shape] += 1
@@ -257,7 +327,9 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
     stable_keys = [k for k, q in freq.items() if q >= float(cfg["selection.min_frequency"])]
     if not stable_keys:
         return Selection(freq, [], np.zeros(0), np.zeros(0), done)
-    cols = [Column(f, a, shapes[(f, a)].most_common(1)[0][0]) for f, a in stable_keys]
+    members = [(f, a) for g, a in stable_keys for f in dict.fromkeys(c.feature for c in design.columns)
+               if group_key((f, a)) == (g, a)]
+    cols = [Column(f, a, shapes[(f, a)].most_common(1)[0][0] if (f, a) in shapes else None) for f, a in members]
     idx = [design.columns.index(c) for c in cols]
     A = design.X[:, idx]
     coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
@@ -319,20 +391,22 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
 
 
 def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
-    """One library column as a one-parameter candidate (its coefficient [N]); the shape value is set
-    only while the coefficient acts, so the columns of one feature's knees do not overwrite each other."""
+    """One library column as a one-parameter candidate (its coefficient [N], in the learned term or, for
+    an input feature, in the input term); the shape value is set only while the coefficient acts, so the
+    columns of one feature's knees do not overwrite each other."""
     shape_name = _SHAPE_OF.get(col.feature)
+    term = INPUT_TERM if col.feature in INPUT_FEATURES else TERM
 
     def apply(P, P0, x, model):
         if x[0] == 0.0:
             return
-        sl = model.term_param_slice(TERM, f"c_{col.feature}")
+        sl = model.term_param_slice(term, f"c_{col.feature}")
         a = sl.start + 2 * AXLES.index(col.axle)
         P[:, a:a + 2] = x[0]
         if shape_name is not None and col.shape is not None:
             P[:, model.term_param_slice(TERM, shape_name)] = col.shape
 
-    return Candidate(f"{TERM}[{col.feature}:{col.axle}:{col.shape}]", PHYSICS, WORDS[col.feature],
+    return Candidate(f"{term}[{col.feature}:{col.axle}:{col.shape}]", PHYSICS, WORDS[col.feature],
                      (CandParam("coef", "N", 0.0, -bound, bound, step),), apply, (col.axle,))
 
 

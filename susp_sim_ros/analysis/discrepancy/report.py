@@ -234,7 +234,8 @@ def interface_json(f) -> dict:
     if v == "unmeasured_input":
         u = f.unmeasured_
         classes = [x["iso8608_class"] for x in u if x.get("iso8608_class")]
-        rep["unmeasured_input"] = {"kind": "road", "signals": sorted({s for x in u for s in x["signals"]}),
+        rep["unmeasured_input"] = {"kind": ", ".join(sorted({x.get("kind", "road") for x in u})),
+                                   "signals": sorted({s for x in u for s in x["signals"]}),
                                    "iso8608_class": max(classes) if classes else None,
                                    "drives": [x["drive"] for x in u],
                                    "road_estimates": {x["drive"]: x["road_estimate"] for x in u
