@@ -166,7 +166,7 @@ def test_vehicle_errors_name_file_and_key(tmp_path):
 
 def test_every_vehicle_parameter_has_unit_and_source(model_full):
     srcs = model_full.vehicle.sources
-    assert len(srcs) == 39  # every entry of the vehicle file was read, each with unit and source
+    assert len(srcs) == 40  # every entry of the vehicle file read (incl. tyre.rolling_radius), with unit and source
     for key, (unit, source) in srcs.items():
         assert unit and source, key
 

@@ -130,3 +130,21 @@ def test_a_state_dependence_is_still_physics(state_physics):
     assert "friction_amplitude" in [t["name"] for t in rep["terms"] if t["evidence"]["kind"] == "physics"]
     assert not f.input_led_ and f.unmeasured_ == []
     assert not any(s["input_led"] for s in rep["force_shape"])
+
+
+def test_a_remainder_that_follows_an_input_is_stated_beside_the_physics_named_before_it():
+    """Physics named at an earlier step, a later step led by an input feature: the verdict stays
+    missing_physics and its reason carries the input finding."""
+    from types import SimpleNamespace
+
+    from susp_sim_ros.analysis.discrepancy.report import verdict
+    fit = SimpleNamespace(rss=1.2e4, n=1.0e4, structure=SimpleNamespace(names=["calibration", "friction_amplitude"]))
+    base = SimpleNamespace(rss=4.0e4, n=1.0e4)
+    statement = "bump: the force the model lacks follows the wheel's rotation: an input the recording lacks"
+    f = SimpleNamespace(result_=fit, base_fit_=base, heldout_=None, windows_=[{"drive": "bump"}],
+                        unmeasured_=[{"kind": "wheel_rotation", "statement": statement}], competing_=[])
+    v, why = verdict(f)
+    assert v == "missing_physics"
+    assert "friction_amplitude" in why and statement in why
+    f.unmeasured_ = []
+    assert statement not in verdict(f)[1]

@@ -174,6 +174,8 @@ def verdict(f) -> tuple[str, str]:
                 f"the candidate library names")
     if rival:
         why += f"; not decided: {undecided}"
+    if unmeasured:  # physics named first, then a remainder that follows an input (issue 26, item 5)
+        why += "; besides: " + "; ".join(u["statement"] for u in unmeasured)
     return "missing_physics", why
 
 
