@@ -257,6 +257,14 @@ def _zero_interval(term: dict) -> bool:
     return all(lo is not None and hi is not None and lo <= 0.0 <= hi for lo, hi in cis)
 
 
+def _zero_effect(term: dict) -> bool:
+    """Does the 95 % interval of the term's effect as a whole (``terms[].effect.ci95_fraction``: a fraction of
+    the fitted effect, 0 is none) contain zero? Terms without an effect entry (the measurement chain, judged
+    on their parameters) give False."""
+    ci = (term.get("effect") or {}).get("ci95_fraction")
+    return bool(ci) and ci[0] is not None and ci[0] <= 0.0
+
+
 def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, car: TruthCar, fr: TruthFriction,
            hid: TruthHidden, t_gen: float, t0: float) -> dict:
     f = DiscrepancyFinder(variant=spec["base"]).fit(paths)
@@ -295,6 +303,7 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         "case": name, "noise_deg_s": noise, "base_variant": spec["base"], "seed": spec["seed"],
         "family_form": spec.get("family_form"), "split": spec.get("split"), "effect": spec.get("effect"),
         "zero_interval_terms": [t["name"] for t in rep["terms"] if _zero_interval(t)],
+        "zero_effect_terms": [t["name"] for t in rep["terms"] if _zero_effect(t)],
         "zero_interval_measurement_terms": [t["name"] for t in rep["terms"]
                                             if _is_measurement(t["name"]) and _zero_interval(t)],
         "car": "perturbed " + json.dumps({k: (np.round(v, 3).tolist() if isinstance(v, list) else round(v, 3))
@@ -305,6 +314,9 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         "verdict": rep["verdict"], "expected_verdicts": spec["verdicts"],
         "verdict_right": rep["verdict"] in spec["verdicts"],
         "named_physics": named, "measurement_terms": measurement, "not_identifiable": ni,
+        "named_effect_ci95": {t["name"]: t["effect"]["ci95_fraction"] for t in rep["terms"] if t.get("effect")},
+        "competes_with": {x["name"]: x["competes_with"] for x in rep.get("not_identifiable", [])
+                          if x.get("competes_with")},
         "expected_physics": sorted(expect), "optional_physics": sorted(optional),
         "true_positives": tp, "handled_not_identifiable": handled_ni, "false_positives": fp,
         "false_negatives": fn,
@@ -418,7 +430,8 @@ def summarise(results: list[dict]) -> dict:
 
 FAMILY_TARGETS = {"precision": 0.9, "recall": 0.9, "verdicts_right_fraction": 1.0,
                   "max_named_terms_on_structure_runs": 1, "min_structure_runs": 20,
-                  "zero_interval_measurement_findings": 0, "max_heldout_over_structure_level": 1.05,
+                  "zero_interval_measurement_findings": 0, "zero_effect_terms": 0,
+                  "max_heldout_over_structure_level": 1.05,
                   "nothing_missing_above_structure_level": 0}
 
 
@@ -436,6 +449,7 @@ def summarise_family(results: list[dict]) -> dict:
               if level and r["heldout_after_over_noise"] is not None}
     named_structure = sum(len(r["named_physics"]) for r in structure)
     zero_meas = sum(len(r["zero_interval_measurement_terms"]) for r in results)
+    zero_effect = {r["case"]: r["zero_effect_terms"] for r in results if r.get("zero_effect_terms")}
     worst = max(ratios.items(), key=lambda kv: kv[1]) if ratios else None
     # issue 24 item 5: "nothing missing" only where no more remains than the structure-only runs leave
     top = max(lvl) if lvl else None
@@ -451,6 +465,7 @@ def summarise_family(results: list[dict]) -> dict:
         "structure_named": {r["case"]: r["named_physics"] for r in structure if r["named_physics"]},
         "zero_interval_measurement_findings": zero_meas,
         "zero_interval_terms": {r["case"]: r["zero_interval_terms"] for r in results if r["zero_interval_terms"]},
+        "zero_effect_terms": zero_effect,
         "structure_level_heldout_over_noise": level,
         "structure_heldout_over_noise": {r["case"]: r["heldout_after_over_noise"] for r in structure},
         "heldout_over_structure_level": ratios,
@@ -474,6 +489,7 @@ def summarise_family(results: list[dict]) -> dict:
         "max_named_terms_on_structure_runs": named_structure <= t["max_named_terms_on_structure_runs"]
         and len(structure) >= t["min_structure_runs"],
         "zero_interval_measurement_findings": zero_meas == t["zero_interval_measurement_findings"],
+        "zero_effect_terms": sum(map(len, zero_effect.values())) == t["zero_effect_terms"],
         "max_heldout_over_structure_level": worst is None or worst[1] <= t["max_heldout_over_structure_level"],
         "nothing_missing_above_structure_level": len(dishonest) == t["nothing_missing_above_structure_level"],
     }

@@ -377,4 +377,7 @@ def test_a_term_and_a_one_state_damper_value_compete_until_another_state_separat
 
     rep = DiscrepancyFinder(variant="full").fit(list(paths.values())).report()
     assert "extra_viscous_damping" in [t["name"] for t in rep["terms"]]
+    # named: its effect on the drives as a whole has a 95 % interval clear of zero (issue 24 item 3)
+    effect = {t["name"]: t for t in rep["terms"]}["extra_viscous_damping"]["effect"]
+    assert 0.0 < effect["ci95_fraction"][0] < 1.0 < effect["ci95_fraction"][1]
     assert "extra_viscous_damping" not in {x["name"] for x in rep["not_identifiable"]}

@@ -22,7 +22,10 @@ calibration explains.
    step the shape regression (:mod:`.force_shape`) also offers input features (the road under the wheel,
    the wheel's rotation); a residual led by one is an input the recording lacks: discovery stops there
    and no physics is named for it (``unmeasured_input`` of that kind);
-5. leave-one-drive-out of the whole result (calibration included) against the base model;
+5. leave-one-drive-out of the whole result (calibration included) against the base model; each physics
+   term judged on its effect on the drives as a whole (:mod:`.effect`), the measurement chain on its
+   parameters: a term whose 95 % interval holds no effect is not named (dropped, the rest refitted; listed
+   in ``not_identifiable`` when a held vehicle value could stand in for it);
 6. verdict: ``missing_physics``, ``unmeasured_input``, ``no_significant_discrepancy`` or
    ``unexplained_residual`` (:func:`.report.verdict`).
 """
@@ -52,6 +55,7 @@ from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PHYSICS
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .data import SIGNAL_UNIT, as_cases
 from .decoys import decoy_margin
+from .effect import DATA, HELD_FREE, TermEffect, covariance_held_free, term_effect
 from . import force_shape
 from .engine import Evaluator, Structure
 from .fit import (FitResult, Option, bic, debias, fit_structure, learn_residual_correlation, n_effective,
@@ -208,13 +212,27 @@ class DiscrepancyFinder:
             self._set_calibration(cur)
         self.path_, self.accepted_ = path, accepted
         self._finish(ev, cur)
-        # 6. the measurement chain judged on its intervals: an entry the data do not support is dropped;
-        # one a held vehicle value could stand in for is not named but listed as competing with it
-        drop, competing = self._judge_measurement_terms()
-        if drop:
+        # 6. the physics terms judged on their effect's interval, then the measurement chain on its
+        # parameters' intervals: an entry the data do not support is dropped; one a held vehicle value could
+        # stand in for is not named but listed as competing with it
+        # (each drop refits the rest, which is judged again)
+        effect_competing: list[dict] = []
+        self.effect_dropped_: list[dict] = []  # {name, why}: physics terms not named on their effect's interval
+        for _ in range(len(cur.structure.names) + 1):
+            drop, held, why = self._judge_physics_terms()
+            if drop:
+                effect_competing += held
+                self.effect_dropped_ += [{"name": n, "why": why[n]} for n in drop]
+                self._finish(ev, self._drop_terms(ev, self.result_, drop, path, accepted, why))
+                continue
+            drop, competing = self._judge_measurement_terms()
+            if not drop:
+                break
             self._finish(ev, self._drop_terms(ev, self.result_, drop, path, accepted))
+        else:  # every round dropped something (cannot outlast the structure's terms): the last judgement
             _, competing = self._judge_measurement_terms()
-        self.competing_: list[dict] = competing + shift_competing
+        self.competing_: list[dict] = competing + shift_competing + effect_competing
+        self.effects_ = self.term_effects_()
         return self
 
     def _prepare(self, drives, bar) -> Evaluator:
@@ -503,12 +521,85 @@ class DiscrepancyFinder:
                            "may lie anywhere in their priors: the drives cannot tell the two apart"})
         return drop, competing
 
+    def _judge_physics_terms(self) -> tuple[list[str], list[dict], dict[str, str]]:
+        """The final structure's physics terms judged on their effect as a whole (:mod:`.effect`; issue 24,
+        item 3: a term whose 95 % interval holds no effect is never named): those whose interval from the
+        data alone (posterior and drive-to-drive spread) holds it, to drop; those whose interval holds it
+        once the values the calibration holds at their file value are free within their priors, to drop
+        and list as entries ``{name, competes_with, reveal_with, why, value, effect}`` of physics
+        competing with those values (the held values that bring most of the effect's variance). The
+        learned term has no listed rival physics: it is dropped in both cases."""
+        effects = self.term_effects_()
+        st, x = self.result_.structure, self.result_.x
+        drop, competing = [], []
+        for name, eff in effects.items():
+            lo, hi = eff.ci95_fraction(DATA)
+            if eff.holds_zero(DATA):
+                drop.append((name, f"the 95 % interval of its effect on the drives, {lo:.2f} to {hi:.2f} of the "
+                                   "fitted one, holds no effect: not named"))
+                continue
+            if not eff.holds_zero(HELD_FREE):
+                continue
+            lo, hi = eff.ci95_fraction(HELD_FREE)
+            rivals = self._strongest_held(np.array(eff.held_share))
+            why = (f"the 95 % interval of its effect, {lo:.2f} to {hi:.2f} of the fitted one once "
+                   f"{', '.join(rivals) or 'the held vehicle values'} may lie anywhere in their priors, holds no "
+                   "effect: the drives cannot tell the term from those values")
+            drop.append((name, why + ": not named"))
+            if name not in BY_NAME:
+                continue
+            keys = [self.consider_keys_[self.consider_names_.index(r)] for r in rivals]
+            a, b = st.offsets[st.names.index(name)], st.offsets[st.names.index(name) + 1]
+            entry = self._competing_entry(name, rivals, [f"a measurement of {', '.join(keys)} (held at the vehicle "
+                                                         "file's value)"] if keys else [], why)
+            entry.update({"value": {p.name: float(v) for p, v in zip(BY_NAME[name].params, x[a:b])},
+                          "effect": eff.as_json()})
+            competing.append(entry)
+        return [n for n, _ in drop], competing, {n: w for n, w in drop}
+
+    def term_effects_(self) -> dict[str, TermEffect]:
+        """Each physics term of the final structure: its effect on the drives as a whole, with the
+        interval's ingredients (:mod:`.effect`)."""
+        fit, ev = self.result_, self.evaluator_
+        st = fit.structure
+        if fit.jac is None:
+            return {}
+        cov = fit.covariance(getattr(self, "prior_scale_", 1.0))
+        cons = getattr(self, "consider_sd_", None)
+        Jh = getattr(self, "consider_jac_", np.zeros((0, 0)))
+        cov_free = covariance_held_free(fit.information(getattr(self, "prior_scale_", 1.0)), fit.jac, Jh,
+                                        self.consider_prior_sd_, fit.data_information_scale()) \
+            if Jh.size and Jh.shape[0] == fit.jac.shape[0] else None
+        folds = [f["params"] for f in (self.heldout_ or {}).get("folds", []) if len(f.get("params", [])) == len(fit.x)]
+        out = {}
+        for k, cand in enumerate(st.cands):
+            if cand.kind != PHYSICS or not cand.params:
+                continue
+            a, b = st.offsets[k], st.offsets[k + 1]
+            x0 = fit.x.copy()
+            x0[a:b] = cand.neutral()
+            r0 = raw_residuals(ev, st, x0[None], fit.idx)[0]
+            if st.bias:
+                r0 = debias(ev, r0, fit.idx)
+            jk = np.array(folds)[:, a:b] if len(folds) >= 3 else None
+            out[cand.name] = term_effect(r0 - fit.residual, fit.jac[:, a:b], cov[a:b, a:b],
+                                         cons[a:b] if cons is not None and cons.shape[0] == len(fit.x) else None,
+                                         jk, fit.x[a:b], None if cov_free is None else cov_free[a:b, a:b])
+        return out
+
     def _competitors(self, a: int, b: int) -> list[str]:
         """The held values (``PARAM:where``) that bring most of the consider variance of parameters a..b."""
         contrib = getattr(self, "consider_contrib_", None)
         if contrib is None or not contrib.size:
             return []
-        share = contrib[a:b].sum(axis=0)
+        return self._strongest_held(contrib[a:b].sum(axis=0))
+
+    def _strongest_held(self, share: np.ndarray) -> list[str]:
+        """The held values (``PARAM:where``) whose ``share`` (one per held value) make up at least
+        :data:`COMPETES_SHARE` of the total, strongest first."""
+        share = np.asarray(share, float)
+        if not share.size:
+            return []
         order = np.argsort(share)[::-1]
         total, out, acc = float(share.sum()), [], 0.0
         for j in order:
@@ -519,8 +610,9 @@ class DiscrepancyFinder:
         return out
 
     def _drop_terms(self, ev: Evaluator, cur: FitResult, names: list[str], path: list,
-                    accepted: list) -> FitResult:
-        """``cur`` without the terms ``names`` (refitted, calibration jointly), each drop in the path."""
+                    accepted: list, why: dict[str, str] | None = None) -> FitResult:
+        """``cur`` without the terms ``names`` (refitted, calibration jointly), each drop in the path with
+        its reason (``why``: name -> reason; default: the measurement chain's)."""
         allidx = tuple(range(len(ev.cases)))
         st = cur.structure
         for name in names:
@@ -529,7 +621,8 @@ class DiscrepancyFinder:
         for name in names:
             path.append({"step": len(path), "removed": name, "structure": list(st.names), "rss": f.rss,
                          "bic": f.bic, "delta_bic": cur.bic - f.bic,
-                         "why": "its 95 % interval from the drives holds no effect: not named"})
+                         "why": (why or {}).get(name, "its 95 % interval from the drives holds no effect: "
+                                                      "not named")})
         accepted[:] = [a for a in accepted if a["name"] not in names]
         return f
 
@@ -747,6 +840,9 @@ class DiscrepancyFinder:
         calibrated value's interval include the truth when the data pin it only through an assumed value
         (the unsprung masses, the tyre damping, a friction level the drives do not inform, ...)."""
         self.consider_contrib_ = np.zeros((len(fit.x), 0))
+        self.consider_sd_ = np.zeros((len(fit.x), 0))  # S x sd: each parameter's shift per held value's sd
+        self.consider_jac_ = np.zeros((0, 0))  # the whitened residual's Jacobian in the held values
+        self.consider_prior_sd_ = np.zeros(0)
         self.consider_names_: list[str] = []   # PARAM:where, as in the calibration table
         self.consider_keys_: list[str] = []    # the vehicle file's key of each
         if not self.calibrate or fit.jac is None or not len(fit.x):
@@ -765,7 +861,9 @@ class DiscrepancyFinder:
         if st.bias:
             Jc = debias(ev, Jc, fit.idx)
         S = consider_sensitivity(fit.jac, fit.information(), Jc, fit.data_information_scale())
-        self.consider_contrib_ = (S * sd[None, :]) ** 2
+        self.consider_sd_ = S * sd[None, :]
+        self.consider_jac_, self.consider_prior_sd_ = Jc, sd
+        self.consider_contrib_ = self.consider_sd_ ** 2
         self.consider_names_ = [f"{p.field}:{p.where}" for p in cons]
         self.consider_keys_ = [p.key if p.where == "all" else f"{p.key} ({p.where})" for p in cons]
         return np.sqrt(np.clip(self.consider_contrib_.sum(axis=1), 0, None))

@@ -75,9 +75,14 @@ def term_entries(f) -> list[dict]:
                     ci[f"{c.name}:{sig}"] = [_num(m[j] - 1.96 * se[j]), _num(m[j] + 1.96 * se[j])]
             params = {"bias": bias}
             ev["units"] = {"bias": "deg/s for rates, m/s^2 for specific forces"}
+        effect = getattr(f, "effects_", {}).get(name)
+        if effect is not None:
+            ev["effect"] = effect.as_json()
         ev["statement"] = statement(cand, params, ev, f)
         entry = {"name": name, "where": _where(cand, x, lo[a:b], hi[a:b]) if cand.n_params else "all",
                  "params": params, "ci95": ci, "evidence": ev}
+        if effect is not None:  # interface.md: the term's effect as a whole (issue 24, item 3)
+            entry["effect"] = ev["effect"]
         if name == force_shape.TERM:  # interface.md: what the learned force depends on, in words
             sel = getattr(f, "learned_selection_", None)
             entry["dependences"] = ev.get("dependences", [])
@@ -110,6 +115,10 @@ def statement(cand: Candidate, params: dict, ev: dict, f) -> str:
     if "decoy_margin" in ev:
         s += (f"; its criterion beats the best of its {ev['decoys']} decoys (its own effect "
               f"time-reversed and shifted) by {ev['decoy_margin']:.0f}")
+    if "effect" in ev:
+        lo, hi = ev["effect"]["ci95_fraction"]
+        s += (f"; the 95 % interval of its effect on the drives is {lo:.2f} to {hi:.2f} of the fitted one (the "
+              f"held vehicle values free within their priors)")
     if cand.kind == PHYSICS:
         s += "; no recalibration of the base model within its priors explains it (fitted jointly with them"
         if "recalibration_rss" in ev:
@@ -147,14 +156,15 @@ def verdict(f) -> tuple[str, str]:
     unmeasured = getattr(f, "unmeasured_", [])
     if unmeasured and not phys:
         return "unmeasured_input", "; ".join(u["statement"] for u in unmeasured)
-    rival = [c for c in getattr(f, "competing_", []) if BY_NAME[c["name"]].kind == PHYSICS]
+    rival = [c for c in getattr(f, "competing_", []) if c["name"] in BY_NAME and BY_NAME[c["name"]].kind == PHYSICS]
     undecided = "; ".join(f"{c['name']} and {', '.join(c['competes_with'])} explain the same residual "
                           f"(reveal with {c['reveal_with']})" for c in rival)
     if rival and not phys:
         # a calibration value far from its prior on one vehicle state's evidence is a hypothesis as much
         # as the term: "nothing missing" would take the hypothesis for a fact (issue 24, item 4)
-        return "missing_physics", (f"either physics is missing or calibration values sit beyond their priors; "
-                                   f"the drives cannot tell which: {undecided}")
+        return "missing_physics", (f"either physics is missing or vehicle values differ from what the calibration "
+                                   f"took (moved beyond their priors, or held at the file's value); the drives "
+                                   f"cannot tell which: {undecided}")
     if not phys and after <= line:
         if not significant:
             return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
@@ -162,10 +172,13 @@ def verdict(f) -> tuple[str, str]:
                                               f"{after:.2f} x the noise held-out, within {level}; nothing "
                                               f"is missing")
     if not phys:
-        return "unexplained_residual", (f"a residual of {after:.2f} x the noise floor remains held-out after "
-                                        f"calibration, above {level}; the calibration explains "
-                                        f"{100 * max(explained, 0):.0f} % of the base model's excess and no "
-                                        f"candidate term the rest")
+        why = (f"a residual of {after:.2f} x the noise floor remains held-out after calibration, above {level}; "
+               f"the calibration explains {100 * max(explained, 0):.0f} % of the base model's excess and no "
+               f"candidate term the rest")
+        tried = [d for d in getattr(f, "effect_dropped_", []) if d["name"] not in {c["name"] for c in rival}]
+        if tried:  # a term that passed every other test but whose effect may be nothing: said, not named
+            why += "; tried and not named: " + "; ".join(f"{d['name']} ({d['why']})" for d in tried)
+        return "unexplained_residual", why
     # Accepted terms passed their own held-out and stability tests: they are named even when a residual
     # remains (hiding them under "unexplained" lost correct terms); the remainder is stated beside them.
     why = f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out residual above noise"
