@@ -118,10 +118,12 @@ def test_physics_terms_are_judged_on_their_effect():
     pinned = TermEffect(300.0, 20.0, 30.0, 25.0, 40.0, (1.0, 0.5, 0.0))
     loose = TermEffect(100.0, 60.0, 30.0, 10.0, 70.0, ())
     rival = TermEffect(300.0, 20.0, 500.0, 25.0, 200.0, (9.0, 1.0, 0.01))
-    drop, competing, why = _finder_with({"extra_viscous_damping": pinned, "friction_amplitude": loose})._judge_physics_terms()
+    f = _finder_with({"extra_viscous_damping": pinned, "friction_amplitude": loose})
+    drop, competing, why = f._judge_physics_terms()
     assert drop == ["friction_amplitude"] and competing == []
     assert "holds no effect" in why["friction_amplitude"]
-    drop, competing, why = _finder_with({"extra_viscous_damping": rival, "friction_amplitude": pinned})._judge_physics_terms()
+    f = _finder_with({"extra_viscous_damping": rival, "friction_amplitude": pinned})
+    drop, competing, why = f._judge_physics_terms()
     assert drop == ["extra_viscous_damping"] and [c["name"] for c in competing] == ["extra_viscous_damping"]
     c = competing[0]
     assert c["competes_with"] == ["a:all"] and "geometry.a" in c["reveal_with"]
