@@ -1,4 +1,5 @@
 """A named term's effect as a whole with its 95 % interval (issue 24, item 3; analysis/discrepancy/effect.py)."""
+import math
 from types import SimpleNamespace
 
 import numpy as np
@@ -121,6 +122,15 @@ def test_physics_terms_are_judged_on_their_effect():
     f = _finder_with({"extra_viscous_damping": pinned, "friction_amplitude": loose})
     drop, competing, why = f._judge_physics_terms()
     assert drop == ["friction_amplitude"] and competing == []
+    # two terms that stand in for each other: only the weaker goes (the other is judged again after the refit)
+    weaker = TermEffect(100.0, 80.0, 30.0, 10.0, 90.0, ())
+    drop, _, _ = _finder_with({"extra_viscous_damping": loose, "friction_amplitude": weaker})._judge_physics_terms()
+    assert drop == ["friction_amplitude"]
+    # a failed simulation (not a number) is no evidence of an effect
+    nan = TermEffect(math.nan, math.nan, math.nan, math.nan, math.nan, ())
+    assert nan.holds_zero(DATA)
+    assert _finder_with({"extra_viscous_damping": nan, "friction_amplitude": pinned})._judge_physics_terms()[0] \
+        == ["extra_viscous_damping"]
     assert "holds no effect" in why["friction_amplitude"]
     f = _finder_with({"extra_viscous_damping": rival, "friction_amplitude": pinned})
     drop, competing, why = f._judge_physics_terms()

@@ -80,8 +80,9 @@ class TermEffect:
         return (1.0 - half, 1.0 + half)
 
     def holds_zero(self, held: str = HELD_FREE) -> bool:
-        """Whether the 95 % interval holds "no effect"."""
-        return self.ci95_fraction(held)[0] <= 0.0
+        """Whether the 95 % interval holds "no effect" (also when it is not a number: a failed simulation
+        is no evidence of an effect)."""
+        return not self.ci95_fraction(held)[0] > 0.0
 
     def as_json(self) -> dict:
         return {"size_whitened": self.size,

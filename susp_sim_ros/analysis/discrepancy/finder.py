@@ -523,39 +523,44 @@ class DiscrepancyFinder:
 
     def _judge_physics_terms(self) -> tuple[list[str], list[dict], dict[str, str]]:
         """The final structure's physics terms judged on their effect as a whole (:mod:`.effect`; issue 24,
-        item 3: a term whose 95 % interval holds no effect is never named): those whose interval from the
-        data alone (posterior and drive-to-drive spread) holds it, to drop; those whose interval holds it
-        once the values the calibration holds at their file value are free within their priors, to drop
-        and list as entries ``{name, competes_with, reveal_with, why, value, effect}`` of physics
-        competing with those values (the held values that bring most of the effect's variance). The
-        learned term has no listed rival physics: it is dropped in both cases."""
+        item 3: a term whose 95 % interval holds no effect is never named). At most one term per call, the
+        weakest, so two terms that stand in for each other are not both dropped (the caller refits and
+        judges again): first among those whose interval from the data alone (posterior and drive-to-drive
+        spread) holds it, the one whose interval reaches furthest below zero; else among those whose
+        interval holds it once the values the calibration holds at their file value are free within their
+        priors, the same, also returned as an entry ``{name, competes_with, reveal_with, why, value,
+        effect}`` of physics competing with those values (the held values that bring most of the effect's
+        variance). The learned term has no listed rival physics: it is dropped without an entry.
+        Returns (names to drop, competing entries, name -> reason)."""
         effects = self.term_effects_()
+        for held in (DATA, HELD_FREE):
+            weak = [(_finite_or_lowest(eff.ci95_fraction(held)[0]), name) for name, eff in effects.items()
+                    if eff.holds_zero(held)]
+            if weak:
+                break
+        if not weak:
+            return [], [], {}
+        _, name = min(weak)
+        eff = effects[name]
+        lo, hi = eff.ci95_fraction(held)
+        if held == DATA:
+            why = (f"the 95 % interval of its effect on the drives, {lo:.2f} to {hi:.2f} of the fitted one, holds no "
+                   "effect")
+            return [name], [], {name: why + ": not named"}
+        rivals = self._strongest_held(np.array(eff.held_share))
+        why = (f"the 95 % interval of its effect, {lo:.2f} to {hi:.2f} of the fitted one once "
+               f"{', '.join(rivals) or 'the held vehicle values'} may lie anywhere in their priors, holds no "
+               "effect: the drives cannot tell the term from those values")
+        if name not in BY_NAME:
+            return [name], [], {name: why + ": not named"}
         st, x = self.result_.structure, self.result_.x
-        drop, competing = [], []
-        for name, eff in effects.items():
-            lo, hi = eff.ci95_fraction(DATA)
-            if eff.holds_zero(DATA):
-                drop.append((name, f"the 95 % interval of its effect on the drives, {lo:.2f} to {hi:.2f} of the "
-                                   "fitted one, holds no effect: not named"))
-                continue
-            if not eff.holds_zero(HELD_FREE):
-                continue
-            lo, hi = eff.ci95_fraction(HELD_FREE)
-            rivals = self._strongest_held(np.array(eff.held_share))
-            why = (f"the 95 % interval of its effect, {lo:.2f} to {hi:.2f} of the fitted one once "
-                   f"{', '.join(rivals) or 'the held vehicle values'} may lie anywhere in their priors, holds no "
-                   "effect: the drives cannot tell the term from those values")
-            drop.append((name, why + ": not named"))
-            if name not in BY_NAME:
-                continue
-            keys = [self.consider_keys_[self.consider_names_.index(r)] for r in rivals]
-            a, b = st.offsets[st.names.index(name)], st.offsets[st.names.index(name) + 1]
-            entry = self._competing_entry(name, rivals, [f"a measurement of {', '.join(keys)} (held at the vehicle "
-                                                         "file's value)"] if keys else [], why)
-            entry.update({"value": {p.name: float(v) for p, v in zip(BY_NAME[name].params, x[a:b])},
-                          "effect": eff.as_json()})
-            competing.append(entry)
-        return [n for n, _ in drop], competing, {n: w for n, w in drop}
+        keys = [self.consider_keys_[self.consider_names_.index(r)] for r in rivals]
+        a, b = st.offsets[st.names.index(name)], st.offsets[st.names.index(name) + 1]
+        entry = self._competing_entry(name, rivals, [f"a measurement of {', '.join(keys)} (held at the vehicle "
+                                                     "file's value)"] if keys else [], why)
+        entry.update({"value": {p.name: float(v) for p, v in zip(BY_NAME[name].params, x[a:b])},
+                      "effect": eff.as_json()})
+        return [name], [entry], {name: why + ": not named"}
 
     def term_effects_(self) -> dict[str, TermEffect]:
         """Each physics term of the final structure: its effect on the drives as a whole, with the
@@ -567,6 +572,8 @@ class DiscrepancyFinder:
         cov = fit.covariance(getattr(self, "prior_scale_", 1.0))
         cons = getattr(self, "consider_sd_", None)
         Jh = getattr(self, "consider_jac_", np.zeros((0, 0)))
+        # the held values' priors as documented: the empirical-Bayes factor is measured on the calibrated
+        # values, which the drives inform; nothing here tells the held values' spread
         cov_free = covariance_held_free(fit.information(getattr(self, "prior_scale_", 1.0)), fit.jac, Jh,
                                         self.consider_prior_sd_, fit.data_information_scale()) \
             if Jh.size and Jh.shape[0] == fit.jac.shape[0] else None
@@ -1356,6 +1363,11 @@ def _fold_refit(fit: FitResult, held: np.ndarray) -> tuple[float, float]:
         return float(r[held] @ r[held]), float(r[tr] @ r[tr])
     e = r + fit.jac @ _fold_step(fit, held)
     return float(e[held] @ e[held]), float(e[tr] @ e[tr])
+
+
+def _finite_or_lowest(v: float) -> float:
+    """``v``, or minus infinity where it is not a number (the weakest of all)."""
+    return v if math.isfinite(v) else -math.inf
 
 
 def _steers(cases: Sequence[DriveCase]) -> bool:
