@@ -40,9 +40,11 @@ the model-form sd the inspection used. The left-against-right comparison per axl
 ``left_right``): ``false_asymmetry_rate`` (axles whose two dampers hold the same oil level, flagged
 ``asymmetric``) and ``asymmetry_detection_rate`` (axles whose sides differ by >= 0.4, flagged; an axle the
 drive does not tell left from right counts as missed), with counts, the difference's error and coverage
-under ``left_right``.
+under ``left_right``. ``--wheel-loads``: every car weighed as a workshop would (the truth car's static
+wheel loads, each read with a relative error at ``wheel_loads.scale_accuracy`` of ``config/inspection.yaml``;
+:func:`weighed_wheel_loads`), passed to the inspection (``susp inspect --wheel-loads``).
 
-    PYTHONPATH=. .venv/bin/python benchmarks/bench_inspect.py --family development [--cars 3] [--json]
+    PYTHONPATH=. .venv/bin/python benchmarks/bench_inspect.py --family development [--cars 3] [--wheel-loads] [--json]
         [--effects all] [--inspection-config FILE]
 
 ``--inspection-config``: another ``config/inspection.yaml``, e.g. ``benchmarks/inspection_before_issue27.yaml``
@@ -267,8 +269,21 @@ def family_scores(rows: list[dict], states_cfg: dict) -> dict:
             "wrong_states": int(sum(_state_wrong(r["state"], r["truth"], states_cfg) for r in rows))}
 
 
-def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | None = None) -> dict:
-    """Inspect the split's crossings; scores overall, per speed band, per bump band, per form."""
+def weighed_wheel_loads(drive, seed: int, accuracy: float) -> list[float]:
+    """The truth car's static wheel loads FL, FR, RL, RR [N] as a wheel-load scale of relative accuracy
+    ``accuracy`` (sd, per wheel) reads them: sprung mass split by the axle distances, plus each corner's
+    unsprung mass (the truth metadata of ``drive``)."""
+    car = json.loads(drive.metadata["truth"])["car"]
+    g, L = car["gravity"], car["a"] + car["b"]
+    ms, mu = car["sprung_mass"], car["unsprung_mass"]
+    exact = np.array([ms * g * car["b"] / L / 2 + mu[0] * g] * 2 + [ms * g * car["a"] / L / 2 + mu[1] * g] * 2)
+    return (exact * (1.0 + accuracy * np.random.default_rng(seed + 77).standard_normal(4))).tolist()
+
+
+def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | None = None,
+                wheel_loads: bool = False) -> dict:
+    """Inspect the split's crossings; scores overall, per speed band, per bump band, per form. ``wheel_loads``:
+    each car weighed too (:func:`weighed_wheel_loads`, at the scale accuracy of the inspection settings)."""
     cfg = load_config() if cfg is None else cfg
     rows, times, lr_rows = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
@@ -279,7 +294,9 @@ def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | No
             path = Path(tmp) / f"{cr['seed']}.mcap"
             ind.write_drive(path, drive, overwrite=True)
             t0 = time.perf_counter()
-            res = inspect_drives([path], cfg=cfg)
+            loads = weighed_wheel_loads(drive, cr["seed"], float(cfg["wheel_loads"]["scale_accuracy"])) \
+                if wheel_loads else None
+            res = inspect_drives([path], cfg=cfg, wheel_loads_n=loads)
             times.append(time.perf_counter() - t0)
             new = family_rows(res, cr)
             rows += new
@@ -303,6 +320,8 @@ def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | No
             "left_right_rows": [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()}
                                 for r in lr_rows],
             "split": split, "forms": list(by_form), "effects": effects, "cars_per_form": cars,
+            "wheel_loads": "weighed (truth loads, scale error per wheel at wheel_loads.scale_accuracy)" if wheel_loads
+            else "not given",
             "crossings": len(times), "overall": family_scores(rows, st),
             "intact_mean_error": float(np.mean([r["est"] - 1.0 for r in intact])) if intact else None,
             "by_speed_band": by_speed, "by_bump_band": by_bump, "by_form": by_form,
@@ -321,7 +340,7 @@ if __name__ == "__main__":
             sys.exit(f"--family must be one of {fam.SPLITS}")
         cfg_path = _opt("--inspection-config")
         out = family_main(split, int(_opt("--cars", "3") or 3), _opt("--effects", "none") or "none",
-                          cfg=load_config(cfg_path) if cfg_path else None)
+                          cfg=load_config(cfg_path) if cfg_path else None, wheel_loads="--wheel-loads" in sys.argv)
         out["inspection_config"] = cfg_path or "config/inspection.yaml"
         if "--json" not in sys.argv:
             out = {k: v for k, v in out.items() if k not in ("rows", "left_right_rows")}

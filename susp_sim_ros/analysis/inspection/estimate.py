@@ -178,13 +178,14 @@ class Inspection:
     notes_: list = field(default_factory=list)
     protocol_: dict = field(default_factory=dict)   # the crossings seen against the test protocol
     left_right_: list = field(default_factory=list)  # per axle: left minus right oil level (left_right)
+    wheel_loads_: dict | None = None  # the measured static wheel loads and the sprung mass they give
 
     def to_json(self) -> dict:
         """The interface object (interface.md, ``susp inspect``) plus details."""
         return {"wheels": self.wheels_, "axles": self.axles_, "elapsed_s": self.elapsed_s_,
                 "vehicle": self.vehicle_, "nuisance": self.nuisance_,
                 "identifiability": self.identifiability_, "noise": self.noise_, "notes": self.notes_,
-                "protocol": self.protocol_, "left_right": self.left_right_,
+                "protocol": self.protocol_, "left_right": self.left_right_, "wheel_loads": self.wheel_loads_,
                 "fit": {"success": self.fit_.success, "message": self.fit_.message, "nfev": self.fit_.nfev,
                         "rms_x_noise": math.sqrt(self.fit_.rss / max(self.fit_.n, 1))}}
 
@@ -586,17 +587,61 @@ def _curve_beyond_entries(st: Structure, x: np.ndarray, se: np.ndarray) -> list[
     return out
 
 
+def sprung_mass_from_wheel_loads(cal: Sequence, wheel_loads_n: Sequence[float], gravity: float,
+                                 scale_accuracy: float) -> tuple[list, dict]:
+    """The nuisance parameters ``cal`` with the sprung mass's prior taken from the car's measured static
+    wheel loads (FL, FR, RL, RR [N]; a wheel-load scale, or the static reading of an EUSAMA tester):
+    ``sum(F) / g`` minus the unsprung masses (their priors), sd from the scale's relative accuracy per
+    wheel and the unsprung masses' sds. Why: a bump crossing seen by a body IMU tells the car's ratios
+    (spring rate and damping to mass) but hardly its overall scale, so a heavy car read against the
+    vehicle file's mass reads its dampers weak by about the mass ratio (issue 27, benchmarks/RESULTS.md);
+    the scale pins it. Returns the parameters and the JSON entry."""
+    loads = np.asarray(wheel_loads_n, float)
+    if loads.shape != (4,) or not np.all(np.isfinite(loads)) or np.any(loads <= 0):
+        raise ConfigError(f"wheel loads: expected four positive static loads FL,FR,RL,RR in N, got "
+                          f"{list(wheel_loads_n)}")
+    by = {(p.field, p.axle): p for p in cal}
+    if ("sprung_mass", None) not in by:
+        raise ConfigError("wheel loads given but the sprung mass is no inspection nuisance "
+                          "(config/inspection.yaml estimator.nuisance)")
+    unsprung = [by.get(("unsprung_mass", a)) for a in (0, 1)]
+    mu = sum(2.0 * p.prior for p in unsprung if p is not None)
+    var_u = sum(4.0 * p.sd ** 2 for p in unsprung if p is not None)
+    total = float(loads.sum()) / gravity
+    sd = math.sqrt((scale_accuracy * float(np.sqrt(np.sum(loads ** 2))) / gravity) ** 2 + var_u)
+    m_s = total - mu
+    if not m_s > 2 * sd:
+        raise ConfigError(f"wheel loads {list(wheel_loads_n)} N give a total mass of {total:.0f} kg, no more than "
+                          f"the unsprung masses ({mu:.0f} kg): not this car's static loads in N")
+    old = by[("sprung_mass", None)]
+    new = dataclasses.replace(old, prior=m_s, lo=m_s - 2 * sd, hi=m_s + 2 * sd,
+                              reason=f"from the measured static wheel loads ({total:.0f} kg in all, the unsprung "
+                                     "masses' priors taken off)")
+    entry = {"measured_N": [float(v) for v in loads], "total_mass_kg": total, "sprung_mass_prior_kg": m_s,
+             "sprung_mass_prior_sd_kg": sd, "vehicle_file_sprung_mass_kg": old.prior,
+             "front_share": float(loads[:2].sum() / loads.sum())}
+    return [new if p is old else p for p in cal], entry
+
+
 def inspect_drives(paths: Sequence[str | Path], config: str | None = None, variant: str = "full",
-                   cfg: dict | None = None, topic_map=None) -> Inspection:
+                   cfg: dict | None = None, topic_map=None,
+                   wheel_loads_n: Sequence[float] | None = None) -> Inspection:
     """Estimate each damper's oil level with a 95 % interval from the drives ``paths``: what the drives
     can tell (:func:`oil_identifiability`), the fit of oil levels and nuisances, the test protocol, and
-    the levels per wheel and axle."""
+    the levels per wheel and axle. ``wheel_loads_n``: the car's measured static wheel loads FL, FR, RL, RR
+    [N], when weighed (:func:`sprung_mass_from_wheel_loads`)."""
     t_start = time.perf_counter()
     cfg = load_config() if cfg is None else cfg
     est = cfg["estimator"]
     notes: list = []
     model, ev, noise = prepare(paths, config, variant, cfg, topic_map, notes)
     cal = nuisance_params(model, est["nuisance"], est.get("nuisance_range_scale"))
+    loads_entry: dict | None = None
+    if wheel_loads_n is not None:
+        acc = cfg.get("wheel_loads", {}).get("scale_accuracy")
+        if acc is None:
+            raise ConfigError("wheel loads given but the inspection settings have no wheel_loads.scale_accuracy")
+        cal, loads_entry = sprung_mass_from_wheel_loads(cal, wheel_loads_n, model.vehicle.gravity, float(acc))
     ident = oil_identifiability(ev, cal, cfg)
     groups = _oil_groups(ident)
     st, fit, cov = _fit_oil(model, ev, cal, groups, est)
@@ -615,6 +660,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     res = Inspection(wheels, axles, nuis, fit, ev, ident, 0.0, noise, model.vehicle.name, notes,
                      {"validated_for": dict(cfg["protocol"]), "seen": seen, "warnings": found,
                       "model_form_sd": max(sd_m.values()), "model_form_sd_per_axle": sd_m}, lr)
+    res.wheel_loads_ = loads_entry
     res.elapsed_s_ = time.perf_counter() - t_start
     return res
 

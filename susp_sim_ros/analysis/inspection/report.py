@@ -106,6 +106,13 @@ def write_inspection_report(res, out: str | Path, cfg: dict, drives) -> dict:
     for n in d["nuisance"]:
         lines.append(f"| {n['param']} | {n['unit']} | {n['prior']:.4g} | {n['prior_range'][0]:.4g} - "
                      f"{n['prior_range'][1]:.4g} | {n['value']:.4g} | {n['ci95'][0]:.4g} - {n['ci95'][1]:.4g} |")
+    w = d.get("wheel_loads")
+    lines += ["", ("Weighed: static wheel loads " + ", ".join(f"{v:.0f}" for v in w["measured_N"])
+                   + f" N (FL, FR, RL, RR), {w['total_mass_kg']:.0f} kg in all: sprung mass "
+                   f"{w['sprung_mass_prior_kg']:.0f} +- {w['sprung_mass_prior_sd_kg']:.0f} kg as its prior (vehicle "
+                   f"file {w['vehicle_file_sprung_mass_kg']:.0f} kg)") if w else
+              "Not weighed: the sprung mass rests on the vehicle file's range; a car far from it reads its dampers "
+              "off by about the mass ratio (`--wheel-loads`)."]
     lines += ["", f"Fit: {d['fit']['message']} ({d['fit']['nfev']} evaluations), residual RMS "
               f"{d['fit']['rms_x_noise']:.2f} x the sensor noise.", ""]
     for n in d["notes"]:
