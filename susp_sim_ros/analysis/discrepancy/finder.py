@@ -231,8 +231,8 @@ class DiscrepancyFinder:
             self._finish(ev, self._drop_terms(ev, self.result_, drop, path, accepted))
         else:  # every round dropped something (cannot outlast the structure's terms): the last judgement
             _, competing = self._judge_measurement_terms()
+            self.effects_ = self.term_effects_()
         self.competing_: list[dict] = competing + shift_competing + effect_competing
-        self.effects_ = self.term_effects_()
         return self
 
     def _prepare(self, drives, bar) -> Evaluator:
@@ -532,7 +532,7 @@ class DiscrepancyFinder:
         effect}`` of physics competing with those values (the held values that bring most of the effect's
         variance). The learned term has no listed rival physics: it is dropped without an entry.
         Returns (names to drop, competing entries, name -> reason)."""
-        effects = self.term_effects_()
+        effects = self.effects_ = self.term_effects_()  # the report's, once nothing more drops
         for held in (DATA, HELD_FREE):
             weak = [(_finite_or_lowest(eff.ci95_fraction(held)[0]), name) for name, eff in effects.items()
                     if eff.holds_zero(held)]
