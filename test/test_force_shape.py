@@ -195,3 +195,26 @@ def test_feature_series_is_finite_and_the_free_play_bounded(ds, v):
 def test_an_unknown_feature_is_named(bad):
     with pytest.raises(ValueError, match=bad):
         feature_series(bad, *(np.zeros((3, 4)),) * 4, DT)
+
+
+def test_the_shape_is_read_against_the_calibration_with_its_far_shifts_undone():
+    """The regression's target is the model as calibrated, except that a value moved more than one prior
+    sd from its prior (a hypothesis that may have taken up the physics: a blown-off valve read as dampers
+    25 % weaker) is set back to its prior; values within one sd (the car) and other terms are kept."""
+    from types import SimpleNamespace
+
+    from susp_sim_ros.analysis.discrepancy.calibration import CalParam
+    from susp_sim_ros.analysis.discrepancy.finder import CALIBRATION, DiscrepancyFinder
+
+    def par(name, prior, lo, hi):   # prior sd = (hi - lo) / 4
+        return CalParam(name, name, "all", None, "1", prior, lo, hi, "test")
+
+    informed = [par("damper", 1.0, 0.9, 1.1), par("mass", 1400.0, 1260.0, 1540.0), par("arb", 15e3, 12e3, 18e3)]
+    structure = SimpleNamespace(names=[CALIBRATION, "a_term"], offsets=[0, 3, 4])
+    fit = SimpleNamespace(structure=structure, x=np.array([0.75, 1430.0, 17000.0, 42.0]))
+    x = DiscrepancyFinder._without_far_shifts(SimpleNamespace(informed_=informed), fit)
+    # damper 5 sd off -> prior; mass 0.9 sd off -> kept; arb 1.3 sd off -> prior; the term's value kept
+    np.testing.assert_array_equal(x, [1.0, 1430.0, 15e3, 42.0])
+    np.testing.assert_array_equal(fit.x, [0.75, 1430.0, 17000.0, 42.0])   # the fit itself untouched
+    nothing = DiscrepancyFinder._without_far_shifts(SimpleNamespace(informed_=[]), fit)
+    np.testing.assert_array_equal(nothing, fit.x)

@@ -715,19 +715,42 @@ class DiscrepancyFinder:
         """What the missing force left by ``cur`` depends on (:mod:`.force_shape`: the model's corner states
         and, beside them, the input features). Records what the regression saw in ``force_shape_``; None
         when fewer than two drives have rows."""
-        # proposed against the file's values; the joint fit then weighs calibration and learned force
+        # proposed against the file's values, and when nothing is stable there against the calibration as
+        # fitted with its far shifts undone (item 4); the joint fit then weighs calibration and learned force
         st = cur.structure
+        against = "file_values"
         sel = force_shape.select(force_shape.design_for(self, st, st.at_neutral(cur.x, CALIBRATION), cur.idx))
+        if sel is not None and not sel.stable and CALIBRATION in st.names:
+            against = "calibration_within_priors"
+            sel = force_shape.select(force_shape.design_for(self, st, self._without_far_shifts(cur), cur.idx))
         if sel is None:
             return None
         phys = sel.physics()
         self.force_shape_.append({
-            "step": step, "resamples": sel.resamples,
+            "step": step, "read_against": against, "resamples": sel.resamples,
             "selection_frequency": {f"{k[0]}:{k[1]}": q for k, q in sorted(sel.frequency.items())},
             "stable": [f"{c.feature}:{c.axle}" for c in sel.stable], "dependences": sel.dependences,
             "description": sel.description() if sel.stable else "", "listed_rivals": phys.listed_rivals(),
             "input_led": sel.input_led})
         return sel
+
+    def _without_far_shifts(self, fit: FitResult) -> np.ndarray:
+        """``fit.x`` with every calibrated value further than :data:`SHIFT_SD` prior sd from its prior set
+        back to the prior: the shape regression's second look when nothing is stable against the file's
+        values. Within its prior a calibrated value is the car (at the file's values the regression sees
+        every difference of this car from the file too: springs, bars, masses, which can hide a force such
+        as a velocity-weakening friction); far beyond it, a hypothesis that may have taken up what physics
+        explains (a blown-off damper valve taken as intact dampers 25 % weaker, 5 prior sd), which the
+        regression must see."""
+        st = fit.structure
+        x = np.array(fit.x, float, copy=True)
+        if CALIBRATION not in st.names or not self.informed_:
+            return x
+        a = int(st.offsets[st.names.index(CALIBRATION)])
+        for i, p in enumerate(self.informed_):
+            if abs(x[a + i] - p.prior) > SHIFT_SD * p.sd:
+                x[a + i] = p.prior
+        return x
 
     def _input_finding(self, ev: Evaluator, sel: force_shape.Selection, step: int) -> None:
         """An ``unmeasured_input`` finding per drive from a selection led by an input feature: the missing

@@ -9,9 +9,14 @@ axle's two corners as a suspension force does, on every compared signal of every
 forward-difference Jacobian of the whitened residual, as the finder's criteria see it), and the target
 is the residual itself, of the model as fitted so far with its calibration at the vehicle file's values:
 calibration and learned physics then compete on equal terms in the joint fit that follows, instead of
-the calibration having taken up first what the physics would explain. That is the missing force
-attributed to dependences without first estimating it as a smoothed series (:mod:`.missing_force`, the
-picture an engineer reads), whose body-mode band and uncertainty blur the fast forces of a bump impact.
+the calibration having taken up first what the physics would explain. When nothing is stable there, a
+second look reads the residual with the calibration as fitted, every value that moved more than one prior
+sd set back to its prior (the finder's ``_without_far_shifts``): the values within their priors are the
+car, whose differences from the vehicle file can hide a force at the file's values; a far shift is a
+hypothesis that may have taken up the physics (a blown-off valve read as weaker dampers).
+That is the missing force attributed to dependences without first estimating it as a smoothed series
+(:mod:`.missing_force`, the picture an engineer reads), whose body-mode band and uncertainty blur the fast
+forces of a bump impact.
 
 Selection is sparse and held out by drive: orthogonal matching pursuit (scikit-learn's
 ``orthogonal_mp_gram`` on each drive's sufficient statistics; Pati, Rezaiifar and Krishnaprasad 1993)
