@@ -270,13 +270,9 @@ def family_scores(rows: list[dict], states_cfg: dict) -> dict:
 
 
 def weighed_wheel_loads(drive, seed: int, accuracy: float) -> list[float]:
-    """The truth car's static wheel loads FL, FR, RL, RR [N] as a wheel-load scale of relative accuracy
-    ``accuracy`` (sd, per wheel) reads them: sprung mass split by the axle distances, plus each corner's
-    unsprung mass (the truth metadata of ``drive``)."""
-    car = json.loads(drive.metadata["truth"])["car"]
-    g, L = car["gravity"], car["a"] + car["b"]
-    ms, mu = car["sprung_mass"], car["unsprung_mass"]
-    exact = np.array([ms * g * car["b"] / L / 2 + mu[0] * g] * 2 + [ms * g * car["a"] / L / 2 + mu[1] * g] * 2)
+    """The truth car's static wheel loads FL, FR, RL, RR [N] (``TruthCar.static_wheel_loads`` of the truth
+    metadata of ``drive``) as a wheel-load scale of relative accuracy ``accuracy`` (sd, per wheel) reads them."""
+    exact = ind.truth_car_of(drive).static_wheel_loads()
     return (exact * (1.0 + accuracy * np.random.default_rng(seed + 77).standard_normal(4))).tolist()
 
 

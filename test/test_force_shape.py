@@ -212,9 +212,12 @@ def test_the_shape_is_read_against_the_calibration_with_its_far_shifts_undone():
     informed = [par("damper", 1.0, 0.9, 1.1), par("mass", 1400.0, 1260.0, 1540.0), par("arb", 15e3, 12e3, 18e3)]
     structure = SimpleNamespace(names=[CALIBRATION, "a_term"], offsets=[0, 3, 4])
     fit = SimpleNamespace(structure=structure, x=np.array([0.75, 1430.0, 17000.0, 42.0]))
-    x = DiscrepancyFinder._without_far_shifts(SimpleNamespace(informed_=informed), fit)
+    finder = DiscrepancyFinder.__new__(DiscrepancyFinder)   # only the calibration's informed values set
+    finder.informed_ = informed
+    x = finder._without_far_shifts(fit)
     # damper 5 sd off -> prior; mass 0.9 sd off -> kept; arb 1.3 sd off -> prior; the term's value kept
     np.testing.assert_array_equal(x, [1.0, 1430.0, 15e3, 42.0])
     np.testing.assert_array_equal(fit.x, [0.75, 1430.0, 17000.0, 42.0])   # the fit itself untouched
-    nothing = DiscrepancyFinder._without_far_shifts(SimpleNamespace(informed_=[]), fit)
+    finder.informed_ = []
+    nothing = finder._without_far_shifts(fit)
     np.testing.assert_array_equal(nothing, fit.x)

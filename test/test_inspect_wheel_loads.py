@@ -4,7 +4,6 @@ A bump crossing seen by a body IMU tells the car's ratios (spring rate and dampi
 overall scale: a car heavier than the vehicle file read against the file's mass reads its intact dampers
 weak by about the mass ratio (benchmarks/RESULTS.md, "Damper inspection over the truth-generator family").
 """
-import json
 import subprocess
 import sys
 
@@ -17,6 +16,7 @@ from susp_sim_ros.analysis.inspection.report import write_inspection_report
 from susp_sim_ros.analysis.inspection.estimate import sprung_mass_from_wheel_loads
 from susp_sim_ros.errors import ConfigError
 from truth_generators import family
+from truth_generators.independent_sim import truth_car_of
 from susp_sim_ros.io.drive import write_drive
 
 G = 9.81
@@ -63,13 +63,11 @@ def test_a_heavy_car_weighed_reads_its_intact_dampers_intact(tmp_path):
     0.88; weighed, within 0.07 of intact and the sprung mass within 2 % of the truth's."""
     drive = family.bump_crossing(family.FORMS["structure/velocity_scaling_ramp"], 7010, (1.0, 1.0, 1.0, 1.0),
                                  9.0, 0.044, gyro_noise_deg_s=0.1, car_band="within", friction_dev_N=2.0)
-    car = json.loads(drive.metadata["truth"])["car"]
+    car = truth_car_of(drive)
     path = tmp_path / "heavy.mcap"
     write_drive(path, drive, overwrite=True)
-    L = car["a"] + car["b"]
-    front = car["sprung_mass"] * G * car["b"] / L / 2 + car["unsprung_mass"][0] * G
-    rear = car["sprung_mass"] * G * car["a"] / L / 2 + car["unsprung_mass"][1] * G
-    assert car["sprung_mass"] > 1.1 * 1400.0
+    front, _, rear, _ = car.static_wheel_loads()
+    assert car.sprung_mass > 1.1 * 1400.0
 
     plain = inspect_drives([path])
     weighed = inspect_drives([path], wheel_loads_n=[front * 1.01, front * 0.99, rear * 1.005, rear * 0.995])
@@ -78,7 +76,7 @@ def test_a_heavy_car_weighed_reads_its_intact_dampers_intact(tmp_path):
     assert max(low) < 0.92                                  # the scale ridge: read weak by about the mass ratio
     assert min(read) > 0.93 and min(read) > max(low)
     mass = {n["param"]: n["value"] for n in weighed.nuisance_}["sprung_mass"]
-    assert mass == pytest.approx(car["sprung_mass"], rel=0.02)
+    assert mass == pytest.approx(car.sprung_mass, rel=0.02)
     assert weighed.to_json()["wheel_loads"]["total_mass_kg"] == pytest.approx(
         (2 * front + 2 * rear) / G, rel=0.01)
     md = open(write_inspection_report(weighed, tmp_path / "out", load_config(), [path])["report"]).read()

@@ -79,6 +79,14 @@ class TruthCar:
     def total_mass(self) -> float:
         return self.sprung_mass + 2 * self.unsprung_mass[0] + 2 * self.unsprung_mass[1]
 
+    def static_wheel_loads(self) -> np.ndarray:
+        """Static tyre loads FL, FR, RL, RR [N]: the sprung weight split by the lever rule, plus each
+        wheel's unsprung weight (what a wheel-load scale reads on level ground)."""
+        g, L = self.gravity, self.wheelbase
+        front = 0.5 * self.sprung_mass * g * self.b / L + self.unsprung_mass[0] * g
+        rear = 0.5 * self.sprung_mass * g * self.a / L + self.unsprung_mass[1] * g
+        return np.array([front, front, rear, rear])
+
     def perturbed(self, rng, lo: float = 0.05, hi: float = 0.15, extended: bool = False) -> "TruthCar":
         """A car whose sprung mass, inertias, cornering stiffnesses, wheel rates and tyre stiffness differ
         by a random factor 1 +- U(lo, hi) each (random sign); ``factors`` records them. ``extended`` also
@@ -781,6 +789,11 @@ def _white(rng, n, rms, exact):
     if exact and rms > 0 and n > 1:
         x = (x - x.mean()) / np.sqrt(np.mean((x - x.mean()) ** 2))
     return x * rms
+
+
+def truth_car_of(drive) -> TruthCar:
+    """The truth car a drive of :func:`make_drive` was made with (its ``truth`` metadata)."""
+    return TruthCar(**json.loads(drive.metadata["truth"])["car"])
 
 
 def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = None,

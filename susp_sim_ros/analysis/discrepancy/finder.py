@@ -322,16 +322,30 @@ class DiscrepancyFinder:
         the data tell less about the value than its prior does: :func:`_informed_only_by`), as
         ``(index in cur.x, parameter, state, shift in prior sd)``. Such a value (the oil-empty rear damper
         of the one rear-empty car 39 % stronger than measured) is a hypothesis, not a fact."""
-        st = cur.structure
-        if CALIBRATION not in st.names or cur.jac is None or not self.informed_:
+        if cur.jac is None:
+            return []
+        far = {j: (p, z) for j, p, z in self._far_shifts(cur)}
+        if not far:
+            return []
+        out = []
+        for j, state in self._one_state_values(cur).items():
+            if j in far:
+                p, z = far[j]
+                out.append((j, p, state, z))
+        return out
+
+    def _far_shifts(self, fit: FitResult) -> list[tuple[int, CalParam, float]]:
+        """The calibrated values of ``fit`` more than :data:`SHIFT_SD` prior sd from their prior, as
+        ``(index in fit.x, parameter, shift in prior sd)``."""
+        st = fit.structure
+        if CALIBRATION not in st.names or not self.informed_:
             return []
         a = int(st.offsets[st.names.index(CALIBRATION)])
         out = []
-        for j, state in self._one_state_values(cur).items():
-            p = self.informed_[j - a]
-            z = (cur.x[j] - p.prior) / p.sd
+        for i, p in enumerate(self.informed_):
+            z = float((fit.x[a + i] - p.prior) / p.sd)
             if abs(z) > SHIFT_SD:
-                out.append((j, p, state, float(z)))
+                out.append((a + i, p, z))
         return out
 
     def _one_state_values(self, fit: FitResult) -> dict[int, str]:
@@ -742,14 +756,9 @@ class DiscrepancyFinder:
         as a velocity-weakening friction); far beyond it, a hypothesis that may have taken up what physics
         explains (a blown-off damper valve taken as intact dampers 25 % weaker, 5 prior sd), which the
         regression must see."""
-        st = fit.structure
         x = np.array(fit.x, float, copy=True)
-        if CALIBRATION not in st.names or not self.informed_:
-            return x
-        a = int(st.offsets[st.names.index(CALIBRATION)])
-        for i, p in enumerate(self.informed_):
-            if abs(x[a + i] - p.prior) > SHIFT_SD * p.sd:
-                x[a + i] = p.prior
+        for j, p, _ in self._far_shifts(fit):
+            x[j] = p.prior
         return x
 
     def _input_finding(self, ev: Evaluator, sel: force_shape.Selection, step: int) -> None:
