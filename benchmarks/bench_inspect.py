@@ -45,7 +45,13 @@ wheel loads, each read with a relative error at ``wheel_loads.scale_accuracy`` o
 :func:`weighed_wheel_loads`), passed to the inspection (``susp inspect --wheel-loads``).
 
     PYTHONPATH=. .venv/bin/python benchmarks/bench_inspect.py --family development [--cars 3] [--wheel-loads] [--json]
-        [--effects all] [--inspection-config FILE]
+        [--effects all] [--inspection-config FILE] [--declared-oil-law] [--first-seed 5000]
+
+``--declared-oil-law``: each form's damper type rig-tested (:func:`rig_oil_law`: the generator's own damper
+on a virtual rig, drained in quarter steps, each force read to 1 %) and its oil law given to the inspection
+(``susp inspect --oil-law``); without it the inspection reads the fitted force fractions by the model's own
+law, and a form whose damper loses force otherwise with its oil (``structure/combined``: quadratic) reads the
+law's difference, which no drive can show.
 
 ``--inspection-config``: another ``config/inspection.yaml``, e.g. ``benchmarks/inspection_before_issue27.yaml``
 (the estimator as it was before issue 27: no signal model-form fractions, the curve beyond its measured points
@@ -65,6 +71,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from susp_sim_ros.analysis import synthetic  # noqa: E402
 from susp_sim_ros.analysis.inspection import inspect_drives  # noqa: E402
+from susp_sim_ros.analysis.inspection.oil_law import OilLaw  # noqa: E402
 from susp_sim_ros.model.maneuvers import STATES, vehicle_state  # noqa: E402
 from susp_sim_ros.analysis.inspection import load_config  # noqa: E402
 from truth_generators import family as fam  # noqa: E402
@@ -276,14 +283,37 @@ def weighed_wheel_loads(drive, seed: int, accuracy: float) -> list[float]:
     return (exact * (1.0 + accuracy * np.random.default_rng(seed + 77).standard_normal(4))).tolist()
 
 
+RIG_OILS = (0.0, 0.25, 0.5, 0.75, 1.0)   # a damper drained in quarter steps [-]
+RIG_VELOCITY_M_S = 0.3   # the rig's test velocity: inside the measured curve points, above the friction's knee
+RIG_FORCE_ACCURACY = 0.01   # relative sd of one rig force reading (assumed: a load cell's +-2 % at 2 sd)
+
+
+def rig_oil_law(form) -> OilLaw:
+    """The form's damper type on a virtual damper rig (``independent_sim.damper_rig_force``, the generator's
+    own damper): drained in quarter steps, each step's force at :data:`RIG_VELOCITY_M_S` read with a relative
+    error of sd :data:`RIG_FORCE_ACCURACY` (seeded per form: one rig test per damper type), as the fraction
+    of the way from the oil-empty to the intact force -- the oil law a workshop would take from the damper
+    type's rig test (``susp inspect --oil-law``); between the steps the inspection interpolates it."""
+    rng = np.random.default_rng(list(fam.FORMS).index(form.name) + 31)
+    force = np.array([ind.damper_rig_force(form.friction, o, RIG_VELOCITY_M_S) for o in RIG_OILS])
+    force = force * (1.0 + RIG_FORCE_ACCURACY * rng.standard_normal(force.size))
+    frac = (force - force[0]) / (force[-1] - force[0])
+    return OilLaw(RIG_OILS, tuple(float(v) for v in frac),
+                  f"virtual rig test of {form.name}'s damper at {RIG_VELOCITY_M_S:g} m/s, quarter steps, "
+                  f"force read to {RIG_FORCE_ACCURACY:.0%}")
+
+
 def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | None = None,
-                wheel_loads: bool = False) -> dict:
+                wheel_loads: bool = False, declared_oil_law: bool = False, first_seed: int = 5000) -> dict:
     """Inspect the split's crossings; scores overall, per speed band, per bump band, per form. ``wheel_loads``:
-    each car weighed too (:func:`weighed_wheel_loads`, at the scale accuracy of the inspection settings)."""
+    each car weighed too (:func:`weighed_wheel_loads`, at the scale accuracy of the inspection settings).
+    ``declared_oil_law``: each form's damper type rig-tested (:func:`rig_oil_law`) and its law given to the
+    inspection; else the inspection reads force fractions as oil levels by the model's own law. ``first_seed``:
+    another set of cars, speeds and bumps (:func:`family_crossings`) than the default's."""
     cfg = load_config() if cfg is None else cfg
     rows, times, lr_rows = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
-        for cr in family_crossings(split, cars, effects):
+        for cr in family_crossings(split, cars, effects, first_seed):
             drive = fam.bump_crossing(fam.FORMS[cr["form"]], cr["seed"], cr["oil"], cr["speed_kmh"],
                                       cr["height_m"], gyro_noise_deg_s=GYRO_NOISE, car_band=cr["car_band"],
                                       friction_dev_N=2.0)
@@ -292,7 +322,8 @@ def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | No
             t0 = time.perf_counter()
             loads = weighed_wheel_loads(drive, cr["seed"], float(cfg["wheel_loads"]["scale_accuracy"])) \
                 if wheel_loads else None
-            res = inspect_drives([path], cfg=cfg, wheel_loads_n=loads)
+            law = rig_oil_law(fam.FORMS[cr["form"]]) if declared_oil_law else None
+            res = inspect_drives([path], cfg=cfg, wheel_loads_n=loads, oil_law=law)
             times.append(time.perf_counter() - t0)
             new = family_rows(res, cr)
             rows += new
@@ -315,9 +346,12 @@ def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | No
                                asymmetric_min_difference=cfg.get("left_right", {}).get("asymmetric_min_difference")),
             "left_right_rows": [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()}
                                 for r in lr_rows],
-            "split": split, "forms": list(by_form), "effects": effects, "cars_per_form": cars,
+            "split": split, "first_seed": first_seed, "forms": list(by_form), "effects": effects, "cars_per_form": cars,
             "wheel_loads": "weighed (truth loads, scale error per wheel at wheel_loads.scale_accuracy)" if wheel_loads
             else "not given",
+            "oil_law": (f"declared: each form's damper type rig-tested (virtual rig at {RIG_VELOCITY_M_S:g} m/s, "
+                        f"quarter steps of oil, force read to {RIG_FORCE_ACCURACY:.0%})") if declared_oil_law
+            else "not given (the settings' law)",
             "crossings": len(times), "overall": family_scores(rows, st),
             "intact_mean_error": float(np.mean([r["est"] - 1.0 for r in intact])) if intact else None,
             "by_speed_band": by_speed, "by_bump_band": by_bump, "by_form": by_form,
@@ -336,7 +370,9 @@ if __name__ == "__main__":
             sys.exit(f"--family must be one of {fam.SPLITS}")
         cfg_path = _opt("--inspection-config")
         out = family_main(split, int(_opt("--cars", "3") or 3), _opt("--effects", "none") or "none",
-                          cfg=load_config(cfg_path) if cfg_path else None, wheel_loads="--wheel-loads" in sys.argv)
+                          cfg=load_config(cfg_path) if cfg_path else None, wheel_loads="--wheel-loads" in sys.argv,
+                          declared_oil_law="--declared-oil-law" in sys.argv,
+                          first_seed=int(_opt("--first-seed", "5000") or 5000))
         out["inspection_config"] = cfg_path or "config/inspection.yaml"
         if "--json" not in sys.argv:
             out = {k: v for k, v in out.items() if k not in ("rows", "left_right_rows")}

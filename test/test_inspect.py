@@ -356,19 +356,19 @@ def test_left_right_rule_without_a_fit():
     difference exceeds the configured limit; an axle the drives do not tell apart has no difference; a
     one-sided excitation adds the two sides' model-form sds as independent."""
     import numpy as np
-    from susp_sim_ros.analysis.inspection.estimate import left_right
+    from susp_sim_ros.analysis.inspection.estimate import GroupLevel, left_right
     thr = CFG["left_right"]["asymmetric_min_difference"]
     ident = {"front": {"identifiable": "wheel"}, "rear": {"identifiable": "wheel"}}
-    by_group = {w: (0.0, 0.0, 1.0, j) for j, w in enumerate(("FL", "FR", "RL", "RR"))}
+    x = np.array([1.0, 1.0 - 0.5 * thr, 1.0 - 2.0 * thr, 1.0])   # front: apart but small; rear: large
+    by_group = {w: GroupLevel(float(x[j]), 0.0, 1.0, j) for j, w in enumerate(("FL", "FR", "RL", "RR"))}
     cov = np.diag([0.01 ** 2] * 4)
     sd_m = {"front": 0.05, "rear": 0.05}
-    x = np.array([1.0, 1.0 - 0.5 * thr, 1.0 - 2.0 * thr, 1.0])   # front: apart but small; rear: large
-    lr = {e["axle"]: e for e in left_right(ident, by_group, x, cov, sd_m, False, {}, CFG["left_right"])}
+    lr = {e["axle"]: e for e in left_right(ident, by_group, cov, sd_m, False, {}, CFG["left_right"])}
     assert lr["front"]["ci95"][0] > 0.0 and not lr["front"]["asymmetric"]
     assert lr["rear"]["asymmetric"] and lr["rear"]["sd"] == pytest.approx(0.01 * np.sqrt(2))
-    one_sided = left_right(ident, by_group, x, cov, sd_m, True, {}, CFG["left_right"])
+    one_sided = left_right(ident, by_group, cov, sd_m, True, {}, CFG["left_right"])
     assert one_sided[1]["sd"] == pytest.approx(np.sqrt(2 * 0.01 ** 2 + 2 * 0.05 ** 2))
-    none = left_right({"front": {"identifiable": "axle"}, "rear": {"identifiable": "no"}}, {}, x, cov, sd_m,
+    none = left_right({"front": {"identifiable": "axle"}, "rear": {"identifiable": "no"}}, {}, cov, sd_m,
                       False, {}, CFG["left_right"])
     assert all(e["difference"] is None and e["ci95"] is None and not e["asymmetric"] for e in none)
     assert "tell its left from its right" in none[0]["reason"] and "do not excite" in none[1]["reason"]

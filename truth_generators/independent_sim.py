@@ -397,6 +397,30 @@ def _damper(v, ax, X, C, E):
 
 
 @njit(cache=True)
+def _oil_weight(oil, law):
+    """The weight of the intact hydraulic curve and friction level of a damper holding ``oil`` [-] under the
+    oil law of kernel code ``law`` (:data:`OIL_LAWS`: 0 linear, 1 quadratic)."""
+    return oil if law == 0.0 else oil * oil
+
+
+@njit(cache=True)
+def _hydraulic(f_intact, v, w_oil, c_empty):
+    """Hydraulic damper force [N]: the intact curve's force ``f_intact`` at the damper velocity ``v`` [m/s]
+    blended by the oil weight ``w_oil`` with the oil-empty damper's viscous force ``c_empty * v``."""
+    return w_oil * f_intact + (1.0 - w_oil) * c_empty * v
+
+
+def damper_rig_force(fr: TruthFriction, oil: float, velocity_m_s: float, axle: int = 0) -> float:
+    """The hydraulic force [N] of this generator's damper (``axle`` 0 front, 1 rear) drained to ``oil`` [-]
+    at the damper velocity ``velocity_m_s``: what a damper rig measures of the damper type (friction aside),
+    through the kernel's own functions."""
+    X, C, E, _ = hydraulic_curves(fr)
+    w = _oil_weight(float(oil), _code(fr.oil_law, OIL_LAWS, "oil_law"))
+    return float(_hydraulic(_damper(float(velocity_m_s), axle, X, C, E), float(velocity_m_s), w,
+                            float(fr.empty_viscous[axle])))
+
+
+@njit(cache=True)
 def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
     """dy/dt of the mechanical states; aux[i] = (d, dd, Fz, Fs, F_hidden): F_hidden the part of Fs from
     the hidden physics computed here (all but the Dahl elements). Friction forces Ff held (splitting)."""
@@ -428,16 +452,16 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
         if er > 0.0:
             Fs -= P[KSTOP] * (er + er * er * er / (P[ESTOP] * P[ESTOP]))
         ia = int(W[i, WAXLE])
-        w_oil = W[i, WOIL] if P[OILLAW] == 0.0 else W[i, WOIL] * W[i, WOIL]
+        w_oil = _oil_weight(W[i, WOIL], P[OILLAW])
         if W[i, WBOV] > 0.0 and abs(dd[i]) > W[i, WBOV]:   # blow-off valve open: softer intact curve
             vb = W[i, WBOV] if dd[i] > 0.0 else -W[i, WBOV]
             Fc0 = _damper(dd[i], ia, X, C, E)
             Fb = _damper(vb, ia, X, C, E)
             Fbo = Fb + P[BOFAC] * (Fc0 - Fb)
-            Fh = w_oil * Fbo + (1.0 - w_oil) * W[i, WCEMPTY] * dd[i]
+            Fh = _hydraulic(Fbo, dd[i], w_oil, W[i, WCEMPTY])
             Fhid += P[DSCALE] * w_oil * (Fbo - Fc0)
         else:
-            Fh = w_oil * _damper(dd[i], ia, X, C, E) + (1.0 - w_oil) * W[i, WCEMPTY] * dd[i]
+            Fh = _hydraulic(_damper(dd[i], ia, X, C, E), dd[i], w_oil, W[i, WCEMPTY])
         if P[VISLAW] == 0.0:
             Fv = W[i, WCV] * dd[i]
         elif P[VISLAW] == 1.0:
@@ -643,7 +667,7 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
                 Fca = W[i, WFCA] * sh
                 Fe[i] = _dahl(Fe[i], dx, Famp, P[SEPSIG])
             sv = _s_velocity(abs(dx) / h, P) if P[SVON] > 0.0 else 1.0
-            w_oil = W[i, WOIL] if P[OILLAW] == 0.0 else W[i, WOIL] * W[i, WOIL]
+            w_oil = _oil_weight(W[i, WOIL], P[OILLAW])
             soil = 1.0 + (W[i, WSOIL] - 1.0) * (1.0 - w_oil)
             Fcs = W[i, WFCS] * sv * soil * sh
             Fa[i] = _dahl(Fa[i], dx, Fca, P[SIGMA])
@@ -866,7 +890,8 @@ def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = Non
 
 
 __all__ = ["TruthCar", "TruthFriction", "TruthHidden", "TruthSensor", "TruthManeuver", "TruthResult",
-           "simulate", "make_drive", "body_modes", "hydraulic_curves", "s_velocity", "load_measured_dampers",
+           "simulate", "make_drive", "body_modes", "hydraulic_curves", "damper_rig_force", "s_velocity",
+           "load_measured_dampers",
            "SV_SHAPES", "OIL_LAWS", "DAMPER_CURVES", "AMP_ENVELOPES", "AMP_LAWS", "AMP_ELEMENTS", "VISCOUS_LAWS",
            "ROLL_CENTRE_HANDLINGS", "INTEGRATORS",
            "write_drive", "iso8608_road", "iso8608_psd", "SOURCE"]

@@ -1,6 +1,7 @@
 """``susp inspect``: each damper's oil level with a 95 % interval from recorded drives.
 
-    susp inspect DRIVE.mcap... [--config VEHICLE] [--wheel-loads FL,FR,RL,RR] [--json] [--out DIR]
+    susp inspect DRIVE.mcap... [--config VEHICLE] [--wheel-loads FL,FR,RL,RR] [--oil-law OIL:FRACTION,...]
+        [--json] [--out DIR]
 
 A slow bump crossing (5-15 km/h) is the target case; any drive that excites the suspension works. The
 drives' ``damper_oil_level`` metadata is never used (an inspection drive says ``unknown``). Exit 2 on bad
@@ -13,7 +14,8 @@ import math
 
 from ..analysis.inspection import inspect_drives, load_config
 from ..analysis.inspection.report import write_inspection_report
-from ..errors import SuspInputError
+from ..analysis.inspection.oil_law import OilLaw
+from ..errors import ConfigError, SuspInputError
 from ..io.integrity import append_to_report
 from ..io.topic_map import add_topic_map_argument
 
@@ -29,6 +31,14 @@ def wheel_loads(text: str) -> list[float]:
     return loads
 
 
+def oil_law(text: str) -> OilLaw:
+    """``OIL:FRACTION,...``: the damper type's rig-tested oil law (argparse type)."""
+    try:
+        return OilLaw.parse(text)
+    except ConfigError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
 def add_arguments(p) -> None:
     p.add_argument("drives", nargs="+", metavar="DRIVE.mcap", help="recorded drives of one car")
     p.add_argument("--config", default=None,
@@ -38,6 +48,11 @@ def add_arguments(p) -> None:
     p.add_argument("--wheel-loads", type=wheel_loads, default=None, metavar="FL,FR,RL,RR",
                    help="the car's static wheel loads in N, as weighed (wheel-load scale or the EUSAMA tester's "
                         "static reading): pins the car's mass, which a bump crossing hardly tells")
+    p.add_argument("--oil-law", type=oil_law, default=None, metavar="OIL:FRACTION,...",
+                   help="the damper type's oil law from a rig test of a damper drained in steps: at each oil level "
+                        "the fraction of the way from the oil-empty to the intact force it keeps (e.g. "
+                        "0:0,0.5:0.25,1:1); default the inspection settings' damper_type.oil_law (the model's own, "
+                        "the fraction equal to the oil level)")
     p.add_argument("--out", default=None, help="write inspection.md, inspection.json and PNGs here")
     add_topic_map_argument(p)
 
@@ -45,7 +60,7 @@ def add_arguments(p) -> None:
 def run(args) -> dict:
     cfg = load_config()
     res = inspect_drives(args.drives, config=args.config, variant=args.variant, cfg=cfg, topic_map=args.topic_map,
-                         wheel_loads_n=args.wheel_loads)
+                         wheel_loads_n=args.wheel_loads, oil_law=args.oil_law)
     out = res.to_json()
     if args.out:
         out["written"] = write_inspection_report(res, args.out, cfg, args.drives)

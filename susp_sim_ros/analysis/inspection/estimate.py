@@ -25,6 +25,11 @@ more than the body rates), and the intact curve's slope beyond its last measured
 axle (:func:`curve_beyond_candidate`) instead of assumed. The intervals add a model-form sd per axle
 that grows with its peak damper velocity (:func:`model_form_sd`), learned on the development forms.
 
+What is fitted is each damper's remaining force fraction (the kernel's ``OIL`` weight); it is read as an
+oil level through the damper type's oil law (:mod:`.oil_law`, a rig measurement, default the model's
+identity), which no drive can show: the levels, their intervals and the left-right difference are mapped
+through it (:class:`GroupLevel`).
+
 States (``config/inspection.yaml`` ``states``): ``ok`` from ``ok_from``, ``empty`` below
 ``empty_below``, ``degraded`` between; a 95 % interval that reaches into two of them is ``unknown``.
 
@@ -41,6 +46,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
+from typing import NamedTuple
 from pathlib import Path
 from collections.abc import Sequence
 
@@ -60,6 +66,7 @@ from ..discrepancy.engine import Evaluator, Structure
 from ..discrepancy.fit import FitResult, debias, fd_jacobian, fit_structure, n_effective
 from ..discrepancy.locate import noise_sigma
 from . import protocol
+from .oil_law import OilLaw
 from ...model.params import DEFAULT_VEHICLE
 
 STATES = ("ok", "degraded", "empty")
@@ -179,6 +186,7 @@ class Inspection:
     protocol_: dict = field(default_factory=dict)   # the crossings seen against the test protocol
     left_right_: list = field(default_factory=list)  # per axle: left minus right oil level (left_right)
     wheel_loads_: dict | None = None  # the measured static wheel loads and the sprung mass they give
+    oil_law_: OilLaw = field(default_factory=OilLaw)  # how the fitted force fractions were read as oil levels
 
     def to_json(self) -> dict:
         """The interface object (interface.md, ``susp inspect``) plus details."""
@@ -186,6 +194,7 @@ class Inspection:
                 "vehicle": self.vehicle_, "nuisance": self.nuisance_,
                 "identifiability": self.identifiability_, "noise": self.noise_, "notes": self.notes_,
                 "protocol": self.protocol_, "left_right": self.left_right_, "wheel_loads": self.wheel_loads_,
+                "oil_law": self.oil_law_.to_json(),
                 "fit": {"success": self.fit_.success, "message": self.fit_.message, "nfev": self.fit_.nfev,
                         "rms_x_noise": math.sqrt(self.fit_.rss / max(self.fit_.n, 1))}}
 
@@ -448,23 +457,39 @@ def _axle_of(name: str) -> str:
     return next(a for a, corners in AXLE_CORNERS.items() if k in corners)
 
 
-def _group_intervals(groups: list, oil_off: int, x: np.ndarray, se: np.ndarray, sd_m: dict) -> dict:
-    """{group: (oil level, 95 % low, 95 % high, parameter index)}: the fitted level [-] with the
-    posterior sd ``se`` and its axle's model-form sd ``sd_m`` combined, clipped to [0, 1]."""
+class GroupLevel(NamedTuple):
+    """One fitted oil group as reported: the oil level [-] and its 95 % interval, the fit's parameter index
+    of the group's force fraction, and d(oil level)/d(force fraction) there (the oil law's slope)."""
+
+    level: float
+    lo: float
+    hi: float
+    param: int
+    slope: float = 1.0
+
+
+def _group_intervals(groups: list, oil_off: int, x: np.ndarray, se: np.ndarray, sd_m: dict,
+                     law: OilLaw | None = None) -> dict[str, GroupLevel]:
+    """{group: GroupLevel}: the fitted force fraction [-] with the posterior sd ``se`` and its axle's
+    model-form sd ``sd_m`` combined into a 95 % interval, clipped to [0, 1], and the three read as oil
+    levels through the damper type's oil ``law`` (monotone, so the interval maps onto the level's)."""
+    law = OilLaw() if law is None else law
     by_group = {}
     for g, (name, _wheels) in enumerate(groups):
         j = oil_off + g
+        w = float(x[j])
         s = math.hypot(se[j], sd_m[_axle_of(name)])
-        by_group[name] = (float(x[j]), max(0.0, float(x[j] - 1.96 * s)), min(1.0, float(x[j] + 1.96 * s)), j)
+        by_group[name] = GroupLevel(law.level(w), law.level(max(0.0, w - 1.96 * s)),
+                                    law.level(min(1.0, w + 1.96 * s)), j, law.slope(w))
     return by_group
 
 
-def _wheel_and_axle_levels(ident: dict, by_group: dict, x: np.ndarray, cov: np.ndarray, sd_m: dict,
+def _wheel_and_axle_levels(ident: dict, by_group: dict[str, GroupLevel], cov: np.ndarray, sd_m: dict,
                            states_cfg: dict) -> tuple[dict, dict]:
     """The report's entries per wheel and per axle: oil level [-], 95 % interval, state, the fit's own sd
-    (``sd_fit``: Gauss-Newton and consider parts, without the model-form term) and what the drives can
-    tell. A wheel of an ``axle`` group carries the axle's figures; an axle of two ``wheel`` groups the
-    mean of its wheels (with their covariance)."""
+    (``sd_fit``: Gauss-Newton and consider parts, without the model-form term, as an oil level) and what
+    the drives can tell. A wheel of an ``axle`` group carries the axle's figures; an axle of two ``wheel``
+    groups the mean of its wheels' levels (their covariance carried through the oil law's slopes)."""
     wheels, axles = {}, {}
 
     def entry(v, lo, hi, sd_fit, kind, why):
@@ -481,24 +506,29 @@ def _wheel_and_axle_levels(ident: dict, by_group: dict, x: np.ndarray, cov: np.n
             axles[axle] = dict(none, identifiable="no", why=info["why"])
             continue
         if kind == "axle":
-            v, lo, hi, j = by_group[axle]
-            sd_fit = math.sqrt(max(cov[j, j], 0.0))
+            gl = by_group[axle]
+            v, lo, hi = gl.level, gl.lo, gl.hi
+            sd_fit = gl.slope * math.sqrt(max(cov[gl.param, gl.param], 0.0))
             for w in (l, r):
                 wheels[CORNER_NAMES[w]] = entry(v, lo, hi, sd_fit, "axle", info["why"])
         else:
             for w in (l, r):
-                vw, low, hiw, j = by_group[CORNER_NAMES[w]]
-                wheels[CORNER_NAMES[w]] = entry(vw, low, hiw, math.sqrt(max(cov[j, j], 0.0)), "wheel", info["why"])
-            jl, jr = by_group[CORNER_NAMES[l]][3], by_group[CORNER_NAMES[r]][3]
-            v = 0.5 * (x[jl] + x[jr])
-            sd_fit = 0.5 * math.sqrt(max(cov[jl, jl] + cov[jr, jr] + 2 * cov[jl, jr], 0.0))
-            s = math.hypot(sd_fit, sd_m[axle])
+                gw = by_group[CORNER_NAMES[w]]
+                wheels[CORNER_NAMES[w]] = entry(gw.level, gw.lo, gw.hi,
+                                                gw.slope * math.sqrt(max(cov[gw.param, gw.param], 0.0)),
+                                                "wheel", info["why"])
+            a, b = by_group[CORNER_NAMES[l]], by_group[CORNER_NAMES[r]]
+            v = 0.5 * (a.level + b.level)
+            var = (a.slope ** 2 * cov[a.param, a.param] + b.slope ** 2 * cov[b.param, b.param]
+                   + 2 * a.slope * b.slope * cov[a.param, b.param])
+            sd_fit = 0.5 * math.sqrt(max(var, 0.0))
+            s = math.hypot(sd_fit, sd_m[axle] * 0.5 * (a.slope + b.slope))
             lo, hi = max(0.0, v - 1.96 * s), min(1.0, v + 1.96 * s)
         axles[axle] = entry(v, lo, hi, sd_fit, kind, info["why"])
     return wheels, axles
 
 
-def left_right(ident: dict, by_group: dict, x: np.ndarray, cov: np.ndarray, sd_m: dict, tracks_differ: bool,
+def left_right(ident: dict, by_group: dict[str, GroupLevel], cov: np.ndarray, sd_m: dict, tracks_differ: bool,
                axles: dict, lr_cfg: dict) -> list[dict]:
     """Per axle, the workshop's left-against-right comparison (the EUSAMA test's practice: an axle's
     left-right difference is judged besides each wheel's value): ``{"axle", "difference", "ci95",
@@ -507,7 +537,8 @@ def left_right(ident: dict, by_group: dict, x: np.ndarray, cov: np.ndarray, sd_m
     The interval is ``difference +- 1.96 sd`` (clipped to [-1, 1]) with ``sd`` from the fit's joint
     covariance of the two dampers (``var_l + var_r - 2 cov_lr``; Gauss-Newton posterior plus the
     consider part, so whatever the nuisances, the curve-beyond factors and the oil-empty curve's slope
-    do to both sides alike cancels through their correlation).
+    do to both sides alike cancels through their correlation), each side's sd carried from its force
+    fraction to its oil level by the oil law's slope there (:class:`GroupLevel`).
 
     How the model-form sd is treated: on a crossing that excites both tracks alike it is left out of
     the difference. In the estimator it is one figure per axle (:func:`model_form_sd`, from the axle's
@@ -538,11 +569,13 @@ def left_right(ident: dict, by_group: dict, x: np.ndarray, cov: np.ndarray, sd_m
             out.append({"axle": axle, "difference": None, "ci95": None, "sd": None, "asymmetric": False,
                         "reason": f"{axle}: no left-right comparison: {why}"})
             continue
-        jl, jr = by_group[nl][3], by_group[nr][3]
-        d = float(x[jl] - x[jr])
-        var = max(float(cov[jl, jl] + cov[jr, jr] - 2.0 * cov[jl, jr]), 0.0)
+        a, b = by_group[nl], by_group[nr]
+        jl, jr = a.param, b.param
+        d = float(a.level - b.level)
+        var = max(float(a.slope ** 2 * cov[jl, jl] + b.slope ** 2 * cov[jr, jr]
+                        - 2.0 * a.slope * b.slope * cov[jl, jr]), 0.0)
         if tracks_differ:
-            var += 2.0 * sd_m[axle] ** 2
+            var += 2.0 * (sd_m[axle] * 0.5 * (a.slope + b.slope)) ** 2
         sd = math.sqrt(var)
         lo, hi = max(-1.0, d - 1.96 * sd), min(1.0, d + 1.96 * sd)
         excludes_zero = lo > 0.0 or hi < 0.0
@@ -625,14 +658,17 @@ def sprung_mass_from_wheel_loads(cal: Sequence, wheel_loads_n: Sequence[float], 
 
 def inspect_drives(paths: Sequence[str | Path], config: str | None = None, variant: str = "full",
                    cfg: dict | None = None, topic_map=None,
-                   wheel_loads_n: Sequence[float] | None = None) -> Inspection:
+                   wheel_loads_n: Sequence[float] | None = None, oil_law: OilLaw | None = None) -> Inspection:
     """Estimate each damper's oil level with a 95 % interval from the drives ``paths``: what the drives
     can tell (:func:`oil_identifiability`), the fit of oil levels and nuisances, the test protocol, and
     the levels per wheel and axle. ``wheel_loads_n``: the car's measured static wheel loads FL, FR, RL, RR
-    [N], when weighed (:func:`sprung_mass_from_wheel_loads`)."""
+    [N], when weighed (:func:`sprung_mass_from_wheel_loads`). ``oil_law``: the damper type's oil law
+    (:class:`~.oil_law.OilLaw`, from a rig test), else the settings' ``damper_type.oil_law``, else the
+    model's own: the fit estimates each damper's remaining force fraction, the law reads it as oil."""
     t_start = time.perf_counter()
     cfg = load_config() if cfg is None else cfg
     est = cfg["estimator"]
+    law = OilLaw.from_settings(cfg) if oil_law is None else oil_law
     notes: list = []
     model, ev, noise = prepare(paths, config, variant, cfg, topic_map, notes)
     cal = nuisance_params(model, est["nuisance"], est.get("nuisance_range_scale"))
@@ -648,9 +684,9 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     se = np.sqrt(np.clip(np.diag(cov), 0, None))
     seen, found, sd_m = _check_protocol(ev, fit, ident, cfg, model, notes)
     oil_off: int = st.offsets[1] if groups else 0     # unused without groups
-    by_group = _group_intervals(groups, oil_off, fit.x, se, sd_m)
-    wheels, axles = _wheel_and_axle_levels(ident, by_group, fit.x, cov, sd_m, cfg["states"])
-    lr = (left_right(ident, by_group, fit.x, cov, sd_m, _tracks_differ(ev.cases), axles, cfg["left_right"])
+    by_group = _group_intervals(groups, oil_off, fit.x, se, sd_m, law)
+    wheels, axles = _wheel_and_axle_levels(ident, by_group, cov, sd_m, cfg["states"])
+    lr = (left_right(ident, by_group, cov, sd_m, _tracks_differ(ev.cases), axles, cfg["left_right"])
           if "left_right" in cfg else [])   # a settings file of before the comparison has no section
     nuis = _nuisance_entries(cal, fit.x, se)
     if "curve_beyond" in st.names:
@@ -661,6 +697,7 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
                      {"validated_for": dict(cfg["protocol"]), "seen": seen, "warnings": found,
                       "model_form_sd": max(sd_m.values()), "model_form_sd_per_axle": sd_m}, lr)
     res.wheel_loads_ = loads_entry
+    res.oil_law_ = law
     res.elapsed_s_ = time.perf_counter() - t_start
     return res
 

@@ -96,6 +96,14 @@ def write_inspection_report(res, out: str | Path, cfg: dict, drives) -> dict:
         v = "-" if e["oil_level"] is None else f"{e['oil_level']:.2f}"
         ci = "-" if e["ci95"] is None else f"{e['ci95'][0]:.2f} - {e['ci95'][1]:.2f}"
         lines.append(f"| {a} | {v} | {ci} | {e['state']} |")
+    law = d.get("oil_law") or {}
+    lines += ["", (f"Oil law of the damper type: {law['source']}: a drive shows each damper's remaining force "
+                   "fraction, which reads as its oil level only through how the damper type loses force with "
+                   "its oil; a rig test of a damper drained in steps gives it (`--oil-law`)."
+                   if law.get("model_law", True) else
+                   "Oil law of the damper type (force fraction kept at each oil level, rig test): "
+                   + ", ".join(f"{o:g} -> {f:g}" for o, f in zip(law["oil"], law["force_fraction"]))
+                   + f" ({law['source']}); the fitted force fractions are read as oil levels through it.")]
     lines += ["", "What the drives can tell:", ""]
     for a, e in d["identifiability"].items():
         lines.append(f"- {a}: **{e['identifiable']}**: {e['why']}")
