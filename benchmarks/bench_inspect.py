@@ -59,6 +59,7 @@ held, a constant model-form sd of 0.05), to measure before and after on the same
 """
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 import tempfile
@@ -294,11 +295,9 @@ def rig_oil_law(form) -> OilLaw:
     error of sd :data:`RIG_FORCE_ACCURACY` (seeded per form: one rig test per damper type), as the fraction
     of the way from the oil-empty to the intact force -- the oil law a workshop would take from the damper
     type's rig test (``susp inspect --oil-law``); between the steps the inspection interpolates it."""
-    rng = np.random.default_rng(list(fam.FORMS).index(form.name) + 31)
-    force = np.array([ind.damper_rig_force(form.friction, o, RIG_VELOCITY_M_S) for o in RIG_OILS])
-    force = force * (1.0 + RIG_FORCE_ACCURACY * rng.standard_normal(force.size))
-    frac = (force - force[0]) / (force[-1] - force[0])
-    return OilLaw(RIG_OILS, tuple(float(v) for v in frac),
+    oils, frac = ind.damper_rig_oil_law(form.friction, RIG_OILS, RIG_VELOCITY_M_S, RIG_FORCE_ACCURACY,
+                                        np.random.default_rng(list(fam.FORMS).index(form.name) + 31))
+    return OilLaw(oils, frac,
                   f"virtual rig test of {form.name}'s damper at {RIG_VELOCITY_M_S:g} m/s, quarter steps, "
                   f"force read to {RIG_FORCE_ACCURACY:.0%}")
 
@@ -359,25 +358,33 @@ def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | No
             "rows": [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()} for r in rows]}
 
 
-def _opt(name: str, default: str | None = None) -> str | None:
-    return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
+def parse_args(argv=None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description="susp inspect against synthetic truth drives (issue 14) or over the "
+                                            "truth-generator family (issue 27); prints JSON")
+    p.add_argument("n", nargs="?", type=int, default=24, help="drives of the synthetic run (default 24)")
+    p.add_argument("first", nargs="?", type=int, default=0, help="index of the synthetic run's first drive")
+    p.add_argument("--own", action="store_true", help="the project's own generator instead of independent_sim")
+    p.add_argument("--family", choices=fam.SPLITS, default=None, help="the family's split to inspect")
+    p.add_argument("--cars", type=int, default=3, help="cars per form (family)")
+    p.add_argument("--first-seed", type=int, default=5000, help="seed of the first car (family; another set)")
+    p.add_argument("--effects", choices=("none", "all"), default="none",
+                   help="the forms that hide no physics, or all forms (family)")
+    p.add_argument("--inspection-config", default=None, metavar="FILE", help="another config/inspection.yaml")
+    p.add_argument("--wheel-loads", action="store_true", help="every car weighed (family)")
+    p.add_argument("--declared-oil-law", action="store_true", help="each form's damper type rig-tested (family)")
+    p.add_argument("--json", action="store_true", help="with the per-damper rows (family)")
+    return p.parse_args(argv)
 
 
 if __name__ == "__main__":
-    if "--family" in sys.argv:
-        split = _opt("--family")
-        if split not in fam.SPLITS:
-            sys.exit(f"--family must be one of {fam.SPLITS}")
-        cfg_path = _opt("--inspection-config")
-        out = family_main(split, int(_opt("--cars", "3") or 3), _opt("--effects", "none") or "none",
-                          cfg=load_config(cfg_path) if cfg_path else None, wheel_loads="--wheel-loads" in sys.argv,
-                          declared_oil_law="--declared-oil-law" in sys.argv,
-                          first_seed=int(_opt("--first-seed", "5000") or 5000))
-        out["inspection_config"] = cfg_path or "config/inspection.yaml"
-        if "--json" not in sys.argv:
+    a = parse_args()
+    if a.family:
+        out = family_main(a.family, a.cars, a.effects,
+                          cfg=load_config(a.inspection_config) if a.inspection_config else None,
+                          wheel_loads=a.wheel_loads, declared_oil_law=a.declared_oil_law, first_seed=a.first_seed)
+        out["inspection_config"] = a.inspection_config or "config/inspection.yaml"
+        if not a.json:
             out = {k: v for k, v in out.items() if k not in ("rows", "left_right_rows")}
         print(json.dumps(out, indent=1))
     else:
-        args = [a for a in sys.argv[1:] if not a.startswith("--")]
-        print(json.dumps(main(int(args[0]) if args else 24, "--own" in sys.argv,
-                              first=int(args[1]) if len(args) > 1 else 0), indent=1))
+        print(json.dumps(main(a.n, a.own, first=a.first), indent=1))

@@ -20,9 +20,8 @@ RIG_OILS = tuple(float(v) for v in np.linspace(0.0, 1.0, 11))
 
 
 def rig_law(friction) -> OilLaw:
-    """The truth damper on a virtual rig at 0.3 m/s, drained in steps of 0.1 (as benchmarks/bench_inspect)."""
-    force = np.array([ind.damper_rig_force(friction, o, 0.3) for o in RIG_OILS])
-    return OilLaw(RIG_OILS, tuple(float(v) for v in (force - force[0]) / (force[-1] - force[0])), "test rig")
+    """The truth damper on a virtual rig at 0.3 m/s, drained in steps of 0.1, forces read exactly."""
+    return OilLaw(*ind.damper_rig_oil_law(friction, RIG_OILS, 0.3), "test rig")
 
 
 @pytest.fixture(scope="module")

@@ -420,6 +420,19 @@ def damper_rig_force(fr: TruthFriction, oil: float, velocity_m_s: float, axle: i
                             float(fr.empty_viscous[axle])))
 
 
+def damper_rig_oil_law(fr: TruthFriction, oils, velocity_m_s: float, accuracy: float = 0.0,
+                       rng: np.random.Generator | None = None, axle: int = 0) -> tuple[tuple, tuple]:
+    """A rig test of this generator's damper type drained in steps: at each of ``oils`` (rising from 0 to 1)
+    the force at ``velocity_m_s`` (:func:`damper_rig_force`), each reading off by a relative error of sd
+    ``accuracy`` (drawn from ``rng``), as the fraction of the way from the oil-empty to the intact force.
+    Returns (oil levels, force fractions), the table ``susp inspect --oil-law`` takes."""
+    force = np.array([damper_rig_force(fr, o, velocity_m_s, axle) for o in oils])
+    if accuracy > 0.0:
+        force = force * (1.0 + accuracy * (rng or np.random.default_rng()).standard_normal(force.size))
+    frac = (force - force[0]) / (force[-1] - force[0])
+    return tuple(float(o) for o in oils), tuple(float(f) for f in frac)
+
+
 @njit(cache=True)
 def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
     """dy/dt of the mechanical states; aux[i] = (d, dd, Fz, Fs, F_hidden): F_hidden the part of Fs from
@@ -890,7 +903,8 @@ def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = Non
 
 
 __all__ = ["TruthCar", "TruthFriction", "TruthHidden", "TruthSensor", "TruthManeuver", "TruthResult",
-           "simulate", "make_drive", "body_modes", "hydraulic_curves", "damper_rig_force", "s_velocity",
+           "simulate", "make_drive", "body_modes", "hydraulic_curves", "damper_rig_force", "damper_rig_oil_law",
+           "s_velocity",
            "load_measured_dampers",
            "SV_SHAPES", "OIL_LAWS", "DAMPER_CURVES", "AMP_ENVELOPES", "AMP_LAWS", "AMP_ELEMENTS", "VISCOUS_LAWS",
            "ROLL_CENTRE_HANDLINGS", "INTEGRATORS",
