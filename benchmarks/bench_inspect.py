@@ -60,6 +60,7 @@ held, a constant model-form sd of 0.05), to measure before and after on the same
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
 import tempfile
@@ -289,12 +290,14 @@ RIG_VELOCITY_M_S = 0.3   # the rig's test velocity: inside the measured curve po
 RIG_FORCE_ACCURACY = 0.01   # relative sd of one rig force reading (assumed: a load cell's +-2 % at 2 sd)
 
 
-def rig_oil_law(form) -> OilLaw:
+@functools.cache
+def rig_oil_law(form_name: str) -> OilLaw:
     """The form's damper type on a virtual damper rig (``independent_sim.damper_rig_force``, the generator's
     own damper): drained in quarter steps, each step's force at :data:`RIG_VELOCITY_M_S` read with a relative
-    error of sd :data:`RIG_FORCE_ACCURACY` (seeded per form: one rig test per damper type), as the fraction
+    error of sd :data:`RIG_FORCE_ACCURACY` (seeded per form: one rig test per damper type, done once), as the fraction
     of the way from the oil-empty to the intact force -- the oil law a workshop would take from the damper
     type's rig test (``susp inspect --oil-law``); between the steps the inspection interpolates it."""
+    form = fam.FORMS[form_name]
     oils, frac = ind.damper_rig_oil_law(form.friction, RIG_OILS, RIG_VELOCITY_M_S, RIG_FORCE_ACCURACY,
                                         np.random.default_rng(list(fam.FORMS).index(form.name) + 31))
     return OilLaw(oils, frac,
@@ -321,7 +324,7 @@ def family_main(split: str, cars: int = 3, effects: str = "none", cfg: dict | No
             t0 = time.perf_counter()
             loads = weighed_wheel_loads(drive, cr["seed"], float(cfg["wheel_loads"]["scale_accuracy"])) \
                 if wheel_loads else None
-            law = rig_oil_law(fam.FORMS[cr["form"]]) if declared_oil_law else None
+            law = rig_oil_law(cr["form"]) if declared_oil_law else None
             res = inspect_drives([path], cfg=cfg, wheel_loads_n=loads, oil_law=law)
             times.append(time.perf_counter() - t0)
             new = family_rows(res, cr)

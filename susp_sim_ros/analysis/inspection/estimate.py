@@ -469,11 +469,10 @@ class GroupLevel(NamedTuple):
 
 
 def _group_intervals(groups: list, oil_off: int, x: np.ndarray, se: np.ndarray, sd_m: dict,
-                     law: OilLaw | None = None) -> dict[str, GroupLevel]:
+                     law: OilLaw) -> dict[str, GroupLevel]:
     """{group: GroupLevel}: the fitted force fraction [-] with the posterior sd ``se`` and its axle's
     model-form sd ``sd_m`` combined into a 95 % interval, clipped to [0, 1], and the three read as oil
     levels through the damper type's oil ``law`` (monotone, so the interval maps onto the level's)."""
-    law = OilLaw() if law is None else law
     by_group = {}
     for g, (name, _wheels) in enumerate(groups):
         j = oil_off + g
@@ -482,6 +481,11 @@ def _group_intervals(groups: list, oil_off: int, x: np.ndarray, se: np.ndarray, 
         by_group[name] = GroupLevel(law.level(w), law.level(max(0.0, w - 1.96 * s)),
                                     law.level(min(1.0, w + 1.96 * s)), j, law.slope(w))
     return by_group
+
+
+def _axle_model_form_sd(sd_m: dict, axle: str, a: GroupLevel, b: GroupLevel) -> float:
+    """The axle's model-form sd (a force fraction) as an oil level, through the mean slope of its two sides."""
+    return sd_m[axle] * 0.5 * (a.slope + b.slope)
 
 
 def _wheel_and_axle_levels(ident: dict, by_group: dict[str, GroupLevel], cov: np.ndarray, sd_m: dict,
@@ -522,7 +526,7 @@ def _wheel_and_axle_levels(ident: dict, by_group: dict[str, GroupLevel], cov: np
             var = (a.slope ** 2 * cov[a.param, a.param] + b.slope ** 2 * cov[b.param, b.param]
                    + 2 * a.slope * b.slope * cov[a.param, b.param])
             sd_fit = 0.5 * math.sqrt(max(var, 0.0))
-            s = math.hypot(sd_fit, sd_m[axle] * 0.5 * (a.slope + b.slope))
+            s = math.hypot(sd_fit, _axle_model_form_sd(sd_m, axle, a, b))
             lo, hi = max(0.0, v - 1.96 * s), min(1.0, v + 1.96 * s)
         axles[axle] = entry(v, lo, hi, sd_fit, kind, info["why"])
     return wheels, axles
@@ -575,7 +579,7 @@ def left_right(ident: dict, by_group: dict[str, GroupLevel], cov: np.ndarray, sd
         var = max(float(a.slope ** 2 * cov[jl, jl] + b.slope ** 2 * cov[jr, jr]
                         - 2.0 * a.slope * b.slope * cov[jl, jr]), 0.0)
         if tracks_differ:
-            var += 2.0 * (sd_m[axle] * 0.5 * (a.slope + b.slope)) ** 2
+            var += 2.0 * _axle_model_form_sd(sd_m, axle, a, b) ** 2
         sd = math.sqrt(var)
         lo, hi = max(-1.0, d - 1.96 * sd), min(1.0, d + 1.96 * sd)
         excludes_zero = lo > 0.0 or hi < 0.0

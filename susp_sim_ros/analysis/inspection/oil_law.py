@@ -15,7 +15,8 @@ identity) and the report says so.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
@@ -53,17 +54,19 @@ class OilLaw:
         """Whether this is the identity (the model's own assumption)."""
         return np.allclose(self.oil, self.force_fraction)
 
+    @cached_property
     def _inverse(self) -> PchipInterpolator:
+        """Oil level as a function of the force fraction (built once per law)."""
         return PchipInterpolator(np.asarray(self.force_fraction, float), np.asarray(self.oil, float))
 
     def level(self, force_fraction: float) -> float:
         """The oil level [-] of a damper keeping ``force_fraction`` [-] of its force (clipped to [0, 1])."""
-        return float(np.clip(self._inverse()(float(np.clip(force_fraction, 0.0, 1.0))), 0.0, 1.0))
+        return float(np.clip(self._inverse(float(np.clip(force_fraction, 0.0, 1.0))), 0.0, 1.0))
 
     def slope(self, force_fraction: float) -> float:
         """d(oil level) / d(force fraction) [-] at ``force_fraction``: what carries an sd of the fitted force
         fraction into one of the oil level (the linearisation the intervals' combinations use)."""
-        return float(self._inverse().derivative()(float(np.clip(force_fraction, 0.0, 1.0))))
+        return float(self._inverse.derivative()(float(np.clip(force_fraction, 0.0, 1.0))))
 
     def to_json(self) -> dict:
         return {"oil": list(self.oil), "force_fraction": list(self.force_fraction), "source": self.source,
@@ -95,4 +98,4 @@ class OilLaw:
                               f"[...]}}, got {entry!r}") from None
         law = cls(tuple(float(v) for v in oil), tuple(float(v) for v in frac),
                   str(entry.get("source", "inspection settings damper_type.oil_law")))
-        return cls(law.oil, law.force_fraction, MODEL_LAW_SOURCE) if law.is_model_law else law
+        return replace(law, source=MODEL_LAW_SOURCE) if law.is_model_law else law
