@@ -225,3 +225,23 @@ def test_hidden_physics_changes_the_response(bump_runs):
     assert np.abs(visc.gyro[:, 1]).max() != pytest.approx(np.abs(base.gyro[:, 1]).max(), rel=1e-3)
     amp = simulate(maneuver=TruthManeuver.bump(), hidden=TruthHidden(amplitude_extra_N=(20.0, 25.0)))
     assert np.abs(amp.friction).max() > np.abs(base.friction).max() + 10.0
+
+
+@pytest.mark.parametrize("law,expect", [
+    ("linear", lambda v: 300.0 * v),
+    ("power", lambda v: 300.0 * 0.1 * np.sign(v) * np.abs(v / 0.1) ** 0.6),
+    ("bilinear", lambda v: 300.0 * np.sign(v) * np.where(np.abs(v) <= 0.06, np.abs(v),
+                                                          0.06 + 0.35 * (np.abs(v) - 0.06)))])
+def test_the_extra_damping_follows_its_law(law, expect):
+    """The generator's hidden extra damping against the deflection velocity (central differences of the
+    recorded deflection; away from reversals and samples where the velocity changes fast)."""
+    ref = 0.06 if law == "bilinear" else 0.1
+    r = simulate(maneuver=TruthManeuver.bump(), hidden=TruthHidden(extra_viscous=(300.0, 300.0), viscous_law=law,
+                                                                   viscous_ref_m_s=ref, viscous_exponent=0.6,
+                                                                   viscous_slope_ratio=0.35))
+    d, h, t = np.asarray(r.deflection)[:, 0], np.asarray(r.hidden)[:, 0], np.asarray(r.t)
+    v = np.gradient(d, t)
+    smooth = np.abs(np.gradient(v, t)) * (t[1] - t[0]) < 1e-4
+    sel = smooth & (np.abs(v) > 0.01)
+    assert sel.sum() > 100 and np.abs(v[sel]).max() > 0.1
+    np.testing.assert_allclose(h[sel], expect(v[sel]), rtol=0.05, atol=1.0)

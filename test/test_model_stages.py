@@ -128,6 +128,7 @@ def test_term_parameters_append_slots_with_their_units():
     slots = L.P_SLOTS + L.term_param_slots(terms)
     assert all(a.index + a.size == b.index for a, b in zip(slots, slots[1:]))
     assert slots[-1].index + slots[-1].size == L.KernelLayout.for_terms(terms).n_p
-    assert [(s.name, s.unit) for s in slots[-5:]] == [
+    assert [(s.name, s.unit) for s in slots[-7:]] == [
         ("axle_friction.level", "N"), ("axle_friction.sigma", "N/m"), ("damper_friction.level", "N"),
-        ("damper_friction.sigma", "N/m"), ("extra_viscous_damping.c", "N s/m")]
+        ("damper_friction.sigma", "N/m"), ("extra_viscous_damping.c", "N s/m"), ("extra_viscous_damping.n", "1"),
+        ("extra_viscous_damping.v_ref", "m/s")]

@@ -134,6 +134,25 @@ def test_physics_term_interface_extra_viscous_damping(tmp_path):
     assert np.sum(q(visc)[ring] ** 2) < 0.8 * np.sum(q(base)[ring] ** 2)
 
 
+def test_extra_viscous_damping_follows_its_power_law_on_the_rig(tmp_path):
+    """With an exponent the term's force is c v_ref sgn(v) |v/v_ref|^n: at v_ref it is c v_ref whatever n,
+    below v_ref a digressive law (n < 1) gives more than the linear one, above less."""
+    f = tmp_path / "visc.yaml"
+    f.write_text("name: visc\nvelocity_scaling: true\noil_scaling: true\nhorizontal_scaling: true\n"
+                 "terms:\n  - name: extra_viscous_damping\n"
+                 "    params: {c: {front: 500.0, rear: 0.0}, n: {front: 0.5, rear: 0.5}}\n")
+    base, visc = Model(variant="full"), Model(variant=str(f))
+    fb = np.array(damper_rig(base, "front", 1.0).force_velocity)
+    fv = np.array(damper_rig(visc, "front", 1.0).force_velocity)
+    v = fv[:, 0]
+    np.testing.assert_allclose(fv[:, 1] - fb[:, 1], 500.0 * 0.1 * np.sign(v) * np.sqrt(np.abs(v) / 0.1),
+                               rtol=1e-6, atol=1e-6)
+    slow, fast = (np.abs(v) > 0) & (np.abs(v) < 0.1), np.abs(v) > 0.1
+    assert slow.any() and fast.any()
+    extra = np.abs(fv[:, 1] - fb[:, 1])
+    assert np.all(extra[slow] > 500.0 * np.abs(v[slow])) and np.all(extra[fast] < 500.0 * np.abs(v[fast]))
+
+
 @pytest.mark.parametrize("text,match", [
     ("name: x\nvelocity_scaling: yes-ish\noil_scaling: true\nhorizontal_scaling: true\n", "velocity_scaling"),
     ("name: x\nvelocity_scaling: true\noil_scaling: true\nhorizontal_scaling: true\nterms: [{name: nope}]\n",

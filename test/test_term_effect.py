@@ -104,7 +104,7 @@ def test_held_values_at_their_file_value_add_their_consider_variance():
 def _finder_with(effects: dict) -> fm.DiscrepancyFinder:
     st = Structure(["extra_viscous_damping", "friction_amplitude", "time_offset"])
     f = fm.DiscrepancyFinder()
-    f.result_ = SimpleNamespace(structure=st, x=np.r_[120.0, 80.0, 30.0, 30.0, 0.005, 1.0, 0.0, 0.001])
+    f.result_ = SimpleNamespace(structure=st, x=np.r_[120.0, 80.0, 1.0, 30.0, 30.0, 0.005, 1.0, 0.0, 0.001])
     f.consider_names_ = ["a:all", "b:all", "tyre_damping:front"]
     f.consider_keys_ = ["geometry.a", "geometry.b", "tyre_damping (front)"]
     f.term_effects_ = lambda: effects  # type: ignore[method-assign]
@@ -137,7 +137,7 @@ def test_physics_terms_are_judged_on_their_effect():
     assert drop == ["extra_viscous_damping"] and [c["name"] for c in competing] == ["extra_viscous_damping"]
     c = competing[0]
     assert c["competes_with"] == ["a:all"] and "geometry.a" in c["reveal_with"]
-    assert c["value"] == {"c_front": 120.0, "c_rear": 80.0}
+    assert c["value"] == {"c_front": 120.0, "c_rear": 80.0, "exponent": 1.0}
     assert c["effect"]["ci95_fraction"][0] <= 0.0 < c["effect"]["ci95_fraction_data"][0]
 
 

@@ -251,7 +251,10 @@ def test_existing_forms_keep_their_split_and_their_truth():
         for name in names:
             assert family.split_of(name) == split, name
     before = {n for names in SPLIT_BEFORE_26.values() for n in names}
-    assert set(family.FORMS) - before == set(UNLISTED)
+    # forms added later are held out from the start (never moved between splits)
+    added_27 = {"viscous/bilinear_digressive"}
+    assert set(family.FORMS) - before == set(UNLISTED) | added_27
+    assert all(family.split_of(n) == "held_out" for n in added_27)
     off = ind.TruthHidden()
     for name in before:
         h = family.FORMS[name].hidden

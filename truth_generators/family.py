@@ -171,6 +171,12 @@ def _forms() -> dict[str, GeneratorForm]:
         GeneratorForm("lateral/other_structure", description="as lateral/nominal on Heun at 1 ms, square-root "
                       "velocity scaling, Akima damper curve, quadratic oil law, per-axle roll centres",
                       **lat, **other),
+        # added 2026-11-27 (issue 24), held out from the start: after the product's extra damping gained a
+        # power law, whose family contains the held-out viscous/power form, a law it does not contain
+        GeneratorForm("viscous/bilinear_digressive", description="extra damping of a two-stage valve: slope c "
+                      "up to 0.06 m/s, 0.35 c beyond (digressive, piecewise linear), c 350 / 420 N s/m",
+                      hidden=TruthHidden(extra_viscous=(350.0, 420.0), viscous_law="bilinear",
+                                         viscous_ref_m_s=0.06, viscous_slope_ratio=0.35), **visc),
         GeneratorForm("amplitude_viscous/rear", "amplitude_and_viscous", "rear axle: amplitude friction "
                       "(decaying peak, saturating, 20 N) and extra viscous damping 300 N s/m",
                       expect=("friction_amplitude", "extra_viscous_damping"),

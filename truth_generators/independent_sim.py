@@ -169,9 +169,11 @@ class TruthHidden:
     #                                               "separate": an own Dahl element, unscaled
     amplitude_stiffness_factor: float = 0.5       # separate element: Dahl stiffness = factor x friction sigma
     viscous_law: str = "linear"                   # c v; "power": c v_r sgn(v) |v/v_r|^n;
-    #                                               "saturating": c v_r tanh(v/v_r)
+    #                                               "saturating": c v_r tanh(v/v_r); "bilinear": slope c
+    #                                               up to the knee |v| = v_r, slope ratio x c beyond
     viscous_exponent: float = 0.6
     viscous_ref_m_s: float = 0.1
+    viscous_slope_ratio: float = 0.35             # bilinear: slope beyond the knee over slope below
     gas_cubic_N_m3: tuple = (0.0, 0.0, 0.0, 0.0)  # progressive gas spring: + k3 d^3
     # physics no candidate of the product lists (issue 26; off by default, bit-identical then)
     blow_off_velocity_m_s: tuple = (0.0, 0.0)     # damper blow-off valve opens beyond +-v_bo (0 = no valve):
@@ -187,7 +189,7 @@ class TruthHidden:
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
 AMP_LAWS = ("saturating", "linear", "power")
 AMP_ELEMENTS = ("axle", "separate")
-VISCOUS_LAWS = ("linear", "power", "saturating")
+VISCOUS_LAWS = ("linear", "power", "saturating", "bilinear")
 ROLL_CENTRE_HANDLINGS = ("mean", "per_axle")
 #: integrators of the mechanical states (Dahl states always by their exact step solution)
 INTEGRATORS = ("rk4", "heun", "semi_implicit_euler")
@@ -317,7 +319,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
 # ==== parameter arrays for the kernel =================================================================
 (G, MS, MT, IXX, IYY, IZZ, H, HRC, HPC, A_, B_, MU, RELAX, VFADE, RATIO, KT, CT, KSTOP, ESTOP, DSCALE,
  SIGMA, SVINF, SVS, SVREF, FRIC, AMPA0, AMPTAU, DRIVEF, BRAKEF, SVON, AMPENV, AMPLAW, AMPEXP, AMPSEP, SEPSIG,
- VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, NP) = range(46)
+ VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, NW) = range(29)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
@@ -345,7 +347,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
     P[AMPSEP] = _code(hid.amplitude_element, AMP_ELEMENTS, "amplitude_element")
     P[SEPSIG] = hid.amplitude_stiffness_factor * fr.sigma
     P[VISLAW] = _code(hid.viscous_law, VISCOUS_LAWS, "viscous_law")
-    P[VISN], P[VISREF] = hid.viscous_exponent, hid.viscous_ref_m_s
+    P[VISN], P[VISREF], P[VISRATIO] = hid.viscous_exponent, hid.viscous_ref_m_s, hid.viscous_slope_ratio
     P[SVSHAPE] = _code(fr.sv_shape, SV_SHAPES, "sv_shape")
     P[OILLAW] = _code(fr.oil_law, OIL_LAWS, "oil_law")
     P[RCMODE] = _code(car.roll_centre_handling, ROLL_CENTRE_HANDLINGS, "roll_centre_handling")
@@ -480,8 +482,12 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
         elif P[VISLAW] == 1.0:
             sg = 1.0 if dd[i] >= 0.0 else -1.0
             Fv = W[i, WCV] * P[VISREF] * sg * (abs(dd[i]) / P[VISREF]) ** P[VISN]
-        else:
+        elif P[VISLAW] == 2.0:
             Fv = W[i, WCV] * P[VISREF] * math.tanh(dd[i] / P[VISREF])
+        else:  # two-stage valve: slope c up to the knee v_r, ratio x c beyond
+            sg = 1.0 if dd[i] >= 0.0 else -1.0
+            av = abs(dd[i])
+            Fv = W[i, WCV] * sg * (av if av <= P[VISREF] else P[VISREF] + P[VISRATIO] * (av - P[VISREF]))
         Fgas = W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fs += P[DSCALE] * Fh + Ff[i] + Fv + W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fhid += Fv + Fgas

@@ -49,11 +49,15 @@ class CandParam:
     upper: float
     step: float
     meaning: str = ""
-    prior_sd: float | None = None  # a normal prior around ``neutral`` (calibration parameters only)
+    prior_sd: float | None = None  # a normal prior around ``neutral`` (calibration values, a law's shape)
     #: the lowest value the physics the term stands for can take (None: ``lower``). The fit may go below
     #: it (a term then stands in for a weaker model element), but a term there is no rival physical
     #: explanation of a calibration value (finder: calibration against physics)
     physical_lower: float | None = None
+    #: a parameter that shapes the term's law and has no effect of its own (an exponent: with the term's
+    #: gains at neutral there is no force whatever it is); "no effect" and "physical" are read from the
+    #: other parameters
+    shape: bool = False
 
 
 @dataclass(frozen=True)
@@ -103,17 +107,19 @@ class Candidate:
         """Whether the term's effect at the parameter values ``x`` is one the physics it stands for can
         have: its dominant parameter (furthest from neutral, in steps) respects its
         :attr:`CandParam.physical_lower` (a small value of the other axle's may sit on either side)."""
-        if not self.params:
+        gains = [j for j, p in enumerate(self.params) if not p.shape]
+        if not gains:
             return True
-        k = int(np.argmax([abs(x[j] - p.neutral) / p.step for j, p in enumerate(self.params)]))
+        k = gains[int(np.argmax([abs(x[j] - self.params[j].neutral) / self.params[j].step for j in gains]))]
         p = self.params[k]
         return bool(x[k] >= (p.lower if p.physical_lower is None else p.physical_lower))
 
     def effect_in_interval(self, lo: np.ndarray, hi: np.ndarray) -> bool:
         """Whether the 95 % intervals ``[lo, hi]`` of the parameters all hold "no effect" (every
-        parameter's neutral value inside its interval). A term without parameters (its effect estimated
-        elsewhere, e.g. a sensor bias) gives False."""
-        return bool(self.params) and all(lo[k] <= p.neutral <= hi[k] for k, p in enumerate(self.params))
+        parameter's neutral value inside its interval; :attr:`CandParam.shape` parameters aside). A term
+        without parameters (its effect estimated elsewhere, e.g. a sensor bias) gives False."""
+        return bool(self.params) and all(lo[k] <= p.neutral <= hi[k] for k, p in enumerate(self.params)
+                                         if not p.shape)
 
 
 def _set_axles(P, key, front, rear):
@@ -263,8 +269,13 @@ def _amplitude_params(x, vp):
             "stroke_weight": axle_map(x[4], x[4]), "sigma": axle_map(*sig), "horizontal": axle_map(1.0, 1.0)}
 
 
+def _viscous(P, P0, x, model):
+    _term_axles("extra_viscous_damping", "c")(P, P0, x, model)
+    P[:, model.term_param_slice("extra_viscous_damping", "n")] = x[2]
+
+
 def _viscous_params(x, vp):
-    return {"c": axle_map(x[0], x[1])}
+    return {"c": axle_map(x[0], x[1]), "n": axle_map(x[2], x[2])}
 
 
 def _gas_params(x, vp):
@@ -318,14 +329,21 @@ LIBRARY: tuple[Candidate, ...] = (
               _gas, (None, None), "a bump crossing (large deflection)", "bump", "susp_sim_ros.model.extra_terms",
               term_params=_gas_params),
     Candidate("extra_viscous_damping", PHYSICS,
-              "additional linear damping c*v in parallel with the damper (bushings, residual oil)",
+              "additional damping in parallel with the damper (bushings, residual oil), linear unless the "
+              "drives say otherwise: c v_ref sgn(v) |v/v_ref|^n",
               # a passive element in parallel adds damping, never removes it: c >= 0 as physics (the fit may
               # go below, standing in for a damper weaker than its curve, which the calibration then owns)
               (CandParam("c_front", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, front",
                          physical_lower=0.0),
                CandParam("c_rear", "N s/m", 0.0, -2000.0, 5000.0, 100.0, "viscous coefficient, rear",
-                         physical_lower=0.0)),
-              _term_axles("extra_viscous_damping", "c"), ("front", "rear"), "any drive with body motion",
+                         physical_lower=0.0),
+               # why an exponent: real dampers and bushings are rarely linear (valve-controlled: digressive,
+               # n < 1; orifice flow: progressive, n > 1; Dixon 2007, ch. 5), and a linear term cannot follow
+               # a digressive law across the drives' velocities (development form viscous/saturating, seeds 1
+               # and 2: each drive wanted another c). Prior: linear, +-0.5; one exponent for both axles
+               CandParam("exponent", "1", 1.0, 0.2, 2.0, 0.1, "exponent of the force-velocity law, both axles",
+                         prior_sd=0.5, shape=True)),
+              _viscous, ("front", "rear", None), "any drive with body motion",
               "any", "susp_sim_ros.model.extra_terms", term_params=_viscous_params),
     Candidate("mass_error", PARAMETER, "sprung mass differs from the parameter set (loading, tolerance)",
               (CandParam("scale", "1", 1.0, 0.8, 1.2, 0.01, "sprung mass factor"),),

@@ -402,7 +402,9 @@ class DiscrepancyFinder:
             a = int(st.offsets[st.names.index(CALIBRATION)])
             k = st.names.index(name)
             t0, t1 = int(st.offsets[k]), int(st.offsets[k + 1])
-            cov = np.linalg.pinv(f.information(), hermitian=True)
+            # the term's size against the value, its law's shape as fitted (an exponent free beside them
+            # would share the covariance and hide the trade of size against value)
+            cov = _conditioned_on(f.information(), [t0 + j for j, p in enumerate(BY_NAME[name].params) if p.shape])
             sd = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
             rho = np.abs(cov / np.outer(sd, sd))
             one_state = self._one_state_values(f)
@@ -707,11 +709,20 @@ class DiscrepancyFinder:
     def _passes(self, ev: Evaluator, cur: FitResult, f: FitResult, recalibrations: dict[int, FitResult],
                 step: int) -> tuple[bool, bool, dict]:
         """Every test a new term (or pair) that took ``cur`` to ``f`` must pass, in order: BIC, share of
-        the excess, decoys, held-out drives, better than recalibrating the known physics alone. Returns
+        the excess, values the named physics can take (:meth:`Candidate.physical`), decoys, held-out drives,
+        better than recalibrating the known physics alone. Returns
         ``(passed, passed_in_sample, checks)``."""
         excess = max(cur.rss - cur.n, 1e-12)
         ok = (cur.bic - f.bic) >= MIN_DELTA_BIC and cur.rss - f.rss >= MIN_EXPLAINED * excess
-        in_sample, checks = ok, {}
+        in_sample = ok
+        checks: dict = {}
+        if ok:
+            # a physics name only for values its physics can take (negative extra damping is a damper
+            # weaker than its curve: the calibration's business, not a term in parallel)
+            new = [c for c in f.structure.cands if c.name not in cur.structure.names and c.kind == PHYSICS]
+            unphysical = [c.name for c in new if not c.physical(f.structure.part(f.x, c.name))]
+            if unphysical:
+                checks, ok = {"unphysical": unphysical}, False
         if ok:
             checks = self._decoy_check(ev, cur, f)
             ok = checks["decoys_beaten"]
@@ -1311,6 +1322,15 @@ def _held_trials(ev: Evaluator, cur: FitResult, held: FitResult, cands: Sequence
                           max_nfev=TRIAL_NFEV, fixed=fix)
         trials.append((f.bic - len(idx) * lne, name, f))
     return sorted(trials, key=lambda t: t[0])
+
+
+def _conditioned_on(info: np.ndarray, fixed: Sequence[int]) -> np.ndarray:
+    """The covariance from the information ``info`` with the parameters ``fixed`` held at their values:
+    their rows and columns left out of the (pseudo-)inversion and zero in the result."""
+    keep = np.setdiff1d(np.arange(info.shape[0]), np.asarray(fixed, np.int64))
+    cov = np.zeros_like(info)
+    cov[np.ix_(keep, keep)] = np.linalg.pinv(info[np.ix_(keep, keep)], hermitian=True)
+    return cov
 
 
 def _warm(st: Structure, cur: FitResult, o) -> np.ndarray:
