@@ -339,8 +339,8 @@ LIBRARY: tuple[Candidate, ...] = (
                          physical_lower=0.0),
                # why an exponent: real dampers and bushings are rarely linear (valve-controlled: digressive,
                # n < 1; orifice flow: progressive, n > 1; Dixon 2007, ch. 5), and a linear term cannot follow
-               # a digressive law across the drives' velocities (development form viscous/saturating, seeds 1
-               # and 2: each drive wanted another c). Prior: linear, +-0.5; one exponent for both axles
+               # a digressive law across the drives' velocities (each drive wants another c). Prior: linear,
+               # +-0.5; one exponent for both axles (one damper type)
                CandParam("exponent", "1", 1.0, 0.2, 2.0, 0.1, "exponent of the force-velocity law, both axles",
                          prior_sd=0.5, shape=True)),
               _viscous, ("front", "rear", None), "any drive with body motion",
