@@ -477,16 +477,14 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
             Fhid += P[DSCALE] * w_oil * (Fbo - Fc0)
         else:
             Fh = _hydraulic(_damper(dd[i], ia, X, C, E), dd[i], w_oil, W[i, WCEMPTY])
+        sg, av = (1.0 if dd[i] >= 0.0 else -1.0), abs(dd[i])
         if P[VISLAW] == 0.0:
             Fv = W[i, WCV] * dd[i]
         elif P[VISLAW] == 1.0:
-            sg = 1.0 if dd[i] >= 0.0 else -1.0
-            Fv = W[i, WCV] * P[VISREF] * sg * (abs(dd[i]) / P[VISREF]) ** P[VISN]
+            Fv = W[i, WCV] * P[VISREF] * sg * (av / P[VISREF]) ** P[VISN]
         elif P[VISLAW] == 2.0:
             Fv = W[i, WCV] * P[VISREF] * math.tanh(dd[i] / P[VISREF])
         else:  # two-stage valve: slope c up to the knee v_r, ratio x c beyond
-            sg = 1.0 if dd[i] >= 0.0 else -1.0
-            av = abs(dd[i])
             Fv = W[i, WCV] * sg * (av if av <= P[VISREF] else P[VISREF] + P[VISRATIO] * (av - P[VISREF]))
         Fgas = W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fs += P[DSCALE] * Fh + Ff[i] + Fv + W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]

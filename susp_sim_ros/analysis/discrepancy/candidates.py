@@ -103,11 +103,16 @@ class Candidate:
     def neutral(self) -> np.ndarray:
         return np.array([p.neutral for p in self.params], float)
 
+    @property
+    def gain_indices(self) -> tuple[int, ...]:
+        """Indices of the parameters that size the term's effect (all but the :attr:`CandParam.shape` ones)."""
+        return tuple(j for j, p in enumerate(self.params) if not p.shape)
+
     def physical(self, x: np.ndarray) -> bool:
         """Whether the term's effect at the parameter values ``x`` is one the physics it stands for can
         have: its dominant parameter (furthest from neutral, in steps) respects its
         :attr:`CandParam.physical_lower` (a small value of the other axle's may sit on either side)."""
-        gains = [j for j, p in enumerate(self.params) if not p.shape]
+        gains = self.gain_indices
         if not gains:
             return True
         k = gains[int(np.argmax([abs(x[j] - self.params[j].neutral) / self.params[j].step for j in gains]))]
@@ -118,8 +123,7 @@ class Candidate:
         """Whether the 95 % intervals ``[lo, hi]`` of the parameters all hold "no effect" (every
         parameter's neutral value inside its interval; :attr:`CandParam.shape` parameters aside). A term
         without parameters (its effect estimated elsewhere, e.g. a sensor bias) gives False."""
-        return bool(self.params) and all(lo[k] <= p.neutral <= hi[k] for k, p in enumerate(self.params)
-                                         if not p.shape)
+        return bool(self.params) and all(lo[k] <= self.params[k].neutral <= hi[k] for k in self.gain_indices)
 
 
 def _set_axles(P, key, front, rear):

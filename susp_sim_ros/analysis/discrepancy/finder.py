@@ -404,7 +404,8 @@ class DiscrepancyFinder:
             t0, t1 = int(st.offsets[k]), int(st.offsets[k + 1])
             # the term's size against the value, its law's shape as fitted (an exponent free beside them
             # would share the covariance and hide the trade of size against value)
-            cov = _conditioned_on(f.information(), [t0 + j for j, p in enumerate(BY_NAME[name].params) if p.shape])
+            gains = BY_NAME[name].gain_indices
+            cov = _conditioned_on(f.information(), [t0 + j for j in range(t1 - t0) if j not in gains])
             sd = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
             rho = np.abs(cov / np.outer(sd, sd))
             one_state = self._one_state_values(f)

@@ -31,17 +31,15 @@ def _num(x):
 
 def _where(cand: Candidate, x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> str:
     axles: set[str] = set()
-    for j, p in enumerate(cand.params):
-        if p.shape:
-            continue
+    gains = cand.gain_indices
+    for j in gains:
         ax = cand.axle_of[j] if j < len(cand.axle_of) else None
         if ax is None:
             return "all"
-        if not (lo[j] <= p.neutral <= hi[j]):
+        if not (lo[j] <= cand.params[j].neutral <= hi[j]):
             axles.add(ax)
     if not axles:  # nothing significant on its own: the axle with the larger relative effect
-        eff = [0.0 if p.shape else abs(x[j] - p.neutral) / p.step for j, p in enumerate(cand.params)]
-        ax = cand.axle_of[int(np.argmax(eff))]
+        ax = cand.axle_of[max(gains, key=lambda j: abs(x[j] - cand.params[j].neutral) / cand.params[j].step)]
         assert ax is not None  # a None axle returned "all" in the loop above
         axles.add(ax)
     return axles.pop() if len(axles) == 1 else "all"
