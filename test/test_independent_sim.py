@@ -245,3 +245,35 @@ def test_the_extra_damping_follows_its_law(law, expect):
     sel = smooth & (np.abs(v) > 0.01)
     assert sel.sum() > 100 and np.abs(v[sel]).max() > 0.1
     np.testing.assert_allclose(h[sel], expect(v[sel]), rtol=0.05, atol=1.0)
+
+
+def test_the_load_dependent_strut_friction_follows_its_law():
+    """Rear-only strut friction mu max(F_z0 + F_t, 0) tanh(v/v_eps) against the recorded tyre load (on a
+    straight drive the tyre load holds no lateral load transfer, so it is F_z0 + F_t) and the deflection
+    velocity (central differences of the recorded deflection): the size exactly bounded by mu x load, the
+    law where the velocity is well resolved; zero at the front."""
+    mu, eps = 0.02, 0.001
+    r = simulate(maneuver=TruthManeuver.bump(), oil=(1, 1, 0, 0),
+                 hidden=TruthHidden(load_friction_coefficient=(0.0, mu), stribeck_eps_m_s=eps))
+    h, fz, t = np.asarray(r.hidden), np.asarray(r.tyre_load), np.asarray(r.t)
+    assert np.all(h[:, :2] == 0.0)
+    h, fz = h[:, 2:], fz[:, 2:]
+    v = np.gradient(np.asarray(r.deflection)[:, 2:], t, axis=0)
+    assert np.all(np.abs(h) <= mu * fz * (1.0 + 1e-12))
+    assert 50.0 < np.abs(h).max() < 150.0                    # about 62 N at the static rear load
+    fast = np.abs(v) > 0.005                                 # sliding: tanh saturated, the force mu F_z
+    np.testing.assert_allclose(h[fast], mu * fz[fast] * np.tanh(v[fast] / eps), rtol=1e-3, atol=0.01)
+    assert fast.sum() > 1000 and fz[fast].max() > 1.4 * fz[fast].min()   # a load-dependent level
+    # the regularisation, where the velocity changes slowly over a step
+    smooth = np.abs(np.gradient(v, t, axis=0)) * (t[1] - t[0]) < 1e-5
+    slow = smooth & (np.abs(v) > 2e-4) & (np.abs(v) < 0.003)
+    assert slow.sum() > 100
+    np.testing.assert_allclose(h[slow] / (mu * fz[slow]), np.tanh(v[slow] / eps), atol=0.005)
+
+
+def test_the_load_dependent_strut_friction_off_is_bit_identical():
+    man = TruthManeuver.bump()
+    a = simulate(maneuver=man, oil=(1, 1, 0, 0))
+    b = simulate(maneuver=man, oil=(1, 1, 0, 0), hidden=TruthHidden(load_friction_coefficient=(0.0, 0.0)))
+    for name in ("t", "gyro", "accel", "deflection", "friction", "tyre_load", "hidden"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name

@@ -223,7 +223,8 @@ def test_the_recorded_structure_level_is_measured_on_development_forms():
 
 
 # ---- issue 26: the hidden force exposed, physics no candidate lists -----------------------------------
-UNLISTED = ("unlisted/damper_blow_off", "unlisted/arb_free_play", "unlisted/stribeck_friction")
+UNLISTED = ("unlisted/damper_blow_off", "unlisted/arb_free_play", "unlisted/stribeck_friction",
+            "unlisted/load_friction")
 #: the split of every form before issue 26 (family_split.yaml may only gain forms, never move them)
 SPLIT_BEFORE_26 = {
     "development": ["structure/nominal", "structure/heun_1ms", "structure/velocity_scaling_ramp",
@@ -252,14 +253,16 @@ def test_existing_forms_keep_their_split_and_their_truth():
             assert family.split_of(name) == split, name
     before = {n for names in SPLIT_BEFORE_26.values() for n in names}
     # forms added later are held out from the start (never moved between splits)
-    added_27 = {"viscous/bilinear_digressive"}
+    added_27 = {"viscous/bilinear_digressive", "unlisted/load_friction"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_27
     assert all(family.split_of(n) == "held_out" for n in added_27)
     off = ind.TruthHidden()
     for name in before:
         h = family.FORMS[name].hidden
-        assert (h.blow_off_velocity_m_s, h.arb_free_play_m, h.stribeck_static_N, h.stribeck_coulomb_N) == \
-            (off.blow_off_velocity_m_s, off.arb_free_play_m, off.stribeck_static_N, off.stribeck_coulomb_N), name
+        assert (h.blow_off_velocity_m_s, h.arb_free_play_m, h.stribeck_static_N, h.stribeck_coulomb_N,
+                h.load_friction_coefficient) == \
+            (off.blow_off_velocity_m_s, off.arb_free_play_m, off.stribeck_static_N, off.stribeck_coulomb_N,
+             off.load_friction_coefficient), name
         assert family.FORMS[name].leading == ()
     for name, ref in TRUTH_BEFORE_26.items():
         form = family.FORMS[name]
@@ -274,6 +277,8 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     doc = yaml.safe_load(family.SPLIT_FILE.read_text(encoding="utf-8"))
     text = family.SPLIT_FILE.read_text(encoding="utf-8")
     assert "added 2026-11-26" in text
+    assert "added 2026-11-27 (issue 26)" in text
+    assert doc["held_out"][-1] == "unlisted/load_friction"      # appended, held out from the start
     for name in UNLISTED:
         form = family.FORMS[name]
         assert name in doc["held_out"] and name not in doc["development"]
@@ -287,13 +292,14 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/damper_blow_off"].leading == ("velocity_beyond_knee", "velocity_squared")
     assert family.FORMS["unlisted/arb_free_play"].leading == ("roll_free_play", "roll_deflection")
     assert family.FORMS["unlisted/stribeck_friction"].leading == ("sign_velocity",)
+    assert family.FORMS["unlisted/load_friction"].leading == ("sign_velocity",)
 
 
 @pytest.mark.parametrize("name", UNLISTED)
 def test_unlisted_forms_show_clearly_above_the_gyro_noise(name):
     """Noise-free roll or pitch rate, with against without the effect: RMS difference at least 3x the
-    cases' 0.05 deg/s gyro noise on some drive (measured: blow-off 0.61, free play 0.34, Stribeck 0.56
-    deg/s)."""
+    cases' 0.05 deg/s gyro noise on some drive (measured: blow-off 0.61, free play 0.34, Stribeck 0.56,
+    load-dependent friction 0.72 deg/s)."""
     form, nominal = family.FORMS[name], family.FORMS["structure/nominal"]
     best = 0.0
     for _, _, lbl in family.CASE_DRIVES:
@@ -361,3 +367,12 @@ def test_hidden_force_of_the_unlisted_forms():
     fast = np.abs(v[:, 2:]) > 0.005
     assert np.all(r.hidden[:, 2:][fast] * v[:, 2:][fast] > 0.0)
     assert np.abs(r.hidden[:, 2:][np.abs(v[:, 2:]) > 0.1]).max() < 45.0   # weakened to about F_c
+    # load-dependent strut friction: rear corners only, mu x the tyre load (a straight drive: no lateral load
+    # transfer in it) with the sign of the deflection velocity once sliding
+    r = family.case_truth(family.FORMS["unlisted/load_friction"], 1, "bump_rear_empty")
+    v = np.gradient(r.deflection, r.t, axis=0)
+    h, lim = r.hidden[:, 2:], 0.02 * r.tyre_load[:, 2:]
+    assert np.all(r.hidden[:, :2] == 0.0) and np.all(np.abs(h) <= lim * (1.0 + 1e-12))
+    fast = np.abs(v[:, 2:]) > 0.005
+    np.testing.assert_allclose(h[fast], lim[fast] * np.sign(v[:, 2:][fast]), rtol=1e-3)
+    assert 50.0 < np.abs(h).max() < 150.0

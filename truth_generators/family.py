@@ -197,6 +197,12 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(stribeck_static_N=(0.0, 120.0), stribeck_coulomb_N=(0.0, 40.0),
                                          stribeck_speed_m_s=0.02, stribeck_eps_m_s=0.001),
                       leading=("sign_velocity",), **unl),
+        # added 2026-11-27 (issue 26), held out from the start: a friction law of another shape
+        GeneratorForm("unlisted/load_friction", description="strut friction growing with the wheel's vertical "
+                      "load at the rear corners: mu Fz tanh(v/v_eps), mu 0.02, v_eps 1 mm/s (a friction law of "
+                      "another shape: no candidate depends on the vertical load)",
+                      hidden=TruthHidden(load_friction_coefficient=(0.0, 0.02), stribeck_eps_m_s=0.001),
+                      leading=("sign_velocity",), **unl),
     ]
     return {f.name: f for f in fs}
 

@@ -184,6 +184,9 @@ class TruthHidden:
     stribeck_coulomb_N: tuple = (0.0, 0.0)        # (F_c + (F_s - F_c) exp(-(v/v_s)^2)) tanh(v/v_eps)
     stribeck_speed_m_s: float = 0.02              # v_s
     stribeck_eps_m_s: float = 0.001               # v_eps (regularisation of sign(v))
+    load_friction_coefficient: tuple = (0.0, 0.0)  # strut friction growing with the wheel's vertical load
+    #                                               (front, rear): mu max(Fz0 + Ft, 0) tanh(v/v_eps), Fz0 + Ft
+    #                                               the corner's tyre load, v_eps = stribeck_eps_m_s
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -321,7 +324,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  SIGMA, SVINF, SVS, SVREF, FRIC, AMPA0, AMPTAU, DRIVEF, BRAKEF, SVON, AMPENV, AMPLAW, AMPEXP, AMPSEP, SEPSIG,
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
- WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, NW) = range(29)
+ WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, NW) = range(30)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -375,6 +378,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WGK3] = hid.gas_cubic_N_m3[i]
         W[i, WBOV], W[i, WGAP] = hid.blow_off_velocity_m_s[k], hid.arb_free_play_m[k]
         W[i, WSTRS], W[i, WSTRC] = hid.stribeck_static_N[k], hid.stribeck_coulomb_N[k]
+        W[i, WLFMU] = hid.load_friction_coefficient[k]
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -436,6 +440,12 @@ def damper_rig_oil_law(fr: TruthFriction, oils, velocity_m_s: float, accuracy: f
 
 
 @njit(cache=True)
+def _tyre_force(Ft, Fz0):
+    """The dynamic tyre force ``Ft`` [N] limited to ``-Fz0`` (lift-off: the total load Fz0 + Ft >= 0)."""
+    return -Fz0 if Fz0 + Ft < 0.0 else Ft
+
+
+@njit(cache=True)
 def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
     """dy/dt of the mechanical states; aux[i] = (d, dd, Fz, Fs, F_hidden): F_hidden the part of Fs from
     the hidden physics computed here (all but the Dahl elements). Friction forces Ff held (splitting)."""
@@ -494,9 +504,12 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
             Fst = (W[i, WSTRC] + (W[i, WSTRS] - W[i, WSTRC]) * math.exp(-ra * ra)) * math.tanh(dd[i] / P[STREPS])
             Fs += Fst
             Fhid += Fst
-        Ft = P[KT] * (ZR[i, j] - y[8 + i]) + P[CT] * (ZRD[i, j] - y[12 + i])
-        if W[i, WFZ0] + Ft < 0.0:
-            Ft = -W[i, WFZ0]                           # lift-off
+        Ft = _tyre_force(P[KT] * (ZR[i, j] - y[8 + i]) + P[CT] * (ZRD[i, j] - y[12 + i]), W[i, WFZ0])
+        if W[i, WLFMU] != 0.0:                         # strut friction growing with the vertical tyre load
+            Fload = W[i, WFZ0] + Ft
+            Flf = W[i, WLFMU] * (Fload if Fload > 0.0 else 0.0) * math.tanh(dd[i] / P[STREPS])
+            Fs += Flf
+            Fhid += Flf
         dy[8 + i] = y[12 + i]
         dy[12 + i] = (Ft - Fs) / W[i, WMU]
         Fyax = y[16 + (i // 2) * 2] + y[17 + (i // 2) * 2]
@@ -705,7 +718,8 @@ class TruthResult:
     that element's force minus a shadow Dahl element run on the same deflection increments at the level
     without the amplitude extra (the same s_h); blow-off: the damper force with the valve minus without it;
     anti-roll-bar free play: the bar's force with the gap minus without it (``-k clip(delta, -g, g)``);
-    Stribeck friction. Friction forces are those held over the step that starts at ``t`` (as ``friction``)."""
+    Stribeck friction; load-dependent strut friction ``mu max(F_z0 + F_t, 0) tanh(v/v_eps)``. Friction forces
+    are those held over the step that starts at ``t`` (as ``friction``)."""
 
     t: np.ndarray
     gyro: np.ndarray
