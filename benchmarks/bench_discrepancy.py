@@ -248,8 +248,10 @@ def run_case(name: str, spec: dict, noise: float, tmp: Path) -> dict:
 
 def _zero_interval(term: dict) -> bool:
     """Does every 95 % interval of the term contain zero effect (a finding that may be nothing)?"""
-    # the learned term's knee and free play are shapes, not effects: only its coefficients say "no effect"
-    shapes = ("knee_velocity", "free_play") if term.get("name") == "unlisted_force" else ()
+    # the learned term's knee, free play, presliding travel and Stribeck velocity are shapes, not effects: only
+    # its coefficients say "no effect"
+    shapes = ("knee_velocity", "free_play", "presliding", "stribeck_velocity") \
+        if term.get("name") == "unlisted_force" else ()
     cis = [v for k, v in (term.get("ci95") or {}).items() if isinstance(v, (list, tuple)) and len(v) == 2
            and k not in shapes]
     if not cis:

@@ -25,6 +25,10 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             anti-roll bar; ``d_o`` the other wheel of the axle)
 ``roll_free_play``          clip(d - d_o, -g, g) / d_ref: a force only within a free play ``g`` of the
                             left-right deflection difference (an anti-roll bar with play)
+``velocity_weakening``      z exp(-|v| / v_s): friction whose level falls with the sliding velocity, the
+                            Stribeck effect (``v_s`` the Stribeck velocity); beside ``sign_velocity`` the
+                            pair is a static level falling to a sliding one (Armstrong-Helouvry, Dupont and
+                            Canudas de Wit, Automatica 30(7), 1994, the exponential form)
 ==========================  =======================================================================
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
@@ -40,6 +44,8 @@ force to it).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -49,18 +55,26 @@ from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 
 FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
-            "roll_deflection", "roll_free_play")
+            "roll_deflection", "roll_free_play", "velocity_weakening")
 N_FEATURES = len(FEATURES)
+#: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
+FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force")
+#: a friction law's velocity weakening: a shape of a learned friction, not a dependence of its own
+WEAKENING = "velocity_weakening"
+#: features that shape a law rather than stand for a dependence (not offered to the regression)
+LAW_SHAPE_FEATURES = (WEAKENING,)
 #: the shape parameters after the coefficients, in this order
-SHAPES = ("deflection_ref", "velocity_ref", "force_ref", "knee_velocity", "free_play", "presliding", "memory")
+SHAPES = ("deflection_ref", "velocity_ref", "force_ref", "knee_velocity", "free_play", "presliding", "memory",
+          "stribeck_velocity")
 _O_SHAPE = 4 * N_FEATURES
-_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
+_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
+PRESLIDING, STRIBECK_VELOCITY = SHAPES[5], SHAPES[7]
 _Z, _DEF, _AMP = 0, 4, 8
 _C_D, _C_DD, _C_FX, _C_FY, _C_DT = C_INDEX["D"], C_INDEX["DD"], C_INDEX["FX"], C_INDEX["FY"], C_INDEX["DT"]
 
 
 @njit(cache=True, inline="always")
-def corner_feature(k, d, d_other, v, fx, fy, z, amp, dref, vref, fref, knee, gap):
+def corner_feature(k, d, d_other, v, fx, fy, z, amp, dref, vref, fref, knee, gap, vs):
     """Feature ``k`` of :data:`FEATURES` at one corner (module docstring)."""
     x = d / dref
     u = v / vref
@@ -88,7 +102,9 @@ def corner_feature(k, d, d_other, v, fx, fy, z, amp, dref, vref, fref, knee, gap
         return z * abs(fx) / fref
     if k == 10:
         return roll / dref
-    return min(max(roll, -gap), gap) / dref
+    if k == 11:
+        return min(max(roll, -gap), gap) / dref
+    return z * math.exp(-abs(v) / vs)
 
 
 @njit(cache=True, inline="always")
@@ -107,7 +123,7 @@ def learned_force_force(p, po, s, so, i, c):
     return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * u * abs(u)
             + p[q + 20] * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
-                   + p[q + 36] * abs(c[i, _C_FX]) / fref)
+                   + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i]))
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref)
 
 
@@ -131,7 +147,7 @@ def learned_force_update(p, po, s, so, i, c, dx):
 
 
 @njit(cache=True)
-def _series(D, V, FX, FY, dt, k, dref, vref, fref, knee, gap, presliding, memory, out):
+def _series(D, V, FX, FY, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, out):
     n = D.shape[0]
     z = np.zeros(4)
     amp = np.zeros(4)
@@ -139,7 +155,7 @@ def _series(D, V, FX, FY, dt, k, dref, vref, fref, knee, gap, presliding, memory
         for i in range(4):
             o = i + 1 if i % 2 == 0 else i - 1
             out[t, i] = corner_feature(k, D[t, i], D[t, o], V[t, i], FX[t, i], FY[t, i], z[i], amp[i],
-                                       dref, vref, fref, knee, gap)
+                                       dref, vref, fref, knee, gap, vs)
         if t + 1 < n:
             for i in range(4):
                 z[i], _, amp[i] = advance_states(z[i], D[t, i], amp[i], D[t + 1, i] - D[t, i], presliding,
@@ -158,7 +174,7 @@ def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: 
     D, V, FX, FY = (np.ascontiguousarray(a, float) for a in (deflection, velocity, fx, fy))
     _series(D, V, FX, FY, float(dt), FEATURES.index(name), float(sh["deflection_ref"]), float(sh["velocity_ref"]),
             float(sh["force_ref"]), float(sh["knee_velocity"]), float(sh["free_play"]), float(sh["presliding"]),
-            float(sh["memory"]), out)
+            float(sh["memory"]), float(sh["stribeck_velocity"]), out)
     return out
 
 
@@ -168,6 +184,7 @@ _COEF_MEANING = {
     "velocity_squared": "orifice force at v = v_ref", "velocity_beyond_knee": "force change v_ref beyond the knee",
     "sign_velocity": "friction level", "peak_deflection": "friction level at amplitude d_ref",
     "lateral_force": "friction level at |Fy| = F_ref", "longitudinal_force": "friction level at |Fx| = F_ref",
+    "velocity_weakening": "friction level at rest above the sliding level (falls with exp(-|v| / v_s))",
     "roll_deflection": "force at a left-right difference d_ref",
     "roll_free_play": "force at a left-right difference d_ref within the play"}
 
@@ -184,7 +201,9 @@ LEARNED_FORCE = register_term(PhysicsTerm(
         TermParam("presliding", "m", "presliding travel of the friction-like features' unit Dahl element",
                   1e-4, 1e-7, 0.01),
         TermParam("memory", "s", "time constant with which peak_deflection forgets the peak deflection",
-                  1.0, 1e-3, 100.0)),
+                  1.0, 1e-3, 100.0),
+        TermParam("stribeck_velocity", "m/s", "sliding velocity over which velocity_weakening's friction falls "
+                  "by 1/e (Stribeck velocity)", 0.01, 1e-4, 1.0)),
     n_states=3, force=learned_force_force, update=learned_force_update,
     gains=tuple(f"c_{f}" for f in FEATURES)))
 

@@ -808,9 +808,36 @@ class DiscrepancyFinder:
         lo, hi = st.bounds()
         k = len(sel.coef)
         x0[a:a + k] = np.clip(sel.coef, lo[a:a + k], hi[a:a + k])
-        fit = fit_structure(ev, st, x0, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
+        fit = self._fit_with_friction_law(ev, st, x0, a, sel)
         self.learned_selection_ = sel
         return Option((cand.name,), math.nan, math.nan, np.zeros(0)), fit
+
+    def _fit_with_friction_law(self, ev: Evaluator, st: Structure, x0: np.ndarray, a: int,
+                               sel: force_shape.Selection) -> FitResult:
+        """The learned trial's fit (term at offset ``a`` of ``st``). With a friction law's velocity weakening
+        (:func:`force_shape.friction_law`) in two stages, since a sticking friction's residual is rough in
+        its levels: the plain levels first with the weakening held at none, then from the fitted level
+        split between sliding and rest (``fit.weakening_start_share`` of it at rest); the better fit is kept
+        (refitted with every value free when it is the first)."""
+        allidx = tuple(range(len(ev.cases)))
+        law, _ = force_shape.friction_law(sel, force_shape.settings())
+        if not law:
+            return fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV)
+        labels = st.labels()
+        term = force_shape.TERM
+        weak = [labels.index((term, f"{c.feature}_{c.axle}")) for c in law]
+        held = weak + [labels.index((term, force_shape.STRIBECK_VELOCITY))]
+        plain = fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV, fixed=held)
+        share = float(force_shape.settings()["fit.weakening_start_share"])
+        x1 = plain.x.copy()
+        for c, j in zip(law, weak):
+            level = labels.index((term, f"sign_velocity_{c.axle}"))
+            x1[j] = share * plain.x[level]
+            x1[level] = (1.0 - share) * plain.x[level]
+        split = fit_structure(ev, st, x1, allidx, max_nfev=TRIAL_NFEV)
+        if split.rss <= plain.rss:
+            return split
+        return fit_structure(ev, st, plain.x, allidx, max_nfev=TRIAL_NFEV)
 
     def _backward(self, ev: Evaluator, cur: FitResult, path: list, accepted: list) -> FitResult:
         """Backward elimination after the forward steps: an accepted physics term that a later one made

@@ -54,7 +54,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...model.input_force import INPUT_FEATURES, INPUT_FORCE, INPUT_KIND
-from ...model.learned_force import FEATURES, LEARNED_FORCE
+from ...model.learned_force import FEATURES, FRICTION_LIKE, LAW_SHAPE_FEATURES, LEARNED_FORCE, PRESLIDING, \
+    STRIBECK_VELOCITY, WEAKENING
 from ...model.params import AXLE_CORNERS, load_settings
 from .candidates import PHYSICS, CandParam, Candidate, axle_map
 from .fit import debias, fd_jacobian
@@ -142,6 +143,8 @@ def library(cfg: dict) -> list[tuple[str, float | None]]:
     value, the others once, then the input features offered (``library.input_features``), once each."""
     out: list[tuple[str, float | None]] = []
     for f in FEATURES:
+        if f in LAW_SHAPE_FEATURES:
+            continue   # a friction law's shape, fitted once a friction is stable (learned_candidate)
         if f == "velocity_beyond_knee":
             out += [(f, float(v)) for v in cfg["library.knee_velocities_m_s"]]
         elif f == "roll_free_play":
@@ -350,7 +353,10 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
 
 def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     """The learned term as a finder candidate: one coefficient [N] per stable (feature, axle), neutral 0,
-    and the knee / free play it selected as a free shape value (neutral: the selected value)."""
+    and the knee / free play it selected as a free shape value (neutral: the selected value). A stable
+    friction-like dependence brings its law's shape (:func:`friction_law`): the presliding travel and,
+    per axle with a plain friction level (``sign_velocity``), a level at rest above the sliding one that
+    falls over a Stribeck velocity (coefficient neutral 0, after the stable ones)."""
     cfg = settings() if cfg is None else cfg
     bound = float(cfg["fit.coefficient_bound_N"])
     params = []
@@ -359,6 +365,13 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
         step = max(abs(float(v)) / 5.0, 1.0)
         params.append(CandParam(f"{c.feature}_{c.axle}", "N", 0.0, -bound, bound, step,
                                 f"coefficient of {c.feature}, {c.axle} axle"))
+        axle_of.append(c.axle)
+    law, law_shapes = friction_law(sel, cfg)
+    for c in law:
+        params.append(CandParam(f"{c.feature}_{c.axle}", "N", 0.0, -bound, bound,
+                                float(cfg["fit.weakening_step_N"]),
+                                f"coefficient of {c.feature}, {c.axle} axle: the friction's level at rest above "
+                                "its sliding level"))
         axle_of.append(c.axle)
     shapes: dict[str, float] = {}
     for c in sel.stable:
@@ -370,29 +383,56 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
                                 value / 5, p.meaning + " (one value for both axles)"))
         users = {c.axle for c in sel.stable if c.shape is not None and _SHAPE_OF.get(c.feature) == name}
         axle_of.append(users.pop() if len(users) == 1 else None)
-    stable = list(sel.stable)
+    for name, (lo, hi, on) in law_shapes.items():
+        p = LEARNED_FORCE.params[LEARNED_FORCE.param_index(name)]
+        shapes[name] = p.default
+        params.append(CandParam(name, p.unit, p.default, lo, hi, p.default / 5,
+                                p.meaning + " (one value for both axles)", shape=True))
+        axle_of.append(on[0] if len(on) == 1 else None)
+    coefs = list(sel.stable) + law
 
     def apply(P, P0, x, model):
-        for j, c in enumerate(stable):
+        for j, c in enumerate(coefs):
             sl = model.term_param_slice(TERM, f"c_{c.feature}")
             a = sl.start + 2 * AXLES.index(c.axle)
             P[:, a:a + 2] = x[j]
-        for j, name in enumerate(shapes, start=len(stable)):
+        for j, name in enumerate(shapes, start=len(coefs)):
             P[:, model.term_param_slice(TERM, name)] = x[j]
 
     def term_params(x, vp):
         vals: dict[str, dict] = {}
-        for j, c in enumerate(stable):
+        for j, c in enumerate(coefs):
             e = vals.setdefault(f"c_{c.feature}", {"front": 0.0, "rear": 0.0})
             e[c.axle] += float(x[j])
         out = {k: axle_map(v["front"], v["rear"]) for k, v in vals.items()}
-        for j, name in enumerate(shapes, start=len(stable)):
+        for j, name in enumerate(shapes, start=len(coefs)):
             out[name] = axle_map(x[j], x[j])
         return out
 
     return Candidate(TERM, PHYSICS, sel.description(), tuple(params), apply, tuple(axle_of),
                      "drives that excite the dependences it names: " + ", ".join(sel.dependences), "any",
                      "susp_sim_ros.model.learned_force", term_params=term_params)
+
+
+def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tuple[float, float, list[str]]]]:
+    """The shape of a learned friction's law, fitted beside its levels: no friction-like dependence stable,
+    none. Else the presliding travel of the unit Dahl element (how far a contact deflects before it
+    slides is the contact's own: micrometres in a metal joint, up to a millimetre in an elastomer seal lip),
+    and on each axle with a plain friction level a ``velocity_weakening`` coefficient and the Stribeck
+    velocity (a lubricated contact's friction falls from its level at rest to its sliding level, the
+    Stribeck effect: which it does, and how fast, the drives decide; the bump and the sine steer slide at
+    different deflection velocities). Returns the weakening columns and ``{shape: (lower, upper, axles)}``
+    (bounds from ``config/force_shape.yaml``)."""
+    friction = [c for c in sel.stable if c.feature in FRICTION_LIKE]
+    if not friction:
+        return [], {}
+    plain = sorted({c.axle for c in sel.stable if c.feature == "sign_velocity"}, key=AXLES.index)
+    xp_lo, xp_hi = (float(v) for v in cfg["fit.presliding_range_m"])
+    shapes = {PRESLIDING: (xp_lo, xp_hi, sorted({c.axle for c in friction}, key=AXLES.index))}
+    if plain:
+        vs_lo, vs_hi = (float(v) for v in cfg["fit.stribeck_velocity_range_m_s"])
+        shapes[STRIBECK_VELOCITY] = (vs_lo, vs_hi, plain)
+    return [Column(WEAKENING, a) for a in plain], shapes
 
 
 def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
