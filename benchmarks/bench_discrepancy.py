@@ -89,6 +89,7 @@ from truth_generators.family import SPLIT_RECORDED, SPLITS, GeneratorForm, forms
 from truth_generators.independent_sim import (TruthCar, TruthFriction, TruthHidden,  # noqa: E402
                                                    TruthManeuver, TruthSensor, make_drive, write_drive)
 from susp_sim_ros.io.drive import ImuSeries  # noqa: E402
+from susp_sim_ros.model.learned_force import SHAPES as LEARNED_SHAPES  # noqa: E402
 from susp_sim_ros.model.paper import IMU_SIGNALS  # noqa: E402
 
 MEASUREMENT_TERMS = ("sensor_bias", "time_offset", "steering_offset")
@@ -248,10 +249,9 @@ def run_case(name: str, spec: dict, noise: float, tmp: Path) -> dict:
 
 def _zero_interval(term: dict) -> bool:
     """Does every 95 % interval of the term contain zero effect (a finding that may be nothing)?"""
-    # the learned term's knee, free play, presliding travel and Stribeck velocity are shapes, not effects: only
-    # its coefficients say "no effect"
-    shapes = ("knee_velocity", "free_play", "presliding", "stribeck_velocity") \
-        if term.get("name") == "unlisted_force" else ()
+    # the learned term's shape values (knee, free play, presliding travel, Stribeck velocity, ...) are not
+    # effects: only its coefficients say "no effect"
+    shapes = LEARNED_SHAPES if term.get("name") == "unlisted_force" else ()
     cis = [v for k, v in (term.get("ci95") or {}).items() if isinstance(v, (list, tuple)) and len(v) == 2
            and k not in shapes]
     if not cis:

@@ -820,18 +820,19 @@ class DiscrepancyFinder:
         split between sliding and rest (``fit.weakening_start_share`` of it at rest); the better fit is kept
         (refitted with every value free when it is the first)."""
         allidx = tuple(range(len(ev.cases)))
-        law, _ = force_shape.friction_law(sel, force_shape.settings())
+        cfg = force_shape.settings()
+        law, _ = force_shape.friction_law(sel, cfg)
         if not law:
             return fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV)
         labels = st.labels()
         term = force_shape.TERM
-        weak = [labels.index((term, f"{c.feature}_{c.axle}")) for c in law]
+        weak = [labels.index((term, c.coefficient)) for c in law]
         held = weak + [labels.index((term, force_shape.STRIBECK_VELOCITY))]
         plain = fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV, fixed=held)
-        share = float(force_shape.settings()["fit.weakening_start_share"])
+        share = float(cfg["fit.weakening_start_share"])
         x1 = plain.x.copy()
         for c, j in zip(law, weak):
-            level = labels.index((term, f"sign_velocity_{c.axle}"))
+            level = labels.index((term, force_shape.Column("sign_velocity", c.axle).coefficient))
             x1[j] = share * plain.x[level]
             x1[level] = (1.0 - share) * plain.x[level]
         split = fit_structure(ev, st, x1, allidx, max_nfev=TRIAL_NFEV)

@@ -137,6 +137,11 @@ class Column:
     def key(self) -> tuple[str, str]:
         return self.feature, self.axle
 
+    @property
+    def coefficient(self) -> str:
+        """The name of its coefficient in the learned candidate."""
+        return f"{self.feature}_{self.axle}"
+
 
 def library(cfg: dict) -> list[tuple[str, float | None]]:
     """(feature, shape value) of every library entry: the knee and free-play features once per offered
@@ -363,12 +368,12 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     axle_of: list[str | None] = []
     for c, v in zip(sel.stable, sel.coef):
         step = max(abs(float(v)) / 5.0, 1.0)
-        params.append(CandParam(f"{c.feature}_{c.axle}", "N", 0.0, -bound, bound, step,
+        params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound, step,
                                 f"coefficient of {c.feature}, {c.axle} axle"))
         axle_of.append(c.axle)
     law, law_shapes = friction_law(sel, cfg)
     for c in law:
-        params.append(CandParam(f"{c.feature}_{c.axle}", "N", 0.0, -bound, bound,
+        params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound,
                                 float(cfg["fit.weakening_step_N"]),
                                 f"coefficient of {c.feature}, {c.axle} axle: the friction's level at rest above "
                                 "its sliding level"))
