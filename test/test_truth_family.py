@@ -224,7 +224,7 @@ def test_the_recorded_structure_level_is_measured_on_development_forms():
 
 # ---- issue 26: the hidden force exposed, physics no candidate lists -----------------------------------
 UNLISTED = ("unlisted/damper_blow_off", "unlisted/arb_free_play", "unlisted/stribeck_friction",
-            "unlisted/load_friction")
+            "unlisted/load_friction", "unlisted/damper_valve_stop_rear")
 #: the split of every form before issue 26 (family_split.yaml may only gain forms, never move them)
 SPLIT_BEFORE_26 = {
     "development": ["structure/nominal", "structure/heun_1ms", "structure/velocity_scaling_ramp",
@@ -253,7 +253,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
             assert family.split_of(name) == split, name
     before = {n for names in SPLIT_BEFORE_26.values() for n in names}
     # forms added later are held out from the start (never moved between splits)
-    added_27 = {"viscous/bilinear_digressive", "unlisted/load_friction"}
+    added_27 = {"viscous/bilinear_digressive", "unlisted/load_friction", "unlisted/damper_valve_stop_rear"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_27
     assert all(family.split_of(n) == "held_out" for n in added_27)
     off = ind.TruthHidden()
@@ -278,7 +278,8 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     text = family.SPLIT_FILE.read_text(encoding="utf-8")
     assert "added 2026-11-26" in text
     assert "added 2026-11-27 (issue 26)" in text
-    assert doc["held_out"][-1] == "unlisted/load_friction"      # appended, held out from the start
+    assert doc["held_out"][-2:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear"]   # appended,
+    # held out from the start
     for name in UNLISTED:
         form = family.FORMS[name]
         assert name in doc["held_out"] and name not in doc["development"]
@@ -293,13 +294,14 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/arb_free_play"].leading == ("roll_free_play", "roll_deflection")
     assert family.FORMS["unlisted/stribeck_friction"].leading == ("sign_velocity",)
     assert family.FORMS["unlisted/load_friction"].leading == ("sign_velocity",)
+    assert family.FORMS["unlisted/damper_valve_stop_rear"].leading == ("velocity_beyond_knee", "velocity_squared")
 
 
 @pytest.mark.parametrize("name", UNLISTED)
 def test_unlisted_forms_show_clearly_above_the_gyro_noise(name):
     """Noise-free roll or pitch rate, with against without the effect: RMS difference at least 3x the
     cases' 0.05 deg/s gyro noise on some drive (measured: blow-off 0.61, free play 0.34, Stribeck 0.56,
-    load-dependent friction 0.72 deg/s)."""
+    load-dependent friction 0.72, rear valve at its stop 0.29 deg/s)."""
     form, nominal = family.FORMS[name], family.FORMS["structure/nominal"]
     best = 0.0
     for _, _, lbl in family.CASE_DRIVES:
@@ -360,6 +362,16 @@ def test_hidden_force_of_the_unlisted_forms():
     on = r.hidden != 0.0
     assert on.any() and np.all(np.abs(v[on]) > 0.18) and np.all(r.hidden[on] * v[on] < 0.0)
     assert np.all(r.hidden[np.abs(v) < 0.19] == 0.0)
+    # a rear valve at its stop: firmer beyond +-0.35 m/s (the hidden force has the damper force's sense), rear intact
+    # dampers only: none at the front, none in the rear-empty car
+    form = family.FORMS["unlisted/damper_valve_stop_rear"]
+    r = family.case_truth(form, 1, "bump_front_empty")
+    v = np.gradient(r.deflection, r.t, axis=0)
+    on = r.hidden != 0.0
+    assert np.all(r.hidden[:, :2] == 0.0) and on[:, 2:].any()
+    assert np.all(np.abs(v[on]) > 0.33) and np.all(r.hidden[on] * v[on] > 0.0)   # more damping force
+    assert np.all(r.hidden[:, 2:][np.abs(v[:, 2:]) < 0.34] == 0.0)
+    assert np.all(family.case_truth(form, 1, "bump_rear_empty").hidden == 0.0)
     # Stribeck: rear corners only, within its static level, against the deflection velocity
     r = family.case_truth(family.FORMS["unlisted/stribeck_friction"], 1, "bump_rear_empty")
     v = np.gradient(r.deflection, r.t, axis=0)

@@ -203,6 +203,14 @@ def _forms() -> dict[str, GeneratorForm]:
                       "another shape: no candidate depends on the vertical load)",
                       hidden=TruthHidden(load_friction_coefficient=(0.0, 0.02), stribeck_eps_m_s=0.001),
                       leading=("sign_velocity",), **unl),
+        # added 2026-11-27 (issue 26), held out from the start, before the learned knee's change was run: a
+        # valve of another sense, knee and axle than the blow-off form
+        GeneratorForm("unlisted/damper_valve_stop_rear", description="a rear damper valve at its stop: beyond "
+                      "+-0.35 m/s the intact rear hydraulic curve grows with 1.6 times its slope (firmer at high "
+                      "velocity than the measured curve; front dampers as measured; oil-empty dampers build no "
+                      "pressure)",
+                      hidden=TruthHidden(blow_off_velocity_m_s=(0.0, 0.35), blow_off_slope_factor=1.6),
+                      leading=("velocity_beyond_knee", "velocity_squared"), **unl),
     ]
     return {f.name: f for f in fs}
 
