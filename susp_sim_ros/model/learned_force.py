@@ -13,9 +13,13 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
 ``deflection``              d / d_ref: a spring
 ``deflection_cubed``        (d / d_ref)^3: a progressive spring (elastomer, gas volume)
 ``deflection_velocity``     v / v_ref: viscous damping
-``velocity_squared``        (v / v_ref) |v / v_ref|: orifice-like damping
-``velocity_beyond_knee``    sign(v) max(|v| - v_knee, 0) / v_ref: a damper whose slope changes above a
-                            knee velocity (a blow-off valve opening, a valve closing)
+``velocity_squared``        oil (v / v_ref) |v / v_ref|: orifice-like damping, a force of the oil's flow
+                            through an orifice, so it scales with the damper's oil level ``oil`` as the
+                            knee below
+``velocity_beyond_knee``    oil sign(v) max(|v| - v_knee, 0) / v_ref: a damper whose slope changes above
+                            a knee velocity (a blow-off valve opening, a valve at its stop); a valve acts
+                            on the damper's oil, so the force scales with the damper's oil level ``oil``
+                            (0 empty, 1 intact: an oil-empty damper builds no pressure to open a valve)
 ``sign_velocity``           z: friction-like (``z`` a unit Dahl element, -1..1, presliding travel x_p)
 ``peak_deflection``         z A / d_ref: friction growing with the deflection amplitude (``A`` the peak
                             |d|, forgotten with time constant ``memory``)
@@ -71,10 +75,11 @@ _DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS = (_O_SHAPE + 4 * k for k in ra
 PRESLIDING, STRIBECK_VELOCITY = SHAPES[5], SHAPES[7]
 _Z, _DEF, _AMP = 0, 4, 8
 _C_D, _C_DD, _C_FX, _C_FY, _C_DT = C_INDEX["D"], C_INDEX["DD"], C_INDEX["FX"], C_INDEX["FY"], C_INDEX["DT"]
+_C_OIL = C_INDEX["OIL"]
 
 
 @njit(cache=True, inline="always")
-def corner_feature(k, d, d_other, v, fx, fy, z, amp, dref, vref, fref, knee, gap, vs):
+def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, dref, vref, fref, knee, gap, vs):
     """Feature ``k`` of :data:`FEATURES` at one corner (module docstring)."""
     x = d / dref
     u = v / vref
@@ -89,9 +94,9 @@ def corner_feature(k, d, d_other, v, fx, fy, z, amp, dref, vref, fref, knee, gap
     if k == 3:
         return u
     if k == 4:
-        return u * abs(u)
+        return oil * u * abs(u)
     if k == 5:
-        return sgn * max(abs(v) - knee, 0.0) / vref
+        return oil * sgn * max(abs(v) - knee, 0.0) / vref
     if k == 6:
         return z
     if k == 7:
@@ -120,8 +125,8 @@ def learned_force_force(p, po, s, so, i, c):
     roll = d - s[so + _DEF + o]
     gap = p[po + _GAP + i]
     q = po + i
-    return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * u * abs(u)
-            + p[q + 20] * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
+    return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * c[i, _C_OIL] * u * abs(u)
+            + p[q + 20] * c[i, _C_OIL] * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
                    + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i]))
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref)
@@ -147,14 +152,14 @@ def learned_force_update(p, po, s, so, i, c, dx):
 
 
 @njit(cache=True)
-def _series(D, V, FX, FY, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, out):
+def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, out):
     n = D.shape[0]
     z = np.zeros(4)
     amp = np.zeros(4)
     for t in range(n):
         for i in range(4):
             o = i + 1 if i % 2 == 0 else i - 1
-            out[t, i] = corner_feature(k, D[t, i], D[t, o], V[t, i], FX[t, i], FY[t, i], z[i], amp[i],
+            out[t, i] = corner_feature(k, D[t, i], D[t, o], V[t, i], FX[t, i], FY[t, i], OIL[i], z[i], amp[i],
                                        dref, vref, fref, knee, gap, vs)
         if t + 1 < n:
             for i in range(4):
@@ -163,16 +168,18 @@ def _series(D, V, FX, FY, dt, k, dref, vref, fref, knee, gap, presliding, memory
 
 
 def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: np.ndarray, fy: np.ndarray,
-                   dt: float, shape: dict | None = None) -> np.ndarray:
+                   dt: float, shape: dict | None = None, oil: np.ndarray | None = None) -> np.ndarray:
     """Feature ``name`` (n, 4) along simulated corner series (n, 4) of deflection [m], its velocity
     [m/s] and the wheel forces [N] at step ``dt`` [s]; ``shape``: values of :data:`SHAPES` (defaults
-    where missing). The states start at rest, as the kernel's do."""
+    where missing); ``oil``: the dampers' oil levels (4,) [0..1], intact (1) when not given. The states
+    start at rest, as the kernel's do."""
     if name not in FEATURES:
         raise ValueError(f"unknown learned-force feature {name!r}; known: {', '.join(FEATURES)}")
     sh = shape_defaults() | dict(shape or {})
     out = np.empty(deflection.shape)
     D, V, FX, FY = (np.ascontiguousarray(a, float) for a in (deflection, velocity, fx, fy))
-    _series(D, V, FX, FY, float(dt), FEATURES.index(name), float(sh["deflection_ref"]), float(sh["velocity_ref"]),
+    OIL = np.ones(4) if oil is None else np.ascontiguousarray(oil, float).reshape(4)
+    _series(D, V, FX, FY, OIL, float(dt), FEATURES.index(name), float(sh["deflection_ref"]), float(sh["velocity_ref"]),
             float(sh["force_ref"]), float(sh["knee_velocity"]), float(sh["free_play"]), float(sh["presliding"]),
             float(sh["memory"]), float(sh["stribeck_velocity"]), out)
     return out
@@ -181,7 +188,8 @@ def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: 
 _COEF_MEANING = {
     "constant": "force offset", "deflection": "spring force at d = d_ref",
     "deflection_cubed": "progressive spring force at d = d_ref", "deflection_velocity": "viscous force at v = v_ref",
-    "velocity_squared": "orifice force at v = v_ref", "velocity_beyond_knee": "force change v_ref beyond the knee",
+    "velocity_squared": "orifice force at v = v_ref of an intact damper",
+    "velocity_beyond_knee": "force change v_ref beyond the knee of an intact damper",
     "sign_velocity": "friction level", "peak_deflection": "friction level at amplitude d_ref",
     "lateral_force": "friction level at |Fy| = F_ref", "longitudinal_force": "friction level at |Fx| = F_ref",
     "velocity_weakening": "friction level at rest above the sliding level (falls with exp(-|v| / v_s))",

@@ -22,9 +22,9 @@ Selection is sparse and held out by drive: orthogonal matching pursuit (scikit-l
 ``orthogonal_mp_gram`` on each drive's sufficient statistics; Pati, Rezaiifar and Krishnaprasad 1993)
 with the number of dependences, none included, chosen on left-out drives by the one-standard-error rule,
 repeated on drive-bootstrap resamples; a dependence is *stable* when it is selected in most resamples
-(stability selection, Meinshausen and Buehlmann 2010). Why scikit-learn rather than PySINDy: PySINDy
-regresses measured state derivatives on a library; here the library's columns are simulated effects, so
-only its optimizers would be used, and scikit-learn's OMP is that optimizer.
+that can test it (stability selection, Meinshausen and Buehlmann 2010; :func:`select`). Why scikit-learn
+rather than PySINDy: PySINDy regresses measured state derivatives on a library; here the library's columns
+are simulated effects, so only its optimizers would be used, and scikit-learn's OMP is that optimizer.
 
 The stable set is then a learned physics term (:data:`~susp_sim_ros.model.learned_force.LEARNED_FORCE`,
 TERM ``unlisted_force``) with one coefficient per dependence (and the knee or free play it selected,
@@ -71,8 +71,10 @@ LISTED_FOR = {"constant": "damper_gas_preload", "deflection": "damper_gas_preloa
 WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grows with the deflection)",
          "deflection_cubed": "a progressive spring (grows with the cube of the deflection)",
          "deflection_velocity": "viscous (grows with the deflection velocity)",
-         "velocity_squared": "grows with the square of the deflection velocity (orifice-like)",
-         "velocity_beyond_knee": "changes slope above a deflection velocity of {knee:.2f} m/s (a valve opening)",
+         "velocity_squared": "grows with the square of the deflection velocity, as far as the damper holds "
+                             "oil (orifice-like)",
+         "velocity_beyond_knee": "changes slope above a deflection velocity of {knee:.2f} m/s, as far as the damper "
+                                 "holds oil (a damper valve opening or at its stop)",
          "sign_velocity": "friction-like (a jump when the deflection reverses)",
          "peak_deflection": "friction-like, growing with the remembered peak deflection",
          "lateral_force": "friction-like, growing with the lateral wheel force",
@@ -310,10 +312,27 @@ def _omp_cv(stats: dict[int, _DriveStats], pick: np.ndarray, max_features: int) 
     return sel
 
 
+def _testable(acts: dict[int, set], pick: np.ndarray) -> set:
+    """The dependences a resample ``pick`` can test: those that act (a column not identically zero) on at
+    least two of its distinct drives, one to fit and one left out (``acts``: per drive, the dependences
+    acting on it)."""
+    seen: Counter = Counter()
+    for g in np.unique(pick):
+        seen.update(acts[int(g)])
+    return {k for k, n in seen.items() if n >= 2}
+
+
 def select(design: Design, cfg: dict | None = None) -> Selection | None:
     """Stability selection over drive-bootstrap resamples (module docstring); None when fewer than two
     drives have rows or nothing is stable. A dependence is counted per :func:`group_key` (a rotation
-    harmonic's sine and cosine once, as one), and a stable pair keeps both columns."""
+    harmonic's sine and cosine once, as one), and a stable pair keeps both columns.
+
+    A dependence's selection frequency counts the resamples that can test it: those with at least two
+    distinct drives on which it acts (:func:`_testable`). A force that acts only on some drives (a valve of
+    the rear dampers, zero where they are oil-empty; a knee the sine steers' deflection velocities never
+    reach) can be selected from, and its prediction checked on, those drives only; a resample without two
+    of them says nothing about it: it is counted neither as a vote against it nor, when the count chosen for
+    the other dependences takes it in, for it."""
     cfg = settings() if cfg is None else cfg
     drives = np.unique(design.groups)
     if len(drives) < 2:
@@ -321,7 +340,10 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
     stats = {int(g): _DriveStats.of(design.X[design.groups == g], design.y[design.groups == g]) for g in drives}
     rng = np.random.default_rng(int(cfg["selection.seed"]))
     B, max_f = int(cfg["selection.resamples"]), int(cfg["selection.max_features"])
+    keys = [group_key(c.key) for c in design.columns]
+    acts = {g: {keys[j] for j in np.flatnonzero(np.diag(t.G) > 0.0)} for g, t in stats.items()}
     counts: Counter = Counter()
+    testable: Counter = Counter()
     shapes: dict[tuple[str, str], Counter] = {}
     done = 0
     for _ in range(B):
@@ -330,13 +352,16 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
             continue
         sel = _omp_cv(stats, pick, max_f)
         done += 1
-        for k in set(group_key(design.columns[j].key) for j in np.flatnonzero(sel)):
+        can = _testable(acts, pick)
+        testable.update(can)
+        for k in set(keys[j] for j in np.flatnonzero(sel)) & can:
             counts[k] += 1
         for j in np.flatnonzero(sel):
-            shapes.setdefault(design.columns[j].key, Counter())[design.columns[j].shape] += 1
+            if keys[j] in can:
+                shapes.setdefault(design.columns[j].key, Counter())[design.columns[j].shape] += 1
     if done == 0:
         return None
-    freq = {k: n / done for k, n in counts.items()}
+    freq = {k: n / max(testable[k], 1) for k, n in counts.items()}
     stable_keys = [k for k, q in freq.items() if q >= float(cfg["selection.min_frequency"])]
     if not stable_keys:
         return Selection(freq, [], np.zeros(0), np.zeros(0), done)
