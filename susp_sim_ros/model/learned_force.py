@@ -125,8 +125,9 @@ def learned_force_force(p, po, s, so, i, c):
     roll = d - s[so + _DEF + o]
     gap = p[po + _GAP + i]
     q = po + i
-    return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * c[i, _C_OIL] * u * abs(u)
-            + p[q + 20] * c[i, _C_OIL] * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
+    oil = c[i, _C_OIL]
+    return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * oil * u * abs(u)
+            + p[q + 20] * oil * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
                    + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i]))
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref)

@@ -361,7 +361,7 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
                 shapes.setdefault(design.columns[j].key, Counter())[design.columns[j].shape] += 1
     if done == 0:
         return None
-    freq = {k: n / max(testable[k], 1) for k, n in counts.items()}
+    freq = {k: n / testable[k] for k, n in counts.items()}   # counted only where testable: never 0 / 0
     stable_keys = [k for k, q in freq.items() if q >= float(cfg["selection.min_frequency"])]
     if not stable_keys:
         return Selection(freq, [], np.zeros(0), np.zeros(0), done)
