@@ -224,7 +224,7 @@ def test_the_recorded_structure_level_is_measured_on_development_forms():
 
 # ---- issue 26: the hidden force exposed, physics no candidate lists -----------------------------------
 UNLISTED = ("unlisted/damper_blow_off", "unlisted/arb_free_play", "unlisted/stribeck_friction",
-            "unlisted/load_friction", "unlisted/damper_valve_stop_rear")
+            "unlisted/load_friction", "unlisted/damper_valve_stop_rear", "unlisted/load_friction_front")
 #: the split of every form before issue 26 (family_split.yaml may only gain forms, never move them)
 SPLIT_BEFORE_26 = {
     "development": ["structure/nominal", "structure/heun_1ms", "structure/velocity_scaling_ramp",
@@ -253,9 +253,10 @@ def test_existing_forms_keep_their_split_and_their_truth():
             assert family.split_of(name) == split, name
     before = {n for names in SPLIT_BEFORE_26.values() for n in names}
     # forms added later are held out from the start (never moved between splits)
-    added_27 = {"viscous/bilinear_digressive", "unlisted/load_friction", "unlisted/damper_valve_stop_rear"}
-    assert set(family.FORMS) - before == set(UNLISTED) | added_27
-    assert all(family.split_of(n) == "held_out" for n in added_27)
+    added_later = {"viscous/bilinear_digressive", "unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+                   "unlisted/load_friction_front"}
+    assert set(family.FORMS) - before == set(UNLISTED) | added_later
+    assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
     for name in before:
         h = family.FORMS[name].hidden
@@ -278,7 +279,9 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     text = family.SPLIT_FILE.read_text(encoding="utf-8")
     assert "added 2026-11-26" in text
     assert "added 2026-11-27 (issue 26)" in text
-    assert doc["held_out"][-2:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear"]   # appended,
+    assert "added 2026-11-28 (issue 26)" in text
+    assert doc["held_out"][-3:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+                                    "unlisted/load_friction_front"]   # appended,
     # held out from the start
     for name in UNLISTED:
         form = family.FORMS[name]
@@ -294,6 +297,7 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/arb_free_play"].leading == ("roll_free_play", "roll_deflection")
     assert family.FORMS["unlisted/stribeck_friction"].leading == ("sign_velocity",)
     assert family.FORMS["unlisted/load_friction"].leading == ("sign_velocity",)
+    assert family.FORMS["unlisted/load_friction_front"].leading == ("sign_velocity",)
     assert family.FORMS["unlisted/damper_valve_stop_rear"].leading == ("velocity_beyond_knee", "velocity_squared")
 
 
@@ -388,3 +392,10 @@ def test_hidden_force_of_the_unlisted_forms():
     fast = np.abs(v[:, 2:]) > 0.005
     np.testing.assert_allclose(h[fast], lim[fast] * np.sign(v[:, 2:][fast]), rtol=1e-3)
     assert 50.0 < np.abs(h).max() < 150.0
+    # the same law on the front corners at other values (mu 0.012, v_eps 3 mm/s): the rear untouched
+    r = family.case_truth(family.FORMS["unlisted/load_friction_front"], 1, "bump_intact")
+    v = np.gradient(r.deflection, r.t, axis=0)
+    h, lim = r.hidden[:, :2], 0.012 * r.tyre_load[:, :2]
+    assert np.all(r.hidden[:, 2:] == 0.0) and np.all(np.abs(h) <= lim * (1.0 + 1e-12))
+    fast = np.abs(v[:, :2]) > 0.015
+    np.testing.assert_allclose(h[fast], lim[fast] * np.sign(v[:, :2][fast]), rtol=1e-3)
