@@ -226,6 +226,34 @@ def test_the_learned_candidate_writes_its_coefficients_and_shape_into_the_term()
     assert written["c_roll_free_play"] == {"front": 120.0, "rear": 0.0}
 
 
+def test_a_learned_knee_ranges_over_its_physics_and_sizes_no_effect():
+    """The knee the regression picked from the library is the fit's start, free over the config's plausible
+    range of valve knees (not a band around the library value: x/4..4x around 0.1 m/s held a rear valve's knee
+    at 0.4 m/s, its edge); it is a shape value: the term's effect is sized by its coefficients alone (a
+    coefficient interval holding zero is no effect, a knee's interval says nothing about it), and the words
+    give the knee as fitted."""
+    from susp_sim_ros.analysis.discrepancy.report import _where
+    cfg = fs.settings()
+    truth = {("velocity_beyond_knee", "rear"): -3.0, ("velocity_beyond_knee", "front"): -2.0}
+    sel = fs.select(_design(truth=truth))
+    assert sel is not None and {c.key for c in sel.stable} == set(truth)
+    cand = fs.learned_candidate(sel)
+    knee = cand.params[-1]
+    assert knee.name == "knee_velocity" and knee.shape
+    assert (knee.lower, knee.upper) == tuple(float(v) for v in cfg["fit.knee_velocity_range_m_s"])
+    assert knee.upper > 4 * min(float(v) for v in cfg["library.knee_velocities_m_s"])
+    assert cand.gain_indices == (0, 1)
+    lo, hi = np.array([-200.0, -150.0, 0.3]), np.array([50.0, 40.0, 0.5])   # the knee's interval clear of its start
+    assert cand.effect_in_interval(lo, hi)
+    assert not cand.effect_in_interval(np.array([-200.0, -150.0, 0.3]), np.array([-10.0, 40.0, 0.5]))
+    assert "0.45 m/s" in sel.description(shapes={"knee_velocity": 0.45})
+    # where: no coefficient resolved on its own, the axles it was selected on (both), not the larger one
+    x = np.array([-80.0, -60.0, 0.4])
+    assert _where(cand, x, lo, hi, sel.axles) == "all"
+    assert _where(cand, x, np.array([-200.0, -150.0, 0.3]), np.array([-10.0, 40.0, 0.5]), sel.axles) == \
+        cand.axle_of[0]
+
+
 @settings(max_examples=20, deadline=None)
 @given(st.lists(st.floats(-0.05, 0.05), min_size=8, max_size=8), st.floats(-2.0, 2.0))
 def test_feature_series_is_finite_and_the_free_play_bounded(ds, v):

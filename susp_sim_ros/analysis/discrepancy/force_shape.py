@@ -115,6 +115,8 @@ def group_key(key: tuple[str, str]) -> tuple[str, str]:
 
 #: the shape parameter of the features that have one
 _SHAPE_OF = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play"}
+#: the config entry of each such shape parameter's range in the learned term's fit
+_SHAPE_RANGE = {"knee_velocity": "fit.knee_velocity_range_m_s", "free_play": "fit.free_play_range_m"}
 
 
 def learned_in(variant) -> bool:
@@ -242,15 +244,19 @@ class Selection:
         rivals = [LISTED_FOR.get(c.feature) for c in self.stable]
         return [] if any(r is None for r in rivals) else sorted(set(r for r in rivals if r))
 
-    def description(self, coef: np.ndarray | None = None) -> str:
+    def description(self, coef: np.ndarray | None = None, shapes: dict | None = None) -> str:
         """One sentence in words, strongest dependence first, each with its axles, sense (from ``coef``,
-        the fitted coefficients in :attr:`stable` order, when given; else the regression's) and share."""
+        the fitted coefficients in :attr:`stable` order, when given; else the regression's) and share; a
+        knee or free play at its fitted value in ``shapes`` (``{"knee_velocity": m/s, "free_play": m}``)
+        when given, else at the value the regression selected."""
         coef = self.coef if coef is None else np.asarray(coef, float)
+        shapes = shapes or {}
         parts = []
         for feature in self.dependences:
             ks = [k for k in np.argsort(-self.share) if self.stable[k].feature == feature]
             c = self.stable[ks[0]]
-            w = WORDS[feature].format(knee=c.shape or 0.0, gap_mm=1e3 * (c.shape or 0.0))
+            value = float(shapes.get(_SHAPE_OF.get(feature, ""), c.shape or 0.0))
+            w = WORDS[feature].format(knee=value, gap_mm=1e3 * value)
             more, less = SENSE[feature]
             where = ", ".join(f"{self.stable[k].axle} {more if coef[k] > 0 else less} "
                               f"{100 * self.share[k]:.0f} %" for k in ks)
@@ -383,7 +389,9 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
 
 def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     """The learned term as a finder candidate: one coefficient [N] per stable (feature, axle), neutral 0,
-    and the knee / free play it selected as a free shape value (neutral: the selected value). A stable
+    and the knee / free play it selected as a free shape value (neutral: the selected value; range: the
+    config's, the plausible range of the physics, not a band around the library value the regression picked,
+    which held a valve's knee at its edge). A stable
     friction-like dependence brings its law's shape (:func:`friction_law`): the presliding travel and,
     per axle with a plain friction level (``sign_velocity``), a level at rest above the sliding one that
     falls over a Stribeck velocity (coefficient neutral 0, after the stable ones)."""
@@ -409,8 +417,9 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
             shapes.setdefault(_SHAPE_OF[c.feature], c.shape)
     for name, value in shapes.items():
         p = LEARNED_FORCE.params[LEARNED_FORCE.param_index(name)]
-        params.append(CandParam(name, p.unit, value, max(p.lower, value / 4), min(p.upper, value * 4),
-                                value / 5, p.meaning + " (one value for both axles)"))
+        lo, hi = (float(v) for v in cfg[_SHAPE_RANGE[name]])
+        params.append(CandParam(name, p.unit, value, lo, hi, value / 5, p.meaning + " (one value for both axles)",
+                                shape=True))
         users = {c.axle for c in sel.stable if c.shape is not None and _SHAPE_OF.get(c.feature) == name}
         axle_of.append(users.pop() if len(users) == 1 else None)
     for name, (lo, hi, on) in law_shapes.items():

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +30,10 @@ def _num(x):
     return x if math.isfinite(x) else None
 
 
-def _where(cand: Candidate, x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> str:
+def _where(cand: Candidate, x: np.ndarray, lo: np.ndarray, hi: np.ndarray, selected: Sequence[str] = ()) -> str:
+    """Where the term acts: the axles of its parameters whose interval holds no effect; when none does on its
+    own, the axles the data ``selected`` it on (a learned term's stable dependences), else the axle with the
+    larger relative effect."""
     axles: set[str] = set()
     gains = cand.gain_indices
     for j in gains:
@@ -38,6 +42,8 @@ def _where(cand: Candidate, x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> st
             return "all"
         if not (lo[j] <= cand.params[j].neutral <= hi[j]):
             axles.add(ax)
+    if not axles and selected:
+        return selected[0] if len(set(selected)) == 1 else "all"
     if not axles:  # nothing significant on its own: the axle with the larger relative effect
         ax = cand.axle_of[max(gains, key=lambda j: abs(x[j] - cand.params[j].neutral) / cand.params[j].step)]
         assert ax is not None  # a None axle returned "all" in the loop above
@@ -79,15 +85,17 @@ def term_entries(f) -> list[dict]:
         if effect is not None:
             ev["effect"] = effect.as_json()
         ev["statement"] = statement(cand, params, ev, f)
-        entry = {"name": name, "where": _where(cand, x, lo[a:b], hi[a:b]) if cand.n_params else "all",
+        sel = getattr(f, "learned_selection_", None) if name == force_shape.TERM else None
+        selected = sel.axles if sel is not None else ()
+        entry = {"name": name, "where": _where(cand, x, lo[a:b], hi[a:b], selected) if cand.n_params else "all",
                  "params": params, "ci95": ci, "evidence": ev}
         if effect is not None:  # interface.md: the term's effect as a whole (issue 24, item 3)
             entry["effect"] = ev["effect"]
         if name == force_shape.TERM:  # interface.md: what the learned force depends on, in words
-            sel = getattr(f, "learned_selection_", None)
             entry["dependences"] = ev.get("dependences", [])
             # the sense of each dependence from the fitted coefficients (the joint fit may flip a sign)
-            entry["description"] = sel.description(x[:len(sel.stable)]) if sel is not None else cand.meaning
+            entry["description"] = (sel.description(x[:len(sel.stable)], params) if sel is not None
+                                    else cand.meaning)
             ev["description"] = entry["description"]
         out.append(entry)
     return out
