@@ -212,7 +212,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(blow_off_velocity_m_s=(0.0, 0.35), blow_off_slope_factor=1.6),
                       leading=("velocity_beyond_knee", "velocity_squared"), **unl),
         # added 2026-11-28 (issue 26), held out from the start, before any run of the finder on it and before
-        # the cluster-stability change it is to test blind: the load law on the other axle, at other values
+        # the changes of that day it tested blind: the load law on the other axle, at other values
         GeneratorForm("unlisted/load_friction_front", description="strut friction growing with the wheel's "
                       "vertical load at the front corners: mu Fz tanh(v/v_eps), mu 0.012, v_eps 3 mm/s (the "
                       "load-dependent law of unlisted/load_friction on the other axle, with other values)",

@@ -255,7 +255,8 @@ class Selection:
         for feature in self.dependences:
             ks = [k for k in np.argsort(-self.share) if self.stable[k].feature == feature]
             c = self.stable[ks[0]]
-            value = float(shapes.get(_SHAPE_OF.get(feature, ""), c.shape or 0.0))
+            shape = _SHAPE_OF.get(feature)
+            value = float(shapes[shape]) if shape in shapes else c.shape or 0.0
             w = WORDS[feature].format(knee=value, gap_mm=1e3 * value)
             more, less = SENSE[feature]
             where = ", ".join(f"{self.stable[k].axle} {more if coef[k] > 0 else less} "
