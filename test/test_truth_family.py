@@ -224,7 +224,8 @@ def test_the_recorded_structure_level_is_measured_on_development_forms():
 
 # ---- issue 26: the hidden force exposed, physics no candidate lists -----------------------------------
 UNLISTED = ("unlisted/damper_blow_off", "unlisted/arb_free_play", "unlisted/stribeck_friction",
-            "unlisted/load_friction", "unlisted/damper_valve_stop_rear", "unlisted/load_friction_front")
+            "unlisted/load_friction", "unlisted/damper_valve_stop_rear", "unlisted/load_friction_front",
+            "unlisted/position_friction")
 #: the split of every form before issue 26 (family_split.yaml may only gain forms, never move them)
 SPLIT_BEFORE_26 = {
     "development": ["structure/nominal", "structure/heun_1ms", "structure/velocity_scaling_ramp",
@@ -254,16 +255,16 @@ def test_existing_forms_keep_their_split_and_their_truth():
     before = {n for names in SPLIT_BEFORE_26.values() for n in names}
     # forms added later are held out from the start (never moved between splits)
     added_later = {"viscous/bilinear_digressive", "unlisted/load_friction", "unlisted/damper_valve_stop_rear",
-                   "unlisted/load_friction_front"}
+                   "unlisted/load_friction_front", "unlisted/position_friction"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
     for name in before:
         h = family.FORMS[name].hidden
         assert (h.blow_off_velocity_m_s, h.arb_free_play_m, h.stribeck_static_N, h.stribeck_coulomb_N,
-                h.load_friction_coefficient) == \
+                h.load_friction_coefficient, h.position_friction_N, h.position_friction_rate_N_m) == \
             (off.blow_off_velocity_m_s, off.arb_free_play_m, off.stribeck_static_N, off.stribeck_coulomb_N,
-             off.load_friction_coefficient), name
+             off.load_friction_coefficient, off.position_friction_N, off.position_friction_rate_N_m), name
         assert family.FORMS[name].leading == ()
     for name, ref in TRUTH_BEFORE_26.items():
         form = family.FORMS[name]
@@ -280,8 +281,8 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-26" in text
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
-    assert doc["held_out"][-3:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
-                                    "unlisted/load_friction_front"]   # appended,
+    assert doc["held_out"][-4:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+                                    "unlisted/load_friction_front", "unlisted/position_friction"]   # appended,
     # held out from the start
     for name in UNLISTED:
         form = family.FORMS[name]
@@ -298,6 +299,7 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/stribeck_friction"].leading == ("sign_velocity",)
     assert family.FORMS["unlisted/load_friction"].leading == ("sign_velocity",)
     assert family.FORMS["unlisted/load_friction_front"].leading == ("sign_velocity",)
+    assert family.FORMS["unlisted/position_friction"].leading == ("sign_velocity",)
     assert family.FORMS["unlisted/damper_valve_stop_rear"].leading == ("velocity_beyond_knee", "velocity_squared")
 
 
@@ -305,7 +307,7 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
 def test_unlisted_forms_show_clearly_above_the_gyro_noise(name):
     """Noise-free roll or pitch rate, with against without the effect: RMS difference at least 3x the
     cases' 0.05 deg/s gyro noise on some drive (measured: blow-off 0.61, free play 0.34, Stribeck 0.56,
-    load-dependent friction 0.72, rear valve at its stop 0.29 deg/s)."""
+    load-dependent friction 0.72, rear valve at its stop 0.29, friction growing with the compression 0.37 deg/s)."""
     form, nominal = family.FORMS[name], family.FORMS["structure/nominal"]
     best = 0.0
     for _, _, lbl in family.CASE_DRIVES:
@@ -399,3 +401,13 @@ def test_hidden_force_of_the_unlisted_forms():
     assert np.all(r.hidden[:, 2:] == 0.0) and np.all(np.abs(h) <= lim * (1.0 + 1e-12))
     fast = np.abs(v[:, :2]) > 0.015
     np.testing.assert_allclose(h[fast], lim[fast] * np.sign(v[:, :2][fast]), rtol=1e-3)
+    # strut friction growing with the compression, every corner: max(F0 + k d, 0) with the sign of the deflection
+    # velocity once sliding (v_eps 2 mm/s), more in bump than in rebound
+    r = family.case_truth(family.FORMS["unlisted/position_friction"], 1, "bump_intact")
+    v = np.gradient(r.deflection, r.t, axis=0)
+    lim = np.maximum(np.array([30.0, 30.0, 25.0, 25.0]) + np.array([1500.0, 1500.0, 1200.0, 1200.0]) * r.deflection,
+                     0.0)
+    assert np.all(np.abs(r.hidden) <= lim * (1.0 + 1e-12))
+    fast = np.abs(v) > 0.01
+    np.testing.assert_allclose(r.hidden[fast], lim[fast] * np.sign(v[fast]), rtol=1e-3)
+    assert np.abs(r.hidden[r.deflection > 0.01]).max() > 40.0

@@ -218,6 +218,15 @@ def _forms() -> dict[str, GeneratorForm]:
                       "load-dependent law of unlisted/load_friction on the other axle, with other values)",
                       hidden=TruthHidden(load_friction_coefficient=(0.012, 0.0), stribeck_eps_m_s=0.003),
                       leading=("sign_velocity",), **unl),
+        # added 2026-11-28 (issue 26), held out from the start, before any run of the finder on it and before the
+        # selection's change of that day (forward selection on left-out drives) was run on it
+        GeneratorForm("unlisted/position_friction", description="strut friction growing with the compression at "
+                      "all four corners: max(F0 + k d, 0) tanh(v/v_eps), front 30 N + 1500 N/m, rear 25 N + 1200 N/m, "
+                      "v_eps 2 mm/s (a rod guide whose side load grows as the spring compresses: a friction law of "
+                      "another shape, on both axles, falling in rebound)",
+                      hidden=TruthHidden(position_friction_N=(30.0, 25.0), position_friction_rate_N_m=(1500.0, 1200.0),
+                                         stribeck_eps_m_s=0.002),
+                      leading=("sign_velocity",), **unl),
     ]
     return {f.name: f for f in fs}
 

@@ -187,6 +187,10 @@ class TruthHidden:
     load_friction_coefficient: tuple = (0.0, 0.0)  # strut friction growing with the wheel's vertical load
     #                                               (front, rear): mu max(Fz0 + Ft, 0) tanh(v/v_eps), Fz0 + Ft
     #                                               the corner's tyre load, v_eps = stribeck_eps_m_s
+    position_friction_N: tuple = (0.0, 0.0)       # strut friction growing with the compression (front, rear):
+    position_friction_rate_N_m: tuple = (0.0, 0.0)  # max(F0 + k d, 0) tanh(v/v_eps), d the deflection from
+    #                                               static (positive in bump), v_eps = stribeck_eps_m_s: a rod
+    #                                               guide whose side load grows as the spring compresses
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -324,7 +328,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  SIGMA, SVINF, SVS, SVREF, FRIC, AMPA0, AMPTAU, DRIVEF, BRAKEF, SVON, AMPENV, AMPLAW, AMPEXP, AMPSEP, SEPSIG,
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
- WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, NW) = range(30)
+ WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, NW) = range(32)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -379,6 +383,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WBOV], W[i, WGAP] = hid.blow_off_velocity_m_s[k], hid.arb_free_play_m[k]
         W[i, WSTRS], W[i, WSTRC] = hid.stribeck_static_N[k], hid.stribeck_coulomb_N[k]
         W[i, WLFMU] = hid.load_friction_coefficient[k]
+        W[i, WPF0], W[i, WPFK] = hid.position_friction_N[k], hid.position_friction_rate_N_m[k]
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -446,6 +451,24 @@ def _tyre_force(Ft, Fz0):
 
 
 @njit(cache=True)
+def _strut_friction(w, P, d, dd, Ft):
+    """The hidden strut friction laws of one corner (``w`` its row of W) [N, in Fs's sense]: a Stribeck
+    (velocity-weakening) friction, one growing with the vertical tyre load ``Fz0 + Ft`` and one growing with
+    the compression ``d``; 0 when none is set."""
+    F = 0.0
+    if w[WSTRS] != 0.0 or w[WSTRC] != 0.0:
+        ra = dd / P[STRVS]
+        F += (w[WSTRC] + (w[WSTRS] - w[WSTRC]) * math.exp(-ra * ra)) * math.tanh(dd / P[STREPS])
+    if w[WLFMU] != 0.0:
+        Fload = w[WFZ0] + Ft
+        F += w[WLFMU] * (Fload if Fload > 0.0 else 0.0) * math.tanh(dd / P[STREPS])
+    if w[WPF0] != 0.0 or w[WPFK] != 0.0:
+        Fpn = w[WPF0] + w[WPFK] * d
+        F += (Fpn if Fpn > 0.0 else 0.0) * math.tanh(dd / P[STREPS])
+    return F
+
+
+@njit(cache=True)
 def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
     """dy/dt of the mechanical states; aux[i] = (d, dd, Fz, Fs, F_hidden): F_hidden the part of Fs from
     the hidden physics computed here (all but the Dahl elements). Friction forces Ff held (splitting)."""
@@ -499,17 +522,10 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
         Fgas = W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fs += P[DSCALE] * Fh + Ff[i] + Fv + W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fhid += Fv + Fgas
-        if W[i, WSTRS] != 0.0 or W[i, WSTRC] != 0.0:  # Stribeck (velocity-weakening) friction
-            ra = dd[i] / P[STRVS]
-            Fst = (W[i, WSTRC] + (W[i, WSTRS] - W[i, WSTRC]) * math.exp(-ra * ra)) * math.tanh(dd[i] / P[STREPS])
-            Fs += Fst
-            Fhid += Fst
         Ft = _tyre_force(P[KT] * (ZR[i, j] - y[8 + i]) + P[CT] * (ZRD[i, j] - y[12 + i]), W[i, WFZ0])
-        if W[i, WLFMU] != 0.0:                         # strut friction growing with the vertical tyre load
-            Fload = W[i, WFZ0] + Ft
-            Flf = W[i, WLFMU] * (Fload if Fload > 0.0 else 0.0) * math.tanh(dd[i] / P[STREPS])
-            Fs += Flf
-            Fhid += Flf
+        Fsf = _strut_friction(W[i], P, d[i], dd[i], Ft)
+        Fs += Fsf
+        Fhid += Fsf
         dy[8 + i] = y[12 + i]
         dy[12 + i] = (Ft - Fs) / W[i, WMU]
         Fyax = y[16 + (i // 2) * 2] + y[17 + (i // 2) * 2]
