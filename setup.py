@@ -27,7 +27,7 @@ setup(
         ("share/" + package_name + "/foxglove", glob("foxglove/*.json")),
     ],
     install_requires=["setuptools", "numpy", "scipy", "pyyaml", "matplotlib", "numba", "mcap",
-                      "mcap-ros2-support", "tqdm", "dask[distributed]", "rosbags", "scikit-learn"],
+                      "mcap-ros2-support", "tqdm", "dask[distributed]", "rosbags"],
     zip_safe=False,
     maintainer="susp_sim_ros developers",
     maintainer_email="dev@susp-sim-ros.invalid",
