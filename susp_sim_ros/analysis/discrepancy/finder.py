@@ -684,6 +684,7 @@ class DiscrepancyFinder:
         allidx = tuple(range(len(ev.cases)))
         best, best_fit = None, None
         best_checks: dict = {}
+        singles: dict[str, FitResult] = {}   # the single trials' fits, by term: a pair's members alone
         for size in (1, 2):
             trials = []
             for o in [o for o in opts if len(o.add) == size][:TRIALS]:
@@ -693,8 +694,10 @@ class DiscrepancyFinder:
                 trials.append(learned)
             # every trial in BIC order until one passes: the best-BIC term failing its held-out test
             # must not hide a runner-up that passes; on a tie the listed term goes first
+            if size == 1:
+                singles.update((o.add[0], f) for o, f in trials)
             for o, f in sorted(trials, key=lambda t: (t[1].bic, force_shape.TERM in t[0].add)):
-                ok, in_sample, checks = self._passes(ev, cur, f, recalibrations, step)
+                ok, in_sample, checks = self._passes(ev, cur, f, recalibrations, step, singles)
                 if force_shape.TERM in o.add and self.force_shape_:   # the learned trial's outcome, kept
                     self.force_shape_[-1]["trial"] = {"delta_bic": cur.bic - f.bic, "passed": ok, **checks}
                 if best_fit is None or f.bic < best_fit.bic:
@@ -708,11 +711,12 @@ class DiscrepancyFinder:
         return best, best_fit, False, best_checks
 
     def _passes(self, ev: Evaluator, cur: FitResult, f: FitResult, recalibrations: dict[int, FitResult],
-                step: int) -> tuple[bool, bool, dict]:
+                step: int, singles: dict[str, FitResult] | None = None) -> tuple[bool, bool, dict]:
         """Every test a new term (or pair) that took ``cur`` to ``f`` must pass, in order: BIC, share of
         the excess, values the named physics can take (:meth:`Candidate.physical`), decoys, held-out drives,
-        better than recalibrating the known physics alone. Returns
-        ``(passed, passed_in_sample, checks)``."""
+        for a pair each member's own share of the held-out gain (:meth:`_pair_members_check`; ``singles``:
+        the single trials' fits at this step, by term), better than recalibrating the known physics alone.
+        Returns ``(passed, passed_in_sample, checks)``."""
         excess = max(cur.rss - cur.n, 1e-12)
         ok = (cur.bic - f.bic) >= MIN_DELTA_BIC and cur.rss - f.rss >= MIN_EXPLAINED * excess
         in_sample = ok
@@ -730,11 +734,37 @@ class DiscrepancyFinder:
         if ok:
             checks.update(self._heldout_check(ev, cur, f))
             ok = checks["passed"]
+        pair = [c.name for c in f.structure.cands if c.name not in cur.structure.names]
+        if ok and len(pair) == 2 and "heldout_gain_fraction_of_excess" in checks:  # drives to hold out
+            checks.update(self._pair_members_check(ev, cur, pair, checks["heldout_gain_fraction_of_excess"],
+                                                   singles or {}))
+            ok = checks["members_earn_their_place"]
         if ok:
             recal = self._recalibration(ev, cur, recalibrations, step)
             checks["recalibration_rss"] = recal.rss
             ok = f.rss < recal.rss
         return bool(ok), bool(in_sample), checks
+
+    def _pair_members_check(self, ev: Evaluator, cur: FitResult, pair: list[str], pair_gain: float,
+                            singles: dict[str, FitResult]) -> dict:
+        """A pair is tried only when no single term passes: for two terms that act only together (two
+        effects that cancel in one drive and not in another). Each member must then earn its place out of
+        sample: the pair's held-out gain (:meth:`_heldout_check`, a fraction of the held-out excess of
+        ``cur``) must exceed the other member's alone by :data:`MIN_HELDOUT_GAIN`, the share a single term
+        must lower the held-out residual by. A pair whose second member adds nothing on the left-out drives
+        (or predicts them worse) is one term that failed a later test with a passenger, not two effects.
+        ``member_heldout_gain``: per member, the pair's gain less the other member's alone."""
+        alone = {}
+        for name in pair:
+            f1 = singles.get(name)
+            if f1 is None:  # not among the best-screened singles: fitted here
+                st = cur.structure.with_(name)
+                f1 = fit_structure(ev, st, st.embed(cur.structure, cur.x), tuple(range(len(ev.cases))),
+                                   max_nfev=TRIAL_NFEV)
+            alone[name] = self._heldout_check(ev, cur, f1)["heldout_gain_fraction_of_excess"]
+        own = {a: float(pair_gain - alone[b]) for a, b in (pair, pair[::-1])}
+        return {"member_heldout_gain": own,
+                "members_earn_their_place": bool(min(own.values()) >= MIN_HELDOUT_GAIN)}
 
     # -- physics no candidate lists (issue 26, items 3-4) ---------------------------------------------
     def _shape_selection(self, ev: Evaluator, cur: FitResult, step: int) -> force_shape.Selection | None:
