@@ -69,3 +69,16 @@ def test_a_member_gaining_less_than_a_single_term_must_is_refused(monkeypatch):
 def test_a_pair_that_fails_recalibration_still_fails(monkeypatch):
     ok, _, checks = _judged(monkeypatch, {(AMP,): 0.0, (GAS,): 0.0, (GAS, AMP): 0.2}, recal_rss=7000.0)
     assert not ok and checks["members_earn_their_place"] is True and checks["recalibration_rss"] == 7000.0
+
+
+def test_the_report_says_what_each_member_of_a_named_pair_adds():
+    from susp_sim_ros.analysis.discrepancy.candidates import BY_NAME
+    from susp_sim_ros.analysis.discrepancy.report import statement
+    ev = {"with": [AMP, GAS], "heldout_gain_fraction_of_excess": 0.2, "selected_in_fraction_of_refits": 1.0,
+          "member_heldout_gain": {AMP: 0.15, GAS: 0.04}}
+    said = statement(BY_NAME[AMP], {}, ev, None)
+    assert f"named as a pair with {GAS}" in said and "a further 15 %" in said
+    assert "a further 4 %" in statement(BY_NAME[GAS], {}, ev, None)
+    # a single term says nothing of a pair
+    assert "pair" not in statement(BY_NAME[AMP], {}, {"with": [AMP], "heldout_gain_fraction_of_excess": 0.2,
+                                                      "selected_in_fraction_of_refits": 1.0}, None)

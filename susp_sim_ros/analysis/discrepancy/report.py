@@ -120,6 +120,11 @@ def statement(cand: Candidate, params: dict, ev: dict, f) -> str:
         s += (f"; on drives held out from its fit it removes {100 * ev['heldout_gain_fraction_of_excess']:.0f} % "
               f"of the residual above noise and is selected in {100 * ev['selected_in_fraction_of_refits']:.0f} % "
               f"of the leave-one-drive-out refits")
+    partner = [n for n in ev.get("with", []) if n != cand.name]
+    own = ev.get("member_heldout_gain", {}).get(cand.name)
+    if partner and own is not None:
+        s += (f"; named as a pair with {partner[0]} (no single term passed every test): beyond {partner[0]} alone "
+              f"it removes a further {100 * own:.0f} % of the residual above noise on the held-out drives")
     if "decoy_margin" in ev:
         s += (f"; its criterion beats the best of its {ev['decoys']} decoys (its own effect "
               f"time-reversed and shifted) by {ev['decoy_margin']:.0f}")
