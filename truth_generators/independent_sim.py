@@ -456,15 +456,16 @@ def _strut_friction(w, P, d, dd, Ft):
     (velocity-weakening) friction, one growing with the vertical tyre load ``Fz0 + Ft`` and one growing with
     the compression ``d``; 0 when none is set."""
     F = 0.0
+    slide = math.tanh(dd / P[STREPS])   # each law's sign of sliding, smoothed over v_eps
     if w[WSTRS] != 0.0 or w[WSTRC] != 0.0:
         ra = dd / P[STRVS]
-        F += (w[WSTRC] + (w[WSTRS] - w[WSTRC]) * math.exp(-ra * ra)) * math.tanh(dd / P[STREPS])
+        F += (w[WSTRC] + (w[WSTRS] - w[WSTRC]) * math.exp(-ra * ra)) * slide
     if w[WLFMU] != 0.0:
         Fload = w[WFZ0] + Ft
-        F += w[WLFMU] * (Fload if Fload > 0.0 else 0.0) * math.tanh(dd / P[STREPS])
+        F += w[WLFMU] * (Fload if Fload > 0.0 else 0.0) * slide
     if w[WPF0] != 0.0 or w[WPFK] != 0.0:
         Fpn = w[WPF0] + w[WPFK] * d
-        F += (Fpn if Fpn > 0.0 else 0.0) * math.tanh(dd / P[STREPS])
+        F += (Fpn if Fpn > 0.0 else 0.0) * slide
     return F
 
 

@@ -323,9 +323,9 @@ def _forward_cv(stats: dict[int, _DriveStats], pick: np.ndarray, max_features: i
             w = np.linalg.solve(Gt[idx[:, :, None], idx[:, None, :]] + eye, bt[idx][..., None])[..., 0]
             e[f] = (t.c - 2.0 * np.sum(w * t.b[idx], axis=1)
                     + np.einsum("ci,cij,cj->c", w, t.G[idx[:, :, None], idx[:, None, :]], w)) / t.n
-        best = int(np.argmin(e.mean(axis=0)))
-        chosen.append(int(cand[best]))
-        err.append(list(e[:, best]))
+        step = int(np.argmin(e.mean(axis=0)))
+        chosen.append(int(cand[step]))
+        err.append(list(e[:, step]))
     errs = np.array(err).T                    # fold x count
     mean, se = errs.mean(axis=0), errs.std(axis=0, ddof=1) / math.sqrt(len(errs))
     best = int(np.argmin(mean))
