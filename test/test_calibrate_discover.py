@@ -139,9 +139,9 @@ def test_a_steering_sensor_offset_is_calibrated_not_named_as_physics(tmp_path):
     assert not [t for t in rep["terms"] if BY_NAME[t["name"]].kind == PHYSICS]
 
 
-def _verdict_of(names, base_rms, final_rms, windows=True):
+def _verdict_of(names, base_rms, final_rms, windows=True, unmeasured=()):
     """The verdict of a finder whose final structure holds ``names``, with base and final whitened RMS
-    (in-sample figures: no held-out)."""
+    (in-sample figures: no held-out) and the ``unmeasured_input`` entries ``unmeasured``."""
     from types import SimpleNamespace
 
     from susp_sim_ros.analysis.discrepancy.report import verdict
@@ -149,7 +149,7 @@ def _verdict_of(names, base_rms, final_rms, windows=True):
     f = SimpleNamespace(result_=SimpleNamespace(structure=SimpleNamespace(names=tuple(names)),
                                                 rss=final_rms ** 2 * n, n=n),
                         base_fit_=SimpleNamespace(rss=base_rms ** 2 * n, n=n),
-                        windows_=[{}] if windows else [], heldout_=None, unmeasured_=[])
+                        windows_=[{}] if windows else [], heldout_=None, unmeasured_=list(unmeasured))
     return verdict(f)
 
 
@@ -178,6 +178,26 @@ def test_nothing_missing_only_within_the_measured_structure_level():
     assert v == "no_significant_discrepancy" and f"{line:.2f} x" in why
     v, why = _verdict_of(["calibration", "friction_amplitude"], 6.0, line * 1.1)
     assert v == "missing_physics" and "more is missing" in why
+
+
+def test_an_input_read_off_the_force_shape_is_a_finding_only_above_the_structure_level():
+    """Issue 26 item 5: a missing force at the level the structure-only cases leave is not a finding,
+    also when it follows an input. An input-led shape finding (its entry names the ``feature``) stands
+    above the line and is dropped within it (the reason says what it followed); a drive without road
+    input (no ``feature``: the road-less detector's finding) stays an input finding at any level."""
+    from susp_sim_ros.analysis.discrepancy.report import structure_level
+    line = structure_level()
+    shaped = {"kind": "road", "drive": "bump_front_empty", "signals": ["pitch_rate"], "feature": "road_height",
+              "statement": "bump_front_empty: the force the model lacks follows the road height"}
+    road_less = {"kind": "road", "drive": "highway", "signals": ["accel_z"], "statement": "highway: no road"}
+    v, why = _verdict_of(["calibration"], 6.0, line * 1.1, unmeasured=[shaped])
+    assert v == "unmeasured_input" and "follows the road height" in why
+    v, why = _verdict_of(["calibration"], 6.0, line * 0.95, unmeasured=[shaped])
+    assert v == "no_significant_discrepancy", why
+    assert "road height" in why and "not an input finding" in why
+    assert _verdict_of(["calibration"], 6.0, line * 0.95, unmeasured=[road_less])[0] == "unmeasured_input"
+    assert _verdict_of(["calibration"], 6.0, line * 0.95, unmeasured=[shaped, road_less]) == \
+        ("unmeasured_input", road_less["statement"])
 
 
 def test_a_term_competing_with_a_calibration_shift_is_stated_not_hidden():

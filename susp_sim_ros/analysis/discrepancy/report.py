@@ -166,9 +166,13 @@ def verdict(f) -> tuple[str, str]:
     explained = 1.0 - excess_after / excess_before if excess_before > 0 else 1.0
     line = structure_level()
     level = f"the {line:.2f} x that differences of structure alone leave (measured: config/discrepancy.yaml)"
-    unmeasured = getattr(f, "unmeasured_", [])
+    unmeasured = input_findings(f, after)
     if unmeasured and not phys:
         return "unmeasured_input", "; ".join(u["statement"] for u in unmeasured)
+    at_level = [u for u in getattr(f, "unmeasured_", []) if u not in unmeasured]
+    if at_level:
+        level += (f"; the force the model lacks {force_shape.WORDS[at_level[0]['feature']]}, but what remains is "
+                  f"within that level: not an input finding")
     rival = [c for c in getattr(f, "competing_", []) if c["name"] in BY_NAME and BY_NAME[c["name"]].kind == PHYSICS]
     undecided = "; ".join(f"{c['name']} and {', '.join(c['competes_with'])} explain the same residual "
                           f"(reveal with {c['reveal_with']})" for c in rival)
@@ -203,6 +207,21 @@ def verdict(f) -> tuple[str, str]:
     if unmeasured:  # physics named first, then a remainder that follows an input (issue 26, item 5)
         why += "; besides: " + "; ".join(u["statement"] for u in unmeasured)
     return "missing_physics", why
+
+
+def input_findings(f, after: float | None = None) -> list[dict]:
+    """The ``unmeasured_input`` findings that stand: every one of a drive without road input
+    (:mod:`.unmeasured`); one read off the missing force's shape (an input-led selection, its entries carry
+    the ``feature``) only when what remains held-out (``after``, x noise, as :func:`verdict` judges it) is
+    above :func:`structure_level` (issue 26, item 5: a missing force at the level the structure-only
+    cases leave is not a finding, whatever it follows: where the drives carry their road, a residual that
+    follows it at that level is how the road enters a structure that differs, e.g. the tyre)."""
+    found = list(getattr(f, "unmeasured_", []))
+    if after is None:
+        after = max(_pooled_noise_ratio(f), _primary_noise_ratio(f), key=lambda ba: ba[1])[1]
+    if after > structure_level():
+        return found
+    return [u for u in found if "feature" not in u]
 
 
 def _pooled_noise_ratio(f) -> tuple[float, float]:
@@ -260,7 +279,7 @@ def interface_json(f) -> dict:
         rep["heldout_rmse_before_deg_s"] = _num(_in_sample_primary(f, f.base_fit_))
         rep["heldout_rmse_after_deg_s"] = _num(_in_sample_primary(f, f.result_))
     if v == "unmeasured_input":
-        u = f.unmeasured_
+        u = input_findings(f)
         classes = [x["iso8608_class"] for x in u if x.get("iso8608_class")]
         rep["unmeasured_input"] = {"kind": ", ".join(sorted({x.get("kind", "road") for x in u})),
                                    "signals": sorted({s for x in u for s in x["signals"]}),
@@ -612,7 +631,7 @@ def _md_calibration(f, rep: dict, paths: dict, name: str) -> list[str]:
 def _md_unmeasured(f, rep: dict, paths: dict, name: str) -> list[str]:
     """Unmeasured inputs and the road estimated from the body motion."""
     L: list[str] = []
-    for u in getattr(f, "unmeasured_", []):
+    for u in input_findings(f):
         L += ["", f"**Unmeasured input:** {u['statement']}."]
         re_ = u.get("road_estimate")
         if re_:
