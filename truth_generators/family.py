@@ -227,6 +227,15 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(position_friction_N=(30.0, 25.0), position_friction_rate_N_m=(1500.0, 1200.0),
                                          stribeck_eps_m_s=0.002),
                       leading=("sign_velocity",), **unl),
+        # added 2026-11-28 (issue 26), held out from the start, before any run of the finder on it: the issue's
+        # third example, a bushing that stiffens with frequency (no candidate depends on frequency)
+        GeneratorForm("unlisted/viscoelastic_bushing", description="a viscoelastic bushing at every corner, "
+                      "parallel to the spring: a Maxwell element (rate k_b in series with a dashpot c_b: no static "
+                      "force, a stiffness rising from 0 to k_b about its corner frequency of 2 Hz, a damping "
+                      "falling above it), k_b 5000 / 4000 N/m, c_b 400 / 320 N s/m, acting with full or empty "
+                      "dampers alike", hidden=TruthHidden(bushing_rate_N_m=(5000.0, 4000.0),
+                                                          bushing_damping_N_s_m=(400.0, 320.0)),
+                      leading=("deflection_velocity", "deflection"), **unl),
     ]
     return {f.name: f for f in fs}
 

@@ -191,6 +191,11 @@ class TruthHidden:
     position_friction_rate_N_m: tuple = (0.0, 0.0)  # max(F0 + k d, 0) tanh(v/v_eps), d the deflection from
     #                                               static (positive in bump), v_eps = stribeck_eps_m_s: a rod
     #                                               guide whose side load grows as the spring compresses
+    bushing_rate_N_m: tuple = (0.0, 0.0)          # a viscoelastic bushing at each corner (front, rear), parallel
+    bushing_damping_N_s_m: tuple = (0.0, 0.0)     # to the spring: a Maxwell element, rate k_b in series with a
+    #                                               dashpot c_b, dF/dt = k_b (v - F / c_b): no static force, a
+    #                                               stiffness rising from 0 to k_b about its corner frequency
+    #                                               k_b / (2 pi c_b) (rubber that stiffens with frequency)
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -328,7 +333,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  SIGMA, SVINF, SVS, SVREF, FRIC, AMPA0, AMPTAU, DRIVEF, BRAKEF, SVON, AMPENV, AMPLAW, AMPEXP, AMPSEP, SEPSIG,
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
- WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, NW) = range(32)
+ WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, NW) = range(34)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -384,6 +389,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WSTRS], W[i, WSTRC] = hid.stribeck_static_N[k], hid.stribeck_coulomb_N[k]
         W[i, WLFMU] = hid.load_friction_coefficient[k]
         W[i, WPF0], W[i, WPFK] = hid.position_friction_N[k], hid.position_friction_rate_N_m[k]
+        W[i, WBUK], W[i, WBUC] = hid.bushing_rate_N_m[k], hid.bushing_damping_N_s_m[k]
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -472,7 +478,8 @@ def _strut_friction(w, P, d, dd, Ft):
 @njit(cache=True)
 def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
     """dy/dt of the mechanical states; aux[i] = (d, dd, Fz, Fs, F_hidden): F_hidden the part of Fs from
-    the hidden physics computed here (all but the Dahl elements). Friction forces Ff held (splitting)."""
+    the hidden physics computed here (all but the Dahl elements and the bushings). Forces held over the step
+    ``Ff`` (friction and bushings: splitting)."""
     z, zd, phi, phid, th, thd, vy, r = y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7]
     d = np.empty(4)
     dd = np.empty(4)
@@ -585,6 +592,14 @@ def _dahl(F, dx, Fc, sigma):
 
 
 @njit(cache=True)
+def _maxwell(F, dx, h, k, c):
+    """A Maxwell element's force [N] after a step of ``h`` [s] over which its ends moved ``dx`` [m] at
+    constant velocity: the exact solution of dF/dt = k (dx/h - F/c), relaxation time c / k."""
+    decay = math.exp(-h * k / c)
+    return F * decay + c * (dx / h) * (1.0 - decay)
+
+
+@njit(cache=True)
 def _step(y, yt, h, j, V, AX, DSW, ZR, ZRD, Ff, P, W, X, C, E, k1, k2, k3, k4, aux2):
     """yt = the mechanical states one step on from y (k1 = dy/dt at y given) by the integrator P[INTEG]."""
     if P[INTEG] == 0.0:            # classical RK4
@@ -667,6 +682,8 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
     Alo = np.zeros(4)
     M2 = np.zeros(4)
     Ff = np.zeros(4)
+    Fm = np.zeros(4)                 # viscoelastic bushings (Maxwell elements)
+    Fheld = np.zeros(4)              # every force held over a step: friction and bushings
     k1 = np.zeros(NY)
     k2 = np.zeros(NY)
     k3 = np.zeros(NY)
@@ -679,7 +696,8 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
         j = 2 * k
         for i in range(4):
             Ff[i] = P[FRIC] * (Fa[i] + Fd[i] + Fe[i])
-        _deriv(y, V[j], AX[j], DSW[j], ZR, ZRD, j, Ff, P, W, X, C, E, k1, aux)
+            Fheld[i] = Ff[i] + Fm[i]
+        _deriv(y, V[j], AX[j], DSW[j], ZR, ZRD, j, Fheld, P, W, X, C, E, k1, aux)
         ay = (y[16] + y[17] + y[18] + y[19]) / P[MT]
         out[k, 0] = y[3]
         out[k, 1] = y[5]
@@ -691,10 +709,10 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
             out[k, 6 + i] = aux[i, 0]
             out[k, 10 + i] = Ff[i]
             out[k, 14 + i] = aux[i, 2]
-            out[k, 18 + i] = aux[i, 4] + P[FRIC] * (Fa[i] - Fash[i] + Fe[i])
+            out[k, 18 + i] = aux[i, 4] + P[FRIC] * (Fa[i] - Fash[i] + Fe[i]) + Fm[i]
         if k == n:
             break
-        _step(y, yt, h, j, V, AX, DSW, ZR, ZRD, Ff, P, W, X, C, E, k1, k2, k3, k4, aux2)
+        _step(y, yt, h, j, V, AX, DSW, ZR, ZRD, Fheld, P, W, X, C, E, k1, k2, k3, k4, aux2)
         # friction over the step's deflection increment; scalings from the step's start
         share = P[DRIVEF] if AX[j] >= 0.0 else P[BRAKEF]
         for i in range(4):
@@ -719,6 +737,8 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
             Fcs = W[i, WFCS] * sv * soil * sh
             Fa[i] = _dahl(Fa[i], dx, Fca, P[SIGMA])
             Fd[i] = _dahl(Fd[i], dx, Fcs, P[SIGMA])
+            if W[i, WBUK] > 0.0:
+                Fm[i] = _maxwell(Fm[i], dx, h, W[i, WBUK], W[i, WBUC])
         for m in range(NY):
             y[m] = yt[m]
     return y
@@ -735,8 +755,9 @@ class TruthResult:
     that element's force minus a shadow Dahl element run on the same deflection increments at the level
     without the amplitude extra (the same s_h); blow-off: the damper force with the valve minus without it;
     anti-roll-bar free play: the bar's force with the gap minus without it (``-k clip(delta, -g, g)``);
-    Stribeck friction; load-dependent strut friction ``mu max(F_z0 + F_t, 0) tanh(v/v_eps)``. Friction forces
-    are those held over the step that starts at ``t`` (as ``friction``)."""
+    Stribeck friction; load-dependent strut friction ``mu max(F_z0 + F_t, 0) tanh(v/v_eps)``; strut friction
+    growing with the compression; the viscoelastic bushings' force. Friction and bushing forces are those
+    held over the step that starts at ``t`` (as ``friction``)."""
 
     t: np.ndarray
     gyro: np.ndarray
