@@ -236,6 +236,15 @@ def _forms() -> dict[str, GeneratorForm]:
                       "dampers alike", hidden=TruthHidden(bushing_rate_N_m=(5000.0, 4000.0),
                                                           bushing_damping_N_s_m=(400.0, 320.0)),
                       leading=("deflection_velocity", "deflection"), **unl),
+        # added 2026-11-28 (issue 26), held out from the start, before any run of the finder on it and before the
+        # learned term's frequency-dependent feature it is to test blind: another structure of the same physics
+        GeneratorForm("unlisted/bushing_two_branch_front", description="viscoelastic bushings at the front "
+                      "corners only, with a spread of relaxation times: two Maxwell elements side by side "
+                      "(a generalized Maxwell element), 2500 N/m with 37.5 N s/m (corner 10.6 Hz, near the wheel "
+                      "hop) and 3000 N/m with 750 N s/m (corner 0.64 Hz, below the body modes)",
+                      hidden=TruthHidden(bushing_rate_N_m=(2500.0, 0.0), bushing_damping_N_s_m=(37.5, 0.0),
+                                         bushing2_rate_N_m=(3000.0, 0.0), bushing2_damping_N_s_m=(750.0, 0.0)),
+                      leading=("relaxing_deflection", "deflection_velocity", "deflection"), **unl),
     ]
     return {f.name: f for f in fs}
 

@@ -196,6 +196,8 @@ class TruthHidden:
     #                                               dashpot c_b, dF/dt = k_b (v - F / c_b): no static force, a
     #                                               stiffness rising from 0 to k_b about its corner frequency
     #                                               k_b / (2 pi c_b) (rubber that stiffens with frequency)
+    bushing2_rate_N_m: tuple = (0.0, 0.0)         # a second Maxwell branch beside it (a generalized Maxwell
+    bushing2_damping_N_s_m: tuple = (0.0, 0.0)    # element: rubber's spread of relaxation times)
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -333,7 +335,8 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  SIGMA, SVINF, SVS, SVREF, FRIC, AMPA0, AMPTAU, DRIVEF, BRAKEF, SVON, AMPENV, AMPLAW, AMPEXP, AMPSEP, SEPSIG,
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
- WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, NW) = range(34)
+ WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
+ NW) = range(36)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -390,6 +393,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WLFMU] = hid.load_friction_coefficient[k]
         W[i, WPF0], W[i, WPFK] = hid.position_friction_N[k], hid.position_friction_rate_N_m[k]
         W[i, WBUK], W[i, WBUC] = hid.bushing_rate_N_m[k], hid.bushing_damping_N_s_m[k]
+        W[i, WBUK2], W[i, WBUC2] = hid.bushing2_rate_N_m[k], hid.bushing2_damping_N_s_m[k]
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -682,7 +686,8 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
     Alo = np.zeros(4)
     M2 = np.zeros(4)
     Ff = np.zeros(4)
-    Fm = np.zeros(4)                 # viscoelastic bushings (Maxwell elements)
+    Fm = np.zeros(4)                 # viscoelastic bushings (Maxwell elements; the second branch's Fm2)
+    Fm2 = np.zeros(4)
     Fheld = np.zeros(4)              # every force held over a step: friction and bushings
     k1 = np.zeros(NY)
     k2 = np.zeros(NY)
@@ -696,7 +701,7 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
         j = 2 * k
         for i in range(4):
             Ff[i] = P[FRIC] * (Fa[i] + Fd[i] + Fe[i])
-            Fheld[i] = Ff[i] + Fm[i]
+            Fheld[i] = Ff[i] + (Fm[i] + Fm2[i])
         _deriv(y, V[j], AX[j], DSW[j], ZR, ZRD, j, Fheld, P, W, X, C, E, k1, aux)
         ay = (y[16] + y[17] + y[18] + y[19]) / P[MT]
         out[k, 0] = y[3]
@@ -709,7 +714,7 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
             out[k, 6 + i] = aux[i, 0]
             out[k, 10 + i] = Ff[i]
             out[k, 14 + i] = aux[i, 2]
-            out[k, 18 + i] = aux[i, 4] + P[FRIC] * (Fa[i] - Fash[i] + Fe[i]) + Fm[i]
+            out[k, 18 + i] = aux[i, 4] + P[FRIC] * (Fa[i] - Fash[i] + Fe[i]) + (Fm[i] + Fm2[i])
         if k == n:
             break
         _step(y, yt, h, j, V, AX, DSW, ZR, ZRD, Fheld, P, W, X, C, E, k1, k2, k3, k4, aux2)
@@ -739,6 +744,8 @@ def _run(y0, n, h, V, AX, DSW, ZR, ZRD, SL, P, W, X, C, E, out):
             Fd[i] = _dahl(Fd[i], dx, Fcs, P[SIGMA])
             if W[i, WBUK] > 0.0:
                 Fm[i] = _maxwell(Fm[i], dx, h, W[i, WBUK], W[i, WBUC])
+            if W[i, WBUK2] > 0.0:
+                Fm2[i] = _maxwell(Fm2[i], dx, h, W[i, WBUK2], W[i, WBUC2])
         for m in range(NY):
             y[m] = yt[m]
     return y
