@@ -143,7 +143,8 @@ def test_physics_terms_are_judged_on_their_effect():
 
 def test_a_term_not_named_on_its_effect_is_said_in_the_verdict():
     """A term dropped because its effect may be nothing is not named, and an unexplained remainder's reason
-    says it was tried and why (a user sees what the finder saw)."""
+    says it was tried and why (a user sees what the finder saw), and so does a "nothing missing" within the
+    structure level."""
     from susp_sim_ros.analysis.discrepancy.report import structure_level, verdict
     n = 1000
     rms = structure_level() * 1.1
@@ -156,5 +157,12 @@ def test_a_term_not_named_on_its_effect_is_said_in_the_verdict():
     v, why = verdict(f)
     assert v == "unexplained_residual"
     assert "tried and not named: extra_viscous_damping (the 95 % interval" in why
+    # within the structure level too: "nothing is missing" says what was tried beside it
+    f.result_.rss = (structure_level() * 0.9) ** 2 * n
+    v, why = verdict(f)
+    assert v == "no_significant_discrepancy" and "nothing is missing" in why
+    assert "tried and not named: extra_viscous_damping (the 95 % interval" in why
     f.effect_dropped_ = []
+    assert "tried" not in verdict(f)[1]
+    f.result_.rss = rms ** 2 * n
     assert "tried" not in verdict(f)[1]

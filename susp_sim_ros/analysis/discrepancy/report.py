@@ -182,20 +182,20 @@ def verdict(f) -> tuple[str, str]:
         return "missing_physics", (f"either physics is missing or vehicle values differ from what the calibration "
                                    f"took (moved beyond their priors, or held at the file's value); the drives "
                                    f"cannot tell which: {undecided}")
+    # a term that passed every other test but whose effect may be nothing: said, not named, whatever the level
+    tried = [d for d in getattr(f, "effect_dropped_", []) if d["name"] not in {c["name"] for c in rival}]
+    tried_words = ("; tried and not named: " + "; ".join(f"{d['name']} ({d['why']})" for d in tried)) if tried else ""
     if not phys and after <= line:
         if not significant:
             return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
         return "no_significant_discrepancy", (f"the calibrated base model (and measurement chain) leaves "
                                               f"{after:.2f} x the noise held-out, within {level}; nothing "
-                                              f"is missing")
+                                              f"is missing" + tried_words)
     if not phys:
         why = (f"a residual of {after:.2f} x the noise floor remains held-out after calibration, above {level}; "
                f"the calibration explains {100 * max(explained, 0):.0f} % of the base model's excess and no "
                f"candidate term the rest")
-        tried = [d for d in getattr(f, "effect_dropped_", []) if d["name"] not in {c["name"] for c in rival}]
-        if tried:  # a term that passed every other test but whose effect may be nothing: said, not named
-            why += "; tried and not named: " + "; ".join(f"{d['name']} ({d['why']})" for d in tried)
-        return "unexplained_residual", why
+        return "unexplained_residual", why + tried_words
     # Accepted terms passed their own held-out and stability tests: they are named even when a residual
     # remains (hiding them under "unexplained" lost correct terms); the remainder is stated beside them.
     why = f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out residual above noise"
