@@ -155,9 +155,7 @@ def verdict(f) -> tuple[str, str]:
     ``no_significant_discrepancy`` only when what remains held-out is within :func:`structure_level`
     (issue 24, item 5): a larger remainder without named physics is ``unexplained_residual``, however much
     of the base model's misfit the calibration explained."""
-    # what remains is judged on the pooled signals or on the maneuvers' own gyro signals, whichever keeps
-    # more: a residual in the pitch rate of a bump crossing is not diluted by clean accelerometer channels
-    before, after = max(_pooled_noise_ratio(f), _primary_noise_ratio(f), key=lambda ba: ba[1])
+    before, after = _remaining(f)
     phys = [n for n in f.result_.structure.names
             if n == force_shape.TERM or (n in BY_NAME and BY_NAME[n].kind == PHYSICS)]
     significant = bool(f.windows_)
@@ -218,10 +216,17 @@ def input_findings(f, after: float | None = None) -> list[dict]:
     follows it at that level is how the road enters a structure that differs, e.g. the tyre)."""
     found = list(getattr(f, "unmeasured_", []))
     if after is None:
-        after = max(_pooled_noise_ratio(f), _primary_noise_ratio(f), key=lambda ba: ba[1])[1]
+        after = _remaining(f)[1]
     if after > structure_level():
         return found
     return [u for u in found if "feature" not in u]
+
+
+def _remaining(f) -> tuple[float, float]:
+    """What the base model and the final model leave held-out (x noise), as the verdict judges it: on the
+    pooled signals or on the maneuvers' own gyro signals, whichever keeps more (a residual in the pitch rate
+    of a bump crossing is not diluted by clean accelerometer channels)."""
+    return max(_pooled_noise_ratio(f), _primary_noise_ratio(f), key=lambda ba: ba[1])
 
 
 def _pooled_noise_ratio(f) -> tuple[float, float]:
