@@ -245,6 +245,15 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(bushing_rate_N_m=(2500.0, 0.0), bushing_damping_N_s_m=(37.5, 0.0),
                                          bushing2_rate_N_m=(3000.0, 0.0), bushing2_damping_N_s_m=(750.0, 0.0)),
                       leading=("relaxing_deflection", "deflection_velocity", "deflection"), **unl),
+        # added 2026-11-28 (issue 24 item 4, issue 26), held out from the start, before any run of the finder on it
+        # and before the learned term's competition with the calibration (listed when it trades with calibrated
+        # values) it is to test blind: a spring law no candidate has, on one axle, that a wheel rate can mimic
+        GeneratorForm("unlisted/progressive_spring_rear", description="progressive (variable-pitch) coil springs "
+                      "at the rear corners: in bump beyond static the rate grows, + k2 max(d, 0)^2 with k2 "
+                      "150000 N/m^2 (the rear wheel rate 24000 N/m rises by half at 40 mm bump; linear in "
+                      "rebound; front springs linear)",
+                      hidden=TruthHidden(progressive_rate_N_m2=(0.0, 150000.0)),
+                      leading=("deflection_cubed", "deflection"), **unl),
     ]
     return {f.name: f for f in fs}
 

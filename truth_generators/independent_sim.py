@@ -198,6 +198,9 @@ class TruthHidden:
     #                                               k_b / (2 pi c_b) (rubber that stiffens with frequency)
     bushing2_rate_N_m: tuple = (0.0, 0.0)         # a second Maxwell branch beside it (a generalized Maxwell
     bushing2_damping_N_s_m: tuple = (0.0, 0.0)    # element: rubber's spread of relaxation times)
+    progressive_rate_N_m2: tuple = (0.0, 0.0)     # a progressive (variable-pitch) coil spring (front, rear): in
+    #                                               bump beyond static the rate grows, + k2 max(d, 0)^2 [N] (the
+    #                                               rate k + 2 k2 d: closely wound coils coming to block)
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -336,7 +339,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
- NW) = range(36)
+ WPRG, NW) = range(37)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -394,6 +397,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WPF0], W[i, WPFK] = hid.position_friction_N[k], hid.position_friction_rate_N_m[k]
         W[i, WBUK], W[i, WBUC] = hid.bushing_rate_N_m[k], hid.bushing_damping_N_s_m[k]
         W[i, WBUK2], W[i, WBUC2] = hid.bushing2_rate_N_m[k], hid.bushing2_damping_N_s_m[k]
+        W[i, WPRG] = hid.progressive_rate_N_m2[k]
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -505,6 +509,10 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
             Fhid -= W[i, WKARB] * dc
         else:
             Fs = W[i, WK] * d[i] + W[i, WKARB] * (d[i] - d[o])
+        if W[i, WPRG] > 0.0 and d[i] > 0.0:          # progressive coil: the rate grows in bump
+            Fprg = W[i, WPRG] * d[i] * d[i]
+            Fs += Fprg
+            Fhid += Fprg
         eb = d[i] - W[i, WBUMP]
         er = -d[i] - W[i, WREB]
         if eb > 0.0:
