@@ -51,7 +51,7 @@ from ...progress import progress
 from .calibration import (STEP_OF_SD, CalParam, calibration_candidate, calibration_entries, calibration_params,
                           consider_params, consider_sensitivity, identifiability, reveal_for,
                           vehicle_at)
-from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PHYSICS
+from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PHYSICS, Candidate
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .data import SIGNAL_UNIT, as_cases
 from .decoys import decoy_margin
@@ -250,6 +250,7 @@ class DiscrepancyFinder:
         self._base_run(ev, model, cases)
         testable, skipped, in_base = self._testable(cases, self.base_variant_)
         self.refused_: list[tuple] = []  # (fit before, option, its fit, checks) of terms refused after the criterion
+        self.learned_refused_: list[tuple] = []  # the same of the learned term
         self.force_shape_: list[dict] = []  # what the shape regression saw at each forward step (force_shape)
         self.learned_selection_: force_shape.Selection | None = None  # of the last learned trial offered
         if force_shape.TERM in self.candidates and force_shape.learned_in(self.base_variant_):
@@ -367,53 +368,62 @@ class DiscrepancyFinder:
         return {j: s for s, rows in rows_of.items() for j in _informed_only_by(fit, rows) if j in cal}
 
     @staticmethod
-    def _competing_entry(name: str, rivals: list[str], reveals: Sequence[str], why: str) -> dict:
-        """A ``not_identifiable`` entry of physics term ``name`` competing with the calibration values
-        ``rivals`` (``PARAM:where``): the measurements that pin them (``reveals``, once each), then the
-        term's own maneuver."""
-        cand = BY_NAME[name]
+    def _competing_entry(cand: Candidate, rivals: list[str], reveals: Sequence[str], why: str) -> dict:
+        """A ``not_identifiable`` entry of physics term ``cand`` (listed, or the learned term with its
+        dependences in words) competing with the calibration values ``rivals`` (``PARAM:where``): the
+        measurements that pin them (``reveals``, once each), then the term's own maneuver."""
         reveal = "; ".join(dict.fromkeys(reveals))
-        return {"name": name, "competes_with": rivals,
+        return {"name": cand.name, "competes_with": rivals,
                 "reveal_with": f"{reveal}; then {cand.reveal_with}" if cand.reveal_with else reveal,
                 "why": f"{cand.meaning} {why}"}
 
     def _refused_competition(self, final: FitResult, listed: list[dict]) -> list[dict]:
         """Terms the drives want clearly (criterion and share of the excess passed) but a later test
         refused (held-out drives, stability, recalibration), whose parameters move together with a
-        calibration value that the drives of one vehicle state alone inform (posterior correlation at
-        least :data:`RIVAL_CORRELATION` in the term's joint fit) and whose effect on the drives that value
-        alone would reproduce only by moving more than :data:`SHIFT_SD` prior sd (least squares on its
-        Jacobian column; a smaller effect is the calibration's own uncertainty, not a rival hypothesis):
-        the calibration may have taken what the term would explain, or the term would take what is a
-        wrong value; the drives cannot say which.
-        Listed in ``not_identifiable`` with ``competes_with`` and ``reveal_with``, never dropped in silence
-        (a stronger oil-empty damper and extra damping of the one rear-empty car). Terms in ``final`` or
-        already ``listed``, and terms fitted where their physics cannot be (:meth:`Candidate.physical`:
-        negative extra damping is a weaker damper, the calibration's business), are skipped."""
+        calibration value (posterior correlation at least :data:`RIVAL_CORRELATION` in the term's joint fit)
+        and whose effect on the drives that value alone would reproduce only by moving more than
+        :data:`SHIFT_SD` prior sd (least squares on its Jacobian column; a smaller effect is the
+        calibration's own uncertainty, not a rival hypothesis): the calibration may have taken what the term
+        would explain, or the term would take what is a wrong value; the drives cannot say which.
+        A listed term competes with the values the drives of one vehicle state alone inform (a stronger
+        oil-empty damper and extra damping of the one rear-empty car); the learned term (physics no candidate
+        lists, read off the missing force's shape) only when it also beat its decoys, and with any calibrated
+        value: its dependences are the data's own, so a spring-like missing force and a stiffer wheel rate
+        informed by every drive are rival readings of the same residual (issue 24, item 4, for the learned
+        term; it was dropped in silence before).
+        Listed in ``not_identifiable`` with ``competes_with`` and ``reveal_with``, never dropped in silence.
+        Terms in ``final`` or already ``listed``, and terms fitted where their physics cannot be
+        (:meth:`Candidate.physical`: negative extra damping is a weaker damper, the calibration's business),
+        are skipped."""
         out: list[dict] = []
         seen = set(final.structure.names) | {c["name"] for c in listed}
-        for before, o, f, checks in sorted(self.refused_, key=lambda t: t[2].bic):
+        learned = [t for t in self.learned_refused_ if t[3].get("decoys_beaten")]
+        for before, o, f, checks in sorted(self.refused_ + learned, key=lambda t: t[2].bic):
             name = o.add[0]
-            if name in seen or CALIBRATION not in f.structure.names or f.jac is None \
-                    or not BY_NAME[name].physical(f.structure.part(f.x, name)):
+            st = f.structure
+            if name in seen or CALIBRATION not in st.names or f.jac is None:
+                continue
+            k = st.names.index(name)
+            cand = st.cands[k]
+            if not cand.physical(st.part(f.x, name)):
                 continue
             seen.add(name)
-            st = f.structure
             a = int(st.offsets[st.names.index(CALIBRATION)])
-            k = st.names.index(name)
             t0, t1 = int(st.offsets[k]), int(st.offsets[k + 1])
             # the term's size against the value, its law's shape as fitted (an exponent free beside them
             # would share the covariance and hide the trade of size against value)
-            gains = BY_NAME[name].gain_indices
+            gains = cand.gain_indices
             cov = _conditioned_on(f.information(), [t0 + j for j in range(t1 - t0) if j not in gains])
             sd = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
             rho = np.abs(cov / np.outer(sd, sd))
             one_state = self._one_state_values(f)
+            values = one_state if name != force_shape.TERM else \
+                {j: one_state.get(j, "") for j in range(a, a + len(self.informed_))}
             # the term's effect on the drives, and the shift of each value that alone would reproduce it
             effect = f.jac[:, t0:t1] @ (f.x[t0:t1] - st.neutral()[t0:t1])
-            cols = f.jac[:, list(one_state)]
-            shift = dict(zip(one_state, (cols.T @ effect) / np.maximum(np.sum(cols * cols, axis=0), 1e-300)))
-            rivals = sorted(((float(rho[t0:t1, j].max()), j) for j in one_state
+            cols = f.jac[:, list(values)]
+            shift = dict(zip(values, (cols.T @ effect) / np.maximum(np.sum(cols * cols, axis=0), 1e-300)))
+            rivals = sorted(((float(rho[t0:t1, j].max()), j) for j in values
                              if rho[t0:t1, j].max() >= RIVAL_CORRELATION
                              and abs(shift[j]) >= SHIFT_SD * self.informed_[j - a].sd), reverse=True)
             if not rivals:
@@ -421,15 +431,18 @@ class DiscrepancyFinder:
             params = [self.informed_[j - a] for _, j in rivals]
             refused = ("held-out drives" if not checks.get("passed", True) else
                        "a recalibration of the ranged vehicle values explaining as much")
+            decoys = ", beats its decoys" if checks.get("decoys_beaten") else ""
+            informed = [f"{p.field}:{p.where} ("
+                        + (f"informed by the {values[j]} drives only, " if values[j] else "")
+                        + f"posterior correlation {r:.2f}; the term's effect is {shift[j] / p.sd:+.1f} prior sd of it)"
+                        for p, (r, j) in zip(params, rivals)]
             out.append(self._competing_entry(
-                name, [f"{p.field}:{p.where}" for p in params],
-                [reveal_for(p, one_state[j]) for p, (_, j) in zip(params, rivals)],
+                cand, [f"{p.field}:{p.where}" for p in params],
+                [reveal_for(p, values[j] or "every") for p, (_, j) in zip(params, rivals)],
                 f"lowers the criterion by {before.bic - f.bic:.0f} and explains "
                 f"{100 * (before.rss - f.rss) / max(before.rss - before.n, 1e-12):.0f} % of the residual above "
-                f"noise, but {refused} refused it; "
-                + ", ".join(f"{p.field}:{p.where} (informed by the {one_state[j]} drives only, posterior "
-                            f"correlation {r:.2f}; the term's effect is {shift[j] / p.sd:+.1f} prior sd of it)"
-                            for p, (r, j) in zip(params, rivals))
+                f"noise{decoys}, but {refused} refused it; "
+                + ", ".join(informed)
                 + " moves with it: the drives cannot tell the term from that calibration value"))
         return out
 
@@ -491,7 +504,7 @@ class DiscrepancyFinder:
             path.append({**entry, "accepted": False,
                          "why": "explains the drives as well as the calibration shifts: not identifiable"})
             competing.append(self._competing_entry(
-                name, rivals, reveals, f"explains the drives as well as the calibration moving {moved} beyond "
+                BY_NAME[name], rivals, reveals, f"explains the drives as well as the calibration moving {moved} beyond "
                 "one prior sd on the drives of one vehicle state only: the drives cannot tell them apart"))
         return cur, competing
 
@@ -547,7 +560,7 @@ class DiscrepancyFinder:
         interval holds it once the values the calibration holds at their file value are free within their
         priors, the same, also returned as an entry ``{name, competes_with, reveal_with, why, value,
         effect}`` of physics competing with those values (the held values that bring most of the effect's
-        variance). The learned term has no listed rival physics: it is dropped without an entry.
+        variance); the learned term, too, with its dependences in words.
         Returns (names to drop, competing entries, name -> reason)."""
         effects = self.effects_ = self.term_effects_()  # the report's, once nothing more drops
         for held in (DATA, HELD_FREE):
@@ -568,14 +581,13 @@ class DiscrepancyFinder:
         why = (f"the 95 % interval of its effect, {lo:.2f} to {hi:.2f} of the fitted one once "
                f"{', '.join(rivals) or 'the held vehicle values'} may lie anywhere in their priors, holds no "
                "effect: the drives cannot tell the term from those values")
-        if name not in BY_NAME:
-            return [name], [], {name: why + ": not named"}
         st, x = self.result_.structure, self.result_.x
+        cand = st.cands[st.names.index(name)]
         keys = [self.consider_keys_[self.consider_names_.index(r)] for r in rivals]
         a, b = st.offsets[st.names.index(name)], st.offsets[st.names.index(name) + 1]
-        entry = self._competing_entry(name, rivals, [f"a measurement of {', '.join(keys)} (held at the vehicle "
+        entry = self._competing_entry(cand, rivals, [f"a measurement of {', '.join(keys)} (held at the vehicle "
                                                      "file's value)"] if keys else [], why)
-        entry.update({"value": {p.name: float(v) for p, v in zip(BY_NAME[name].params, x[a:b])},
+        entry.update({"value": {p.name: float(v) for p, v in zip(cand.params, x[a:b])},
                       "effect": eff.as_json()})
         return [name], [entry], {name: why + ": not named"}
 
@@ -704,9 +716,9 @@ class DiscrepancyFinder:
                     best, best_fit, best_checks = o, f, checks
                 if ok:
                     return o, f, True, checks
-                if in_sample and size == 1 and force_shape.TERM not in o.add:  # clear in the drives, refused by
-                    #                                                            a later test
-                    self.refused_.append((cur, o, f, dict(checks)))
+                if in_sample and size == 1:  # clear in the drives, refused by a later test
+                    (self.learned_refused_ if force_shape.TERM in o.add else self.refused_).append(
+                        (cur, o, f, dict(checks)))
         assert best is not None and best_fit is not None  # opts or the learned trial: a trial was fitted
         return best, best_fit, False, best_checks
 

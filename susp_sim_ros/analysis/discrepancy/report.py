@@ -171,7 +171,8 @@ def verdict(f) -> tuple[str, str]:
     if at_level:
         level += (f"; the force the model lacks {force_shape.WORDS[at_level[0]['feature']]}, but what remains is "
                   f"within that level: not an input finding")
-    rival = [c for c in getattr(f, "competing_", []) if c["name"] in BY_NAME and BY_NAME[c["name"]].kind == PHYSICS]
+    rival = [c for c in getattr(f, "competing_", []) if c["name"] == force_shape.TERM
+             or (c["name"] in BY_NAME and BY_NAME[c["name"]].kind == PHYSICS)]
     undecided = "; ".join(f"{c['name']} and {', '.join(c['competes_with'])} explain the same residual "
                           f"(reveal with {c['reveal_with']})" for c in rival)
     if rival and not phys:

@@ -1,0 +1,123 @@
+"""Issue 24 item 4 for the learned term (issue 26): a learned force that the drives want clearly (criterion,
+share of the excess, its decoys beaten) but the held-out drives refuse, and that trades with a calibrated
+value, is listed in ``not_identifiable`` with ``competes_with`` and ``reveal_with``, never dropped in
+silence; the verdict then says the drives cannot tell physics from calibration."""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from susp_sim_ros.analysis.discrepancy import finder as fm
+from susp_sim_ros.analysis.discrepancy import force_shape
+from susp_sim_ros.analysis.discrepancy.calibration import CalParam
+from susp_sim_ros.analysis.discrepancy.candidates import CALIBRATION, PHYSICS, CandParam, Candidate
+from susp_sim_ros.analysis.discrepancy.report import structure_level, verdict
+
+RATE = CalParam("wheel_rate", "suspension.wheel_rate", "rear", 1, "N/m", 24000.0, 23960.0, 24040.0, "test")
+EMPTY = CalParam("damper_measured_empty", "damper_measured_empty", "rear", 1, "-", 1.0, 0.7, 1.3, "test", True)
+
+
+class _Structure:
+    """The parts of a fitted structure the competition reads: calibration (2 values), then one term."""
+
+    def __init__(self, term: Candidate):
+        cal = Candidate(CALIBRATION, "calibration", "calibration",
+                        (CandParam("k", "N/m", 0.0, -1e5, 1e5, 1.0), CandParam("e", "-", 0.0, -1.0, 1.0, 0.1)))
+        self.cands = (cal, term)
+        self.names = (CALIBRATION, term.name)
+        self.offsets = np.array([0, 2, 3])
+
+    def part(self, x, name):
+        k = self.names.index(name)
+        return x[self.offsets[k]:self.offsets[k + 1]]
+
+    def neutral(self):
+        return np.zeros(3)
+
+
+def _trial(name: str, decoys_beaten: bool, seed: int = 0):
+    """A refused trial of term ``name`` whose effect a stiffer rear wheel rate (informed by every drive)
+    reproduces almost exactly, 5 prior sd of it; the oil-empty rear damper (one state) is unrelated."""
+    rng = np.random.default_rng(seed)
+    n = 400
+    u, w = rng.standard_normal(n), rng.standard_normal(n)
+    jac = np.c_[u, w, u + 0.05 * rng.standard_normal(n)]
+    term = Candidate(name, PHYSICS, "spring-like (grows with the deflection), rear axle",
+                     (CandParam("c_deflection", "N", 0.0, -1e4, 1e4, 10.0),), axle_of=("rear",),
+                     reveal_with="drives that excite the dependences it names: deflection:rear")
+    f = SimpleNamespace(structure=_Structure(term), x=np.array([24000.0, 1.0, 100.0]), jac=jac,
+                        information=lambda *a: jac.T @ jac, bic=900.0, rss=300.0, n=n)
+    before = SimpleNamespace(bic=1000.0, rss=600.0, n=n)
+    checks = {"decoys_beaten": decoys_beaten, "passed": False, "heldout_gain_fraction_of_excess": -0.2}
+    return before, SimpleNamespace(add=(name,)), f, checks
+
+
+def _finder(learned=(), listed=()) -> fm.DiscrepancyFinder:
+    f = fm.DiscrepancyFinder()
+    f.informed_ = [RATE, EMPTY]
+    f.refused_, f.learned_refused_ = list(listed), list(learned)
+    f._one_state_values = lambda fit: {1: "rear-empty"}  # type: ignore[method-assign]
+    return f
+
+
+FINAL = SimpleNamespace(structure=SimpleNamespace(names=(CALIBRATION,)))
+
+
+def test_a_refused_learned_force_that_trades_with_a_calibrated_value_competes_with_it():
+    out = _finder(learned=[_trial(force_shape.TERM, True)])._refused_competition(FINAL, [])
+    assert [c["name"] for c in out] == [force_shape.TERM]
+    c = out[0]
+    assert c["competes_with"] == ["wheel_rate:rear"]                      # not the unrelated damper value
+    assert c["reveal_with"].startswith("a measurement of suspension.wheel_rate (rear)")
+    assert "deflection:rear" in c["reveal_with"]                          # then the term's own maneuver
+    assert c["why"].startswith("spring-like") and "beats its decoys" in c["why"] and "held-out drives" in c["why"]
+    assert "+5" in c["why"] or "-5" in c["why"]                           # its effect in prior sd of the value
+    # already named, or listed: no second entry
+    named = SimpleNamespace(structure=SimpleNamespace(names=(CALIBRATION, force_shape.TERM)))
+    assert _finder(learned=[_trial(force_shape.TERM, True)])._refused_competition(named, []) == []
+    assert _finder(learned=[_trial(force_shape.TERM, True)])._refused_competition(
+        FINAL, [{"name": force_shape.TERM}]) == []
+
+
+def test_a_learned_force_that_did_not_beat_its_decoys_is_no_rival():
+    assert _finder(learned=[_trial(force_shape.TERM, False)])._refused_competition(FINAL, []) == []
+
+
+def test_a_listed_term_competes_only_with_values_one_vehicle_state_informs():
+    """The listed terms' rule is unchanged: a value every drive informs (the wheel rate) is the calibration's
+    business; only a value of one vehicle state is a hypothesis a listed term competes with."""
+    assert _finder(listed=[_trial("extra_spring", False)])._refused_competition(FINAL, []) == []
+
+
+def test_the_verdict_says_physics_and_calibration_cannot_be_told_apart():
+    out = _finder(learned=[_trial(force_shape.TERM, True)])._refused_competition(FINAL, [])
+    n = 1000
+    rms = structure_level() * 0.9                                         # within the structure level
+    f = SimpleNamespace(result_=SimpleNamespace(structure=SimpleNamespace(names=(CALIBRATION,)), rss=rms ** 2 * n,
+                                                n=n),
+                        base_fit_=SimpleNamespace(rss=6.0 ** 2 * n, n=n), windows_=[{}], heldout_=None,
+                        unmeasured_=[], competing_=out, effect_dropped_=[])
+    v, why = verdict(f)
+    assert v == "missing_physics"
+    assert "cannot tell" in why and force_shape.TERM in why and "wheel_rate:rear" in why
+
+
+def test_a_learned_force_whose_effect_a_held_value_could_take_competes_with_it():
+    """Judged on its effect (issue 24 item 3): the learned term whose effect's interval holds zero only once
+    the held vehicle values are free in their priors is listed as competing with the held value that
+    brings most of its variance, as a listed term is (it was dropped without an entry before)."""
+    from susp_sim_ros.analysis.discrepancy.effect import TermEffect
+    from susp_sim_ros.analysis.discrepancy.fit import Structure
+    term = Candidate(force_shape.TERM, PHYSICS, "spring-like (grows with the deflection), rear axle",
+                     (CandParam("c_deflection", "N", 0.0, -1e4, 1e4, 10.0),), axle_of=("rear",))
+    f = fm.DiscrepancyFinder()
+    f.result_ = SimpleNamespace(structure=Structure([term]), x=np.array([80.0]))
+    f.consider_names_ = ["a:all", "b:all"]
+    f.consider_keys_ = ["geometry.a", "geometry.b"]
+    f.term_effects_ = lambda: {force_shape.TERM: TermEffect(300.0, 20.0, 500.0, 25.0, 200.0,  # type: ignore
+                                                            (9.0, 1.0))}
+    drop, competing, why = f._judge_physics_terms()
+    assert drop == [force_shape.TERM] and [c["name"] for c in competing] == [force_shape.TERM]
+    assert competing[0]["competes_with"] == ["a:all"] and "geometry.a" in competing[0]["reveal_with"]
+    assert competing[0]["value"] == {"c_deflection": 80.0}
