@@ -201,6 +201,10 @@ class TruthHidden:
     progressive_rate_N_m2: tuple = (0.0, 0.0)     # a progressive (variable-pitch) coil spring (front, rear): in
     #                                               bump beyond static the rate grows, + k2 max(d, 0)^2 [N] (the
     #                                               rate k + 2 k2 d: closely wound coils coming to block)
+    air_spring_rate_N_m: tuple = (0.0, 0.0)       # an air-assist spring beside the coil (front, rear): a gas law
+    air_spring_height_m: float = 0.12             # k_a h / n ((1 - d / h)^-n - 1) less its static rate k_a d
+    air_spring_exponent: float = 1.4              # (the file's wheel rate holds that): h the air column's
+    #                                               effective height, n the polytropic exponent (1.4 adiabatic)
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -339,7 +343,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
- WPRG, NW) = range(37)
+ WPRG, WAIRK, WAIRH, WAIRN, NW) = range(40)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -398,6 +402,8 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WBUK], W[i, WBUC] = hid.bushing_rate_N_m[k], hid.bushing_damping_N_s_m[k]
         W[i, WBUK2], W[i, WBUC2] = hid.bushing2_rate_N_m[k], hid.bushing2_damping_N_s_m[k]
         W[i, WPRG] = hid.progressive_rate_N_m2[k]
+        W[i, WAIRK], W[i, WAIRH], W[i, WAIRN] = hid.air_spring_rate_N_m[k], hid.air_spring_height_m, \
+            hid.air_spring_exponent
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -465,6 +471,18 @@ def _tyre_force(Ft, Fz0):
 
 
 @njit(cache=True)
+def _air_spring(d, k, h, n):
+    """The force [N, in Fs's sense] of an air spring of static rate ``k`` [N/m], effective column height
+    ``h`` [m] and polytropic exponent ``n`` at deflection ``d`` [m] (positive in bump) beyond its static rate's
+    share: k h / n ((1 - d / h)^-n - 1) - k d (the static load and rate belong to the vehicle file). The
+    column is held at 5 % of its height (beyond the bump stops' travel)."""
+    q = 1.0 - d / h
+    if q < 0.05:
+        q = 0.05
+    return k * h / n * (q ** -n - 1.0) - k * d
+
+
+@njit(cache=True)
 def _strut_friction(w, P, d, dd, Ft):
     """The hidden strut friction laws of one corner (``w`` its row of W) [N, in Fs's sense]: a Stribeck
     (velocity-weakening) friction, one growing with the vertical tyre load ``Fz0 + Ft`` and one growing with
@@ -513,6 +531,10 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
             Fprg = W[i, WPRG] * d[i] * d[i]
             Fs += Fprg
             Fhid += Fprg
+        if W[i, WAIRK] > 0.0:                         # air-assist spring: the gas law less its static rate
+            Fair = _air_spring(d[i], W[i, WAIRK], W[i, WAIRH], W[i, WAIRN])
+            Fs += Fair
+            Fhid += Fair
         eb = d[i] - W[i, WBUMP]
         er = -d[i] - W[i, WREB]
         if eb > 0.0:
