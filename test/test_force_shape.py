@@ -36,7 +36,6 @@ def test_features_are_what_their_names_say():
     np.testing.assert_allclose(get["constant"], 1.0)
     np.testing.assert_allclose(get["deflection"], x)
     np.testing.assert_allclose(get["deflection_cubed"], x ** 3)
-    np.testing.assert_allclose(get["deflection_squared"], x ** 2)
     np.testing.assert_allclose(get["deflection_velocity"], u)
     np.testing.assert_allclose(get["velocity_squared"], u * np.abs(u))
     knee = sh["knee_velocity"]
@@ -124,23 +123,22 @@ def test_the_learned_roll_and_friction_features_are_the_models_own_elements_in_t
     assert np.max(np.abs(listed["PITCH_RATE"] - plain["PITCH_RATE"])) > 1e-2 * scale
 
 
-@pytest.mark.parametrize("feature,coef,shape", [("relaxing_deflection", 50.0, {"relaxation_time": 0.05}),
-                                                ("deflection_squared", 30.0, {})])
-def test_the_learned_spring_features_in_the_kernel_are_their_feature_on_the_run(feature, coef, shape):
-    """The kernel's ``relaxing_deflection`` (a spring that relaxes) and ``deflection_squared`` (a spring stiffer
-    in bump than in rebound) force along a bump crossing (``dahl_only`` without friction of note: the terms'
-    force output is the learned term's alone) is its coefficient times the feature evaluated on the run's own
-    deflections (:func:`feature_series`), and it changes the motion."""
+def test_the_learned_relaxing_spring_in_the_kernel_is_its_feature_on_the_run():
+    """The kernel's ``relaxing_deflection`` force along a bump crossing (``dahl_only`` without friction of
+    note: the terms' force output is the learned term's alone) is its coefficient times the feature evaluated on
+    the run's own deflections (:func:`feature_series`), and it changes the motion."""
     vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
                              damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
+    coef, tau = 50.0, 0.05
     model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
-        _learned(**{f"c_{feature}": coef}, **shape),)))
+        _learned(c_relaxing_deflection=coef, relaxation_time=tau),)))
     man = build_maneuver("bump_crossing", vp.wheelbase)
     outs = [f"{o}_{w}" for o in ("DEFL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
     res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs)
     D, F = res.values[:, :4], res.values[:, 4:8]
     zero = np.zeros_like(D)
-    want = coef * feature_series(feature, D, zero, zero, zero, DT, shape=shape)
+    want = coef * feature_series("relaxing_deflection", D, zero, zero, zero, DT,
+                                 shape={"relaxation_time": tau})
     assert np.abs(F).max() > 20.0
     # an output row gives the deflection at the end of its step and the force held over it (from the state
     # at the step's start): the force of row t is the feature of the deflections up to row t - 1
@@ -190,7 +188,7 @@ def test_the_learned_viscous_and_spring_features_are_the_listed_terms_in_the_ker
 #: draws the same problem as before (a column more shifts every later draw). Over 40 seeds of
 #: _one_drive_dominant the truth was the stable set in 25 with the earlier library and in 27 with the
 #: relaxing spring's six columns drawn in (2026-11-28): the step rule is not weakened by them.
-DRAWN_BEFORE = ("relaxing_deflection", "deflection_squared")
+DRAWN_BEFORE = ("relaxing_deflection",)
 
 
 def _design(n_drives=6, n=600, seed=1, truth=None, noise=1.0):

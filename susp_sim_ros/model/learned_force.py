@@ -12,9 +12,6 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
 ``constant``                1: a force offset
 ``deflection``              d / d_ref: a spring
 ``deflection_cubed``        (d / d_ref)^3: a progressive spring (elastomer, gas volume)
-``deflection_squared``      (d / d_ref)^2: a spring stiffer in bump than in rebound (rate k + 2 c d / d_ref^2:
-                            a progressive coil coming to block, an air spring's gas law, a bump rubber taking
-                            up load); its force has the same sense in bump and rebound
 ``deflection_velocity``     v / v_ref: viscous damping
 ``velocity_squared``        oil (v / v_ref) |v / v_ref|: orifice-like damping, a force of the oil's flow
                             through an orifice, so it scales with the damper's oil level ``oil`` as the
@@ -70,7 +67,7 @@ from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 
 FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
-            "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection", "deflection_squared")
+            "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection")
 N_FEATURES = len(FEATURES)
 #: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
 FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force")
@@ -122,9 +119,7 @@ def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref,
         return min(max(roll, -gap), gap) / dref
     if k == 12:
         return z * math.exp(-abs(v) / vs)
-    if k == 13:
-        return rel / dref
-    return x * x
+    return rel / dref
 
 
 @njit(cache=True, inline="always")
@@ -146,7 +141,7 @@ def learned_force_force(p, po, s, so, i, c):
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
                    + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i]))
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
-            + p[q + 52] * s[so + _REL + i] / dref + p[q + 56] * x * x)
+            + p[q + 52] * s[so + _REL + i] / dref)
 
 
 @njit(cache=True, inline="always")
@@ -218,8 +213,7 @@ _COEF_MEANING = {
     "velocity_weakening": "friction level at rest above the sliding level (falls with exp(-|v| / v_s))",
     "roll_deflection": "force at a left-right difference d_ref",
     "roll_free_play": "force at a left-right difference d_ref within the play",
-    "relaxing_deflection": "spring force at a change of d_ref faster than the relaxation time",
-    "deflection_squared": "force at d = +-d_ref of a spring stiffer in bump than in rebound"}
+    "relaxing_deflection": "spring force at a change of d_ref faster than the relaxation time"}
 
 LEARNED_FORCE = register_term(PhysicsTerm(
     name="unlisted_force", component="axle",

@@ -87,9 +87,6 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
                            "(free play in the anti-roll bar)",
          "relaxing_deflection": "a spring that relaxes in {tau:.2f} s, stiffer the faster the deflection changes "
                                 "(viscoelastic: a rubber bushing or mount)",
-         "deflection_squared": "grows with the square of the deflection, the same sense in bump and rebound (a "
-                               "spring of another rate in bump than in rebound: progressive coil, air spring, "
-                               "bump rubber)",
          "road_height": "follows the road height under the wheel (an input, not a state)",
          "road_rate": "follows the rate of the road height under the wheel (an input, not a state)",
          **{f"rotation_{t}{k}": f"follows the wheel's rotation, harmonic {k}, {part} part (an input, not a state)"
@@ -98,7 +95,6 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
 
 #: what a positive and a negative coefficient of a dependence mean (the force is positive up on the body)
 SENSE = {"constant": ("pushes the body up", "pulls the body down"),
-         "deflection_squared": ("stiffer in bump, softer in rebound", "softer in bump, stiffer in rebound"),
          **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play",
                                                 "relaxing_deflection")},
          **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
