@@ -438,7 +438,7 @@ class DiscrepancyFinder:
                         for p, (r, j) in zip(params, rivals)]
             out.append(self._competing_entry(
                 cand, [f"{p.field}:{p.where}" for p in params],
-                [reveal_for(p, values[j] or "every") for p, (_, j) in zip(params, rivals)],
+                [reveal_for(p, values[j] or "recorded") for p, (_, j) in zip(params, rivals)],
                 f"lowers the criterion by {before.bic - f.bic:.0f} and explains "
                 f"{100 * (before.rss - f.rss) / max(before.rss - before.n, 1e-12):.0f} % of the residual above "
                 f"noise{decoys}, but {refused} refused it; "
