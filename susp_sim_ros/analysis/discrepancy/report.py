@@ -179,7 +179,8 @@ def verdict(f) -> tuple[str, str]:
         # a calibration value far from its prior on one vehicle state's evidence is a hypothesis as much
         # as the term: "nothing missing" would take the hypothesis for a fact (issue 24, item 4)
         return "missing_physics", (f"either physics is missing or vehicle values differ from what the calibration "
-                                   f"took (moved beyond their priors, or held at the file's value); the drives "
+                                   f"took (moved beyond their priors, held at the file's value, or calibrated "
+                                   f"where a learned force would act); the drives "
                                    f"cannot tell which: {undecided}")
     # a term that passed every other test but whose effect may be nothing: said, not named, whatever the level
     tried = [d for d in getattr(f, "effect_dropped_", []) if d["name"] not in {c["name"] for c in rival}]
