@@ -200,6 +200,40 @@ def test_an_input_read_off_the_force_shape_is_a_finding_only_above_the_structure
         ("unmeasured_input", road_less["statement"])
 
 
+def test_a_road_led_finding_on_drives_that_carry_their_road_says_what_else_it_can_be():
+    """A missing force that follows the recorded road height of drives that carry their road may be the road
+    as recorded being off, or a law of the states the road excites that no feature describes (the blind
+    air-assist spring form: a spring of another law over the bump). The finding records it
+    (``road_recorded``) and the verdict's reason says it once, with the drive that tells them apart; a
+    road-less drive's finding and a rotation-led one say nothing of it."""
+    from types import SimpleNamespace
+
+    from susp_sim_ros.analysis.discrepancy import force_shape as fs
+    from susp_sim_ros.analysis.discrepancy.finder import DiscrepancyFinder
+    from susp_sim_ros.analysis.discrepancy.report import ROAD_RECORDED, structure_level
+    from susp_sim_ros.model.layout import N_U
+    carried = SimpleNamespace(name="bump_intact", signals=["pitch_rate"], road=np.zeros((5, 2)),
+                              U=np.zeros((10, N_U)))
+    bare = SimpleNamespace(name="sine_intact", signals=["roll_rate"], road=None, U=np.zeros((10, N_U)))
+    sel = fs.Selection({("road_height", "front"): 0.7}, [fs.Column("road_height", "front")], np.ones(1),
+                       np.ones(1), 24)
+    f = DiscrepancyFinder()
+    f.unmeasured_ = []
+    f._input_finding(SimpleNamespace(cases=[carried, bare]), sel, 1)
+    assert [u["road_recorded"] for u in f.unmeasured_] == [True, False]
+    line = structure_level()
+    v, why = _verdict_of(["calibration"], 6.0, line * 1.1, unmeasured=f.unmeasured_)
+    assert v == "unmeasured_input" and why.endswith(ROAD_RECORDED) and why.count("carry their road") == 1
+    assert "another speed" in ROAD_RECORDED
+    v, why = _verdict_of(["calibration"], 6.0, line * 1.1, unmeasured=f.unmeasured_[1:])
+    assert v == "unmeasured_input" and "carry their road" not in why
+    rot = fs.Selection({("rotation_1", "rear"): 0.8}, [fs.Column("rotation_sin1", "rear")], np.ones(1),
+                       np.ones(1), 24)
+    f.unmeasured_ = []
+    f._input_finding(SimpleNamespace(cases=[carried]), rot, 1)
+    assert f.unmeasured_[0]["road_recorded"] is False
+
+
 def test_a_term_competing_with_a_calibration_shift_is_stated_not_hidden():
     """A physics term that explains the drives as well as a one-state calibration shift is listed with
     the shift; the verdict says that either may hold, not "nothing missing"."""

@@ -817,7 +817,11 @@ class DiscrepancyFinder:
 
     def _input_finding(self, ev: Evaluator, sel: force_shape.Selection, step: int) -> None:
         """An ``unmeasured_input`` finding per drive from a selection led by an input feature: the missing
-        force follows the road under the wheel or the wheel's rotation, which the recording lacks."""
+        force follows the road under the wheel or the wheel's rotation, which the recording lacks. A drive
+        that carries its road and whose force follows that road says what else it can be: the road as
+        recorded may be off, or a law of the states that the road excites and no feature describes is
+        missing (a spring of another law over a bump); the same road at another speed tells them apart
+        (``road_recorded``, said once in the verdict's reason: :data:`.report.ROAD_RECORDED`)."""
         lead = sel.leading
         assert lead is not None
         ks = [k for k, c in enumerate(sel.stable) if force_shape.group_of(c.feature) == force_shape.group_of(lead)]
@@ -832,7 +836,8 @@ class DiscrepancyFinder:
                 "statement": (f"{c.name}: the force the model lacks {words} ({', '.join(axles)} "
                               f"{'axle' if len(axles) == 1 else 'axles'}, selected in {100 * freq:.0f} % of drive "
                               f"resamples): an input the recording lacks, not physics of the model's states; "
-                              f"no physics term is named for it")})
+                              f"no physics term is named for it"),
+                "road_recorded": sel.input_kind == "road" and has_road_input(c)})
 
     def _learned_trial(self, ev: Evaluator, cur: FitResult,
                        sel: force_shape.Selection) -> tuple[Option, FitResult] | None:

@@ -140,6 +140,13 @@ def statement(cand: Candidate, params: dict, ev: dict, f) -> str:
     return s
 
 
+#: what a road-led input finding on drives that carry their road adds to the verdict's reason, once
+ROAD_RECORDED = ("; these drives carry their road, so either the road as recorded is off or a law of the states "
+                 "that the road excites is missing that no feature describes (e.g. a spring of another law over a "
+                 "bump): the same road at another speed tells them apart (a law of the states follows the "
+                 "response, a road error the road)")
+
+
 def structure_level() -> float:
     """The held-out residual [x gyro noise floor] that differences of structure alone leave after
     calibration (other integrators, assumed items, cars within and beyond the priors; nothing missing),
@@ -166,7 +173,8 @@ def verdict(f) -> tuple[str, str]:
     level = f"the {line:.2f} x that differences of structure alone leave (measured: config/discrepancy.yaml)"
     unmeasured = input_findings(f, after)
     if unmeasured and not phys:
-        return "unmeasured_input", "; ".join(u["statement"] for u in unmeasured)
+        return "unmeasured_input", ("; ".join(u["statement"] for u in unmeasured)
+                                    + (ROAD_RECORDED if any(u.get("road_recorded") for u in unmeasured) else ""))
     at_level = [u for u in getattr(f, "unmeasured_", []) if u not in unmeasured]
     if at_level:
         level += (f"; the force the model lacks {force_shape.WORDS[at_level[0]['feature']]}, but what remains is "
