@@ -56,7 +56,7 @@ def _trial(name: str, decoys_beaten: bool, seed: int = 0):
 def _finder(learned=(), listed=()) -> fm.DiscrepancyFinder:
     f = fm.DiscrepancyFinder()
     f.informed_ = [RATE, EMPTY]
-    f.refused_, f.learned_refused_ = list(listed), list(learned)
+    f.refused_ = list(listed) + list(learned)
     f._one_state_values = lambda fit: {1: "rear-empty"}  # type: ignore[method-assign]
     return f
 

@@ -250,7 +250,6 @@ class DiscrepancyFinder:
         self._base_run(ev, model, cases)
         testable, skipped, in_base = self._testable(cases, self.base_variant_)
         self.refused_: list[tuple] = []  # (fit before, option, its fit, checks) of terms refused after the criterion
-        self.learned_refused_: list[tuple] = []  # the same of the learned term
         self.force_shape_: list[dict] = []  # what the shape regression saw at each forward step (force_shape)
         self.learned_selection_: force_shape.Selection | None = None  # of the last learned trial offered
         if force_shape.TERM in self.candidates and force_shape.learned_in(self.base_variant_):
@@ -397,11 +396,11 @@ class DiscrepancyFinder:
         are skipped."""
         out: list[dict] = []
         seen = set(final.structure.names) | {c["name"] for c in listed}
-        learned = [t for t in self.learned_refused_ if t[3].get("decoys_beaten")]
-        for before, o, f, checks in sorted(self.refused_ + learned, key=lambda t: t[2].bic):
+        for before, o, f, checks in sorted(self.refused_, key=lambda t: t[2].bic):
             name = o.add[0]
             st = f.structure
-            if name in seen or CALIBRATION not in st.names or f.jac is None:
+            if name in seen or CALIBRATION not in st.names or f.jac is None \
+                    or (name == force_shape.TERM and not checks.get("decoys_beaten")):
                 continue
             k = st.names.index(name)
             cand = st.cands[k]
@@ -717,8 +716,7 @@ class DiscrepancyFinder:
                 if ok:
                     return o, f, True, checks
                 if in_sample and size == 1:  # clear in the drives, refused by a later test
-                    (self.learned_refused_ if force_shape.TERM in o.add else self.refused_).append(
-                        (cur, o, f, dict(checks)))
+                    self.refused_.append((cur, o, f, dict(checks)))
         assert best is not None and best_fit is not None  # opts or the learned trial: a trial was fitted
         return best, best_fit, False, best_checks
 

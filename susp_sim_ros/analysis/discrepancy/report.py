@@ -163,8 +163,7 @@ def verdict(f) -> tuple[str, str]:
     (issue 24, item 5): a larger remainder without named physics is ``unexplained_residual``, however much
     of the base model's misfit the calibration explained."""
     before, after = _remaining(f)
-    phys = [n for n in f.result_.structure.names
-            if n == force_shape.TERM or (n in BY_NAME and BY_NAME[n].kind == PHYSICS)]
+    phys = [n for n in f.result_.structure.names if _is_physics(n)]
     significant = bool(f.windows_)
     excess_before = max(before ** 2 - 1.0, 0.0)
     excess_after = max(after ** 2 - 1.0, 0.0)
@@ -179,8 +178,7 @@ def verdict(f) -> tuple[str, str]:
     if at_level:
         level += (f"; the force the model lacks {force_shape.WORDS[at_level[0]['feature']]}, but what remains is "
                   f"within that level: not an input finding")
-    rival = [c for c in getattr(f, "competing_", []) if c["name"] == force_shape.TERM
-             or (c["name"] in BY_NAME and BY_NAME[c["name"]].kind == PHYSICS)]
+    rival = [c for c in getattr(f, "competing_", []) if _is_physics(c["name"])]
     undecided = "; ".join(f"{c['name']} and {', '.join(c['competes_with'])} explain the same residual "
                           f"(reveal with {c['reveal_with']})" for c in rival)
     if rival and not phys:
@@ -215,6 +213,11 @@ def verdict(f) -> tuple[str, str]:
     if unmeasured:  # physics named first, then a remainder that follows an input (issue 26, item 5)
         why += "; besides: " + "; ".join(u["statement"] for u in unmeasured)
     return "missing_physics", why
+
+
+def _is_physics(name: str) -> bool:
+    """Whether term ``name`` is physics: a listed physics candidate or the learned force."""
+    return name == force_shape.TERM or (name in BY_NAME and BY_NAME[name].kind == PHYSICS)
 
 
 def input_findings(f, after: float | None = None) -> list[dict]:
