@@ -265,6 +265,14 @@ def _forms() -> dict[str, GeneratorForm]:
                       "(+204 N at 40 mm bump, +93 N at 40 mm rebound); rear springs linear",
                       hidden=TruthHidden(air_spring_rate_N_m=(8000.0, 0.0)),
                       leading=("deflection_cubed", "deflection"), **unl),
+        # added 2026-11-28 (issues 24 and 26), held out from the start, before any run of the finder on it and before
+        # the learned term's trial after its listed rival is refused it is to test blind: a spring law no candidate
+        # has, one-sided with a gap, in rebound, on the front axle
+        GeneratorForm("unlisted/rebound_spring_front", description="rebound (top-out) springs inside the front "
+                      "struts: beyond 15 mm of extension from static they pull the wheel back, - k_r max(-d - 0.015, "
+                      "0) with k_r 12000 N/m (-300 N at 40 mm rebound; nothing in bump); rear struts without",
+                      hidden=TruthHidden(rebound_spring_rate_N_m=(12000.0, 0.0), rebound_spring_gap_m=0.015),
+                      leading=("deflection_cubed", "deflection"), **unl),
     ]
     return {f.name: f for f in fs}
 

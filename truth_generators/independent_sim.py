@@ -205,6 +205,9 @@ class TruthHidden:
     air_spring_height_m: float = 0.12             # k_a h / n ((1 - d / h)^-n - 1) less its static rate k_a d
     air_spring_exponent: float = 1.4              # (the file's wheel rate holds that): h the air column's
     #                                               effective height, n the polytropic exponent (1.4 adiabatic)
+    rebound_spring_rate_N_m: tuple = (0.0, 0.0)   # a rebound (top-out) spring inside the strut (front, rear):
+    rebound_spring_gap_m: float = 0.015           # beyond gap g of extension from static it pulls the wheel
+    #                                               back, - k_r max(-d - g, 0) [N] (d positive in bump)
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -343,7 +346,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
- WPRG, WAIRK, WAIRH, WAIRN, NW) = range(40)
+ WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, NW) = range(42)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -404,6 +407,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WPRG] = hid.progressive_rate_N_m2[k]
         W[i, WAIRK], W[i, WAIRH], W[i, WAIRN] = hid.air_spring_rate_N_m[k], hid.air_spring_height_m, \
             hid.air_spring_exponent
+        W[i, WRSK], W[i, WRSG] = hid.rebound_spring_rate_N_m[k], hid.rebound_spring_gap_m
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -483,6 +487,21 @@ def _air_spring(d, k, h, n):
 
 
 @njit(cache=True)
+def _hidden_springs(d, w):
+    """The force [N, in Fs's sense] of the hidden spring laws of one corner (its row ``w`` of W) at
+    deflection ``d`` [m] (positive in bump): a progressive coil's + k2 max(d, 0)^2, an air-assist spring
+    (:func:`_air_spring`), a rebound spring's - k_r max(-d - g, 0)."""
+    F = 0.0
+    if w[WPRG] > 0.0 and d > 0.0:          # progressive coil: the rate grows in bump
+        F += w[WPRG] * d * d
+    if w[WAIRK] > 0.0:                      # air-assist spring: the gas law less its static rate
+        F += _air_spring(d, w[WAIRK], w[WAIRH], w[WAIRN])
+    if w[WRSK] > 0.0 and -d > w[WRSG]:      # rebound spring: engages beyond its gap of extension
+        F -= w[WRSK] * (-d - w[WRSG])
+    return F
+
+
+@njit(cache=True)
 def _strut_friction(w, P, d, dd, Ft):
     """The hidden strut friction laws of one corner (``w`` its row of W) [N, in Fs's sense]: a Stribeck
     (velocity-weakening) friction, one growing with the vertical tyre load ``Fz0 + Ft`` and one growing with
@@ -527,14 +546,9 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
             Fhid -= W[i, WKARB] * dc
         else:
             Fs = W[i, WK] * d[i] + W[i, WKARB] * (d[i] - d[o])
-        if W[i, WPRG] > 0.0 and d[i] > 0.0:          # progressive coil: the rate grows in bump
-            Fprg = W[i, WPRG] * d[i] * d[i]
-            Fs += Fprg
-            Fhid += Fprg
-        if W[i, WAIRK] > 0.0:                         # air-assist spring: the gas law less its static rate
-            Fair = _air_spring(d[i], W[i, WAIRK], W[i, WAIRH], W[i, WAIRN])
-            Fs += Fair
-            Fhid += Fair
+        Fspr = _hidden_springs(d[i], W[i])
+        Fs += Fspr
+        Fhid += Fspr
         eb = d[i] - W[i, WBUMP]
         er = -d[i] - W[i, WREB]
         if eb > 0.0:
@@ -793,7 +807,8 @@ class TruthResult:
     without the amplitude extra (the same s_h); blow-off: the damper force with the valve minus without it;
     anti-roll-bar free play: the bar's force with the gap minus without it (``-k clip(delta, -g, g)``);
     Stribeck friction; load-dependent strut friction ``mu max(F_z0 + F_t, 0) tanh(v/v_eps)``; strut friction
-    growing with the compression; the viscoelastic bushings' force. Friction and bushing forces are those
+    growing with the compression; the viscoelastic bushings' force; the progressive, air-assist and rebound springs'
+    forces. Friction and bushing forces are those
     held over the step that starts at ``t`` (as ``friction``)."""
 
     t: np.ndarray
