@@ -289,13 +289,9 @@ class DiscrepancyFinder:
                 self._input_finding(ev, sel, step)
                 break
             learned = self._learned_trial(ev, cur, sel) if sel is not None else None
-            tried = self._first_passing(ev, cur, opts, recalibrations, step, learned) \
-                if opts or learned is not None else None
-            if (tried is None or not tried[2]) and learned is None and sel is not None:
-                tried = self._learned_after_listed(ev, cur, sel, recalibrations, step, tried)
-            if tried is None:
+            if not opts and learned is None:
                 break
-            best, best_fit, ok, checks = tried
+            best, best_fit, ok, checks = self._first_passing(ev, cur, opts, recalibrations, step, learned)
             gain = cur.rss - best_fit.rss
             per_before = self._per_drive_rmse(ev, cur)
             per_after = self._per_drive_rmse(ev, best_fit)
@@ -841,36 +837,15 @@ class DiscrepancyFinder:
                               f"no physics term is named for it"),
                 "road_recorded": sel.input_kind == "road" and has_road_input(c)})
 
-    def _learned_after_listed(self, ev: Evaluator, cur: FitResult, sel: force_shape.Selection,
-                              recalibrations: dict[int, FitResult], step: int, tried: tuple | None) -> tuple | None:
-        """The learned term's trial once the listed terms that stand for every stable dependence of ``sel``
-        have had their turn at this step and none passed (``tried``: :meth:`_first_passing`'s outcome, None
-        when nothing was screened): the dependence may be right and the listed law wrong (a rear spring that
-        stiffens in bump read as a gas spring's linear rate). Tested like every trial (:meth:`_passes`);
-        returns the outcome to keep, ``(option, fit, passed, checks)``: the learned one when it passes or
-        nothing else was fitted, else ``tried``. The listed form goes first: where it passes, it is named."""
-        late = self._learned_trial(ev, cur, sel, after_listed=True)
-        if late is None:
-            return tried
-        o, f = late
-        ok, in_sample, checks = self._passes(ev, cur, f, recalibrations, step)
-        if self.force_shape_:
-            self.force_shape_[-1]["trial"] = {"delta_bic": cur.bic - f.bic, "passed": ok, "after_listed": True,
-                                              **checks}
-        if in_sample and not ok:  # clear in the drives, refused by a later test
-            self.refused_.append((cur, o, f, dict(checks)))
-        return (o, f, ok, checks) if ok or tried is None else tried
-
-    def _learned_trial(self, ev: Evaluator, cur: FitResult, sel: force_shape.Selection,
-                       after_listed: bool = False) -> tuple[Option, FitResult] | None:
+    def _learned_trial(self, ev: Evaluator, cur: FitResult,
+                       sel: force_shape.Selection) -> tuple[Option, FitResult] | None:
         """The missing force left by ``cur``, read off its shape (``sel``, :meth:`_shape_selection`; input
         features left out), as a learned term fitted on every drive: an extra trial of the forward step,
         tested like every listed candidate (:meth:`_passes`) and competing with them on the criterion.
-        None when no state dependence is stable, and when listed terms stand for every one unless
-        ``after_listed`` (they go first: :meth:`_learned_after_listed`); with ``after_listed`` only then."""
+        None when no state dependence is stable or listed terms stand for every one."""
         sel = sel.physics()
-        if not sel.stable or bool(sel.listed_rivals()) != after_listed:
-            return None   # nothing stable, or listed terms stand for every dependence and go first
+        if not sel.stable or sel.listed_rivals():
+            return None   # nothing stable, or listed terms stand for every dependence: they compete already
         cand = force_shape.learned_candidate(sel)
         st = cur.structure.with_(cand)
         x0 = st.embed(cur.structure, cur.x)

@@ -33,10 +33,8 @@ The stable set is then a learned physics term (:data:`~susp_sim_ros.model.learne
 TERM ``unlisted_force``) with one coefficient per dependence (and the knee or free play it selected,
 freed), which the finder fits and tests like every listed candidate (criterion, decoys, held-out
 drives, recalibration) and which competes with them on the criterion. When listed terms stand for
-every stable dependence (:data:`LISTED_FOR`), they go first (``listed_rivals`` in the record): the
-learned term is offered only when none of the step's trials passes, since the dependence may be right
-and the listed law wrong (a spring stiffening in bump read as a gas spring's linear rate; ``trial``
-then records ``after_listed``); where a listed form passes, it is named. Limits: the dependences and the offered
+every stable dependence (:data:`LISTED_FOR`), the learned term is not offered: those listed terms are
+in the competition already (``listed_rivals`` in the record). Limits: the dependences and the offered
 knee or free play are selected on all drives, so the held-out test refits the learned term's values, not
 its choice of dependences; one knee and one free play serve both axles.
 
