@@ -226,7 +226,8 @@ def test_the_recorded_structure_level_is_measured_on_development_forms():
 UNLISTED = ("unlisted/damper_blow_off", "unlisted/arb_free_play", "unlisted/stribeck_friction",
             "unlisted/load_friction", "unlisted/damper_valve_stop_rear", "unlisted/load_friction_front",
             "unlisted/position_friction", "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
-            "unlisted/progressive_spring_rear", "unlisted/air_assist_front", "unlisted/rebound_spring_front")
+            "unlisted/progressive_spring_rear", "unlisted/air_assist_front", "unlisted/rebound_spring_front",
+            "unlisted/jounce_bumper_rear")
 #: the split of every form before issue 26 (family_split.yaml may only gain forms, never move them)
 SPLIT_BEFORE_26 = {
     "development": ["structure/nominal", "structure/heun_1ms", "structure/velocity_scaling_ramp",
@@ -258,7 +259,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
     added_later = {"viscous/bilinear_digressive", "unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                    "unlisted/load_friction_front", "unlisted/position_friction", "unlisted/viscoelastic_bushing",
                    "unlisted/bushing_two_branch_front", "unlisted/progressive_spring_rear",
-                   "unlisted/air_assist_front", "unlisted/rebound_spring_front"}
+                   "unlisted/air_assist_front", "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -284,11 +285,11 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-26" in text
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
-    assert doc["held_out"][-9:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert doc["held_out"][-10:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
-                                    "unlisted/rebound_spring_front"]   # appended,
+                                    "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear"]   # appended,
     # held out from the start
     for name in UNLISTED:
         form = family.FORMS[name]
@@ -313,6 +314,7 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/progressive_spring_rear"].leading == ("deflection_cubed", "deflection")
     assert family.FORMS["unlisted/air_assist_front"].leading == ("deflection_cubed", "deflection")
     assert family.FORMS["unlisted/rebound_spring_front"].leading == ("deflection_cubed", "deflection")
+    assert family.FORMS["unlisted/jounce_bumper_rear"].leading == ("deflection_cubed", "deflection")
 
 
 @pytest.mark.parametrize("name", UNLISTED)
@@ -321,7 +323,8 @@ def test_unlisted_forms_show_clearly_above_the_gyro_noise(name):
     cases' 0.05 deg/s gyro noise on some drive (measured: blow-off 0.61, free play 0.34, Stribeck 0.56,
     load-dependent friction 0.72, rear valve at its stop 0.29, friction growing with the compression 0.37,
     viscoelastic bushing 0.66, two-branch front bushing 0.46, progressive rear
-    springs 0.65, air-assist front springs 0.29, rebound front springs 0.49 deg/s)."""
+    springs 0.65, air-assist front springs 0.29, rebound front springs 0.49, rear jounce
+    bumpers 0.30 deg/s)."""
     form, nominal = family.FORMS[name], family.FORMS["structure/nominal"]
     best = 0.0
     for _, _, lbl in family.CASE_DRIVES:
@@ -472,6 +475,12 @@ def test_hidden_force_of_the_unlisted_forms():
     d = r.deflection[:, :2]
     np.testing.assert_allclose(r.hidden[:, :2], -12000.0 * np.maximum(-d - 0.015, 0.0), rtol=1e-12, atol=1e-12)
     assert np.all(r.hidden[:, :2][d >= -0.015] == 0.0) and r.hidden[:, :2].min() < -100.0
+    # rear jounce bumpers: k_j e + k_j3 e^3 beyond the gap of bump, nothing within it or in rebound, front untouched
+    r = family.case_truth(family.FORMS["unlisted/jounce_bumper_rear"], 1, "bump_intact")
+    assert np.all(r.hidden[:, :2] == 0.0)
+    e = np.maximum(r.deflection[:, 2:] - 0.025, 0.0)
+    np.testing.assert_allclose(r.hidden[:, 2:], 5000.0 * e + 1.5e7 * e ** 3, rtol=1e-12, atol=1e-12)
+    assert np.all(r.hidden[:, 2:][e == 0.0] == 0.0) and r.hidden[:, 2:].max() > 100.0
 
 
 def test_the_bushing_element_is_a_dashpot_when_slow_and_a_spring_when_fast():

@@ -273,6 +273,16 @@ def _forms() -> dict[str, GeneratorForm]:
                       "0) with k_r 12000 N/m (-300 N at 40 mm rebound; nothing in bump); rear struts without",
                       hidden=TruthHidden(rebound_spring_rate_N_m=(12000.0, 0.0), rebound_spring_gap_m=0.015),
                       leading=("deflection_cubed", "deflection"), **unl),
+        # added 2026-11-28 (issues 24 and 26), held out from the start, before any run of the finder on it and before
+        # the learned term's spring met beyond a gap (made after the three spring forms above read a plain spring)
+        # it is to test blind: a smooth stiffening law beyond a gap, in bump, on the rear axle
+        GeneratorForm("unlisted/jounce_bumper_rear", description="elastomer (polyurethane) jounce bumpers at the "
+                      "rear corners, met beyond 25 mm of bump from static: + k_j e + k_j3 e^3, e = max(d - 0.025, 0), "
+                      "k_j 5000 N/m, k_j3 1.5e7 N/m^3 (+85 N at 15 mm beyond, +359 N at 25 mm beyond; nothing in "
+                      "rebound); front corners without",
+                      hidden=TruthHidden(jounce_bumper_rate_N_m=(0.0, 5000.0), jounce_bumper_cubic_N_m3=(0.0, 1.5e7),
+                                         jounce_bumper_gap_m=0.025),
+                      leading=("deflection_cubed", "deflection"), **unl),
     ]
     return {f.name: f for f in fs}
 

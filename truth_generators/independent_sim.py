@@ -208,6 +208,9 @@ class TruthHidden:
     rebound_spring_rate_N_m: tuple = (0.0, 0.0)   # a rebound (top-out) spring inside the strut (front, rear):
     rebound_spring_gap_m: float = 0.015           # beyond gap g of extension from static it pulls the wheel
     #                                               back, - k_r max(-d - g, 0) [N] (d positive in bump)
+    jounce_bumper_rate_N_m: tuple = (0.0, 0.0)    # an elastomer jounce bumper (front, rear) met beyond gap g of
+    jounce_bumper_cubic_N_m3: tuple = (0.0, 0.0)  # bump from static: + k_j e + k_j3 e^3, e = max(d - g, 0) [N]
+    jounce_bumper_gap_m: float = 0.025            # (a polyurethane bumper stiffening as it is squeezed)
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -346,7 +349,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
- WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, NW) = range(42)
+ WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, NW) = range(45)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -408,6 +411,8 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WAIRK], W[i, WAIRH], W[i, WAIRN] = hid.air_spring_rate_N_m[k], hid.air_spring_height_m, \
             hid.air_spring_exponent
         W[i, WRSK], W[i, WRSG] = hid.rebound_spring_rate_N_m[k], hid.rebound_spring_gap_m
+        W[i, WJBK], W[i, WJBK3], W[i, WJBG] = hid.jounce_bumper_rate_N_m[k], hid.jounce_bumper_cubic_N_m3[k], \
+            hid.jounce_bumper_gap_m
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -490,7 +495,8 @@ def _air_spring(d, k, h, n):
 def _hidden_springs(d, w):
     """The force [N, in Fs's sense] of the hidden spring laws of one corner (its row ``w`` of W) at
     deflection ``d`` [m] (positive in bump): a progressive coil's + k2 max(d, 0)^2, an air-assist spring
-    (:func:`_air_spring`), a rebound spring's - k_r max(-d - g, 0)."""
+    (:func:`_air_spring`), a rebound spring's - k_r max(-d - g, 0), a jounce bumper's k_j e + k_j3 e^3 with
+    e = max(d - g, 0)."""
     F = 0.0
     if w[WPRG] > 0.0 and d > 0.0:          # progressive coil: the rate grows in bump
         F += w[WPRG] * d * d
@@ -498,6 +504,9 @@ def _hidden_springs(d, w):
         F += _air_spring(d, w[WAIRK], w[WAIRH], w[WAIRN])
     if w[WRSK] > 0.0 and -d > w[WRSG]:      # rebound spring: engages beyond its gap of extension
         F -= w[WRSK] * (-d - w[WRSG])
+    if w[WJBK] + w[WJBK3] > 0.0 and d > w[WJBG]:   # jounce bumper: met beyond its gap of bump
+        e = d - w[WJBG]
+        F += w[WJBK] * e + w[WJBK3] * e * e * e
     return F
 
 
@@ -808,7 +817,7 @@ class TruthResult:
     anti-roll-bar free play: the bar's force with the gap minus without it (``-k clip(delta, -g, g)``);
     Stribeck friction; load-dependent strut friction ``mu max(F_z0 + F_t, 0) tanh(v/v_eps)``; strut friction
     growing with the compression; the viscoelastic bushings' force; the progressive, air-assist and rebound springs'
-    forces. Friction and bushing forces are those
+    and the jounce bumpers' forces. Friction and bushing forces are those
     held over the step that starts at ``t`` (as ``friction``)."""
 
     t: np.ndarray
