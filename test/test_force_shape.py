@@ -50,6 +50,13 @@ def test_features_are_what_their_names_say():
     np.testing.assert_allclose(get["roll_deflection"], (D - other) / sh["deflection_ref"])
     gap = sh["free_play"]
     np.testing.assert_allclose(get["roll_free_play"], np.clip(D - other, -gap, gap) / sh["deflection_ref"])
+    g = 0.5 * float(np.abs(D).max())   # springs met beyond a gap of bump, of rebound: nothing within it
+    contact = {f: feature_series(f, D, V, FX, FY, DT, shape={"contact_gap": g})
+               for f in ("bump_contact", "rebound_contact")}
+    np.testing.assert_allclose(contact["bump_contact"], np.maximum(D - g, 0.0) / sh["deflection_ref"])
+    np.testing.assert_allclose(contact["rebound_contact"], np.minimum(D + g, 0.0) / sh["deflection_ref"])
+    assert np.any(D > g) and np.any(D < -g) and np.any(np.abs(D) < g)
+    np.testing.assert_allclose(get["bump_contact"], np.maximum(D - sh["contact_gap"], 0.0) / sh["deflection_ref"])
     z = get["sign_velocity"]
     assert np.all(np.abs(z) <= 1.0 + 1e-12)
     moving = np.abs(V) > 0.02   # past the presliding travel the unit friction element has slid
@@ -147,6 +154,27 @@ def test_the_learned_relaxing_spring_in_the_kernel_is_its_feature_on_the_run():
     assert np.max(np.abs(res.values[:, 8] - plain["PITCH_RATE"])) > 1e-2 * np.max(np.abs(plain["PITCH_RATE"]))
 
 
+@pytest.mark.parametrize("feature", ["bump_contact", "rebound_contact"])
+def test_the_learned_contact_spring_in_the_kernel_is_its_feature_on_the_run(feature):
+    """The kernel's ``bump_contact`` / ``rebound_contact`` force along a bump crossing is its coefficient times
+    the feature on the run's own deflections at the contact gap (none within it), and it changes the motion."""
+    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
+                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
+    coef, gap = 200.0, 0.01
+    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
+        _learned(**{f"c_{feature}": coef}, contact_gap=gap),)))
+    man = build_maneuver("bump_crossing", vp.wheelbase)
+    outs = [f"{o}_{w}" for o in ("DEFL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
+    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs)
+    D, F = res.values[:, :4], res.values[:, 4:8]
+    zero = np.zeros_like(D)
+    want = coef * feature_series(feature, D, zero, zero, zero, DT, shape={"contact_gap": gap})
+    assert np.abs(F).max() > 100.0 and np.all(np.abs(F[1:][np.abs(D[:-1]) <= gap]) < 1e-9)
+    np.testing.assert_allclose(F[1:], want[:-1], rtol=0, atol=1e-9 * np.abs(F).max())
+    plain = _run([], variant="dahl_only", vehicle=vp)
+    assert np.max(np.abs(res.values[:, 8] - plain["PITCH_RATE"])) > 1e-2 * np.max(np.abs(plain["PITCH_RATE"]))
+
+
 def test_the_learned_valve_and_orifice_act_only_as_far_as_the_damper_holds_oil():
     """``velocity_beyond_knee`` (a valve) and ``velocity_squared`` (an orifice) are forces of the damper's oil:
     on the rear-empty car (oil 1, 1, 0, 0) either learned on the rear axle changes nothing (to the bit), the
@@ -188,7 +216,8 @@ def test_the_learned_viscous_and_spring_features_are_the_listed_terms_in_the_ker
 #: draws the same problem as before (a column more shifts every later draw). Over 40 seeds of
 #: _one_drive_dominant the truth was the stable set in 25 with the earlier library and in 27 with the
 #: relaxing spring's six columns drawn in (2026-11-28): the step rule is not weakened by them.
-DRAWN_BEFORE = ("relaxing_deflection",)
+#: The contact springs (bump_contact, rebound_contact) left out the same way.
+DRAWN_BEFORE = ("relaxing_deflection", "bump_contact", "rebound_contact")
 
 
 def _design(n_drives=6, n=600, seed=1, truth=None, noise=1.0):

@@ -311,10 +311,14 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/viscoelastic_bushing"].leading == ("deflection_velocity", "deflection")
     assert family.FORMS["unlisted/bushing_two_branch_front"].leading == ("relaxing_deflection", "deflection_velocity",
                                                                          "deflection")
-    assert family.FORMS["unlisted/progressive_spring_rear"].leading == ("deflection_cubed", "deflection")
-    assert family.FORMS["unlisted/air_assist_front"].leading == ("deflection_cubed", "deflection")
-    assert family.FORMS["unlisted/rebound_spring_front"].leading == ("deflection_cubed", "deflection")
-    assert family.FORMS["unlisted/jounce_bumper_rear"].leading == ("deflection_cubed", "deflection")
+    assert family.FORMS["unlisted/progressive_spring_rear"].leading == ("bump_contact", "deflection_cubed",
+                                                                        "deflection")
+    assert family.FORMS["unlisted/air_assist_front"].leading == ("bump_contact", "deflection_cubed",
+                                                                 "deflection")
+    assert family.FORMS["unlisted/rebound_spring_front"].leading == ("rebound_contact", "deflection_cubed",
+                                                                     "deflection")
+    assert family.FORMS["unlisted/jounce_bumper_rear"].leading == ("bump_contact", "deflection_cubed",
+                                                                   "deflection")
 
 
 @pytest.mark.parametrize("name", UNLISTED)

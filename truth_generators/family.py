@@ -253,7 +253,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       "150000 N/m^2 (the rear wheel rate 24000 N/m rises by half at 40 mm bump; linear in "
                       "rebound; front springs linear)",
                       hidden=TruthHidden(progressive_rate_N_m2=(0.0, 150000.0)),
-                      leading=("deflection_cubed", "deflection"), **unl),
+                      leading=("bump_contact", "deflection_cubed", "deflection"), **unl),
         # added 2026-11-28 (issues 24 and 26), held out from the start, before any run of the finder on it and before
         # the learned term's spring stiffer in bump than in rebound (made after the progressive rear form's blind
         # result) it was to test blind: another spring law of the kind, smooth, both directions, the other axle
@@ -264,7 +264,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       "holds that), k_a 8000 N/m, h 0.12 m, n 1.4 (adiabatic): stiffer in bump, softer in rebound "
                       "(+204 N at 40 mm bump, +93 N at 40 mm rebound); rear springs linear",
                       hidden=TruthHidden(air_spring_rate_N_m=(8000.0, 0.0)),
-                      leading=("deflection_cubed", "deflection"), **unl),
+                      leading=("bump_contact", "deflection_cubed", "deflection"), **unl),
         # added 2026-11-28 (issues 24 and 26), held out from the start, before any run of the finder on it and before
         # the learned term's trial after its listed rival is refused it is to test blind: a spring law no candidate
         # has, one-sided with a gap, in rebound, on the front axle
@@ -272,7 +272,10 @@ def _forms() -> dict[str, GeneratorForm]:
                       "struts: beyond 15 mm of extension from static they pull the wheel back, - k_r max(-d - 0.015, "
                       "0) with k_r 12000 N/m (-300 N at 40 mm rebound; nothing in bump); rear struts without",
                       hidden=TruthHidden(rebound_spring_rate_N_m=(12000.0, 0.0), rebound_spring_gap_m=0.015),
-                      leading=("deflection_cubed", "deflection"), **unl),
+                      leading=("rebound_contact", "deflection_cubed", "deflection"), **unl),
+        # (the four spring forms' leading dependences gained the contact springs with the vocabulary, 2026-11-28: a
+        # progressive coil and an air spring's asymmetry are springs met beyond a gap of 0 in bump, a top-out spring
+        # one in rebound; no score of a run before that feature changes)
         # added 2026-11-28 (issues 24 and 26), held out from the start, before any run of the finder on it and before
         # the learned term's spring met beyond a gap (made after the three spring forms above read a plain spring)
         # it is to test blind: a smooth stiffening law beyond a gap, in bump, on the rear axle
@@ -282,7 +285,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       "rebound); front corners without",
                       hidden=TruthHidden(jounce_bumper_rate_N_m=(0.0, 5000.0), jounce_bumper_cubic_N_m3=(0.0, 1.5e7),
                                          jounce_bumper_gap_m=0.025),
-                      leading=("deflection_cubed", "deflection"), **unl),
+                      leading=("bump_contact", "deflection_cubed", "deflection"), **unl),
     ]
     return {f.name: f for f in fs}
 

@@ -39,6 +39,11 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             rate, fast motion the spring). Linear viscoelasticity's Maxwell element
                             (Ferry, Viscoelastic Properties of Polymers, 3rd ed., 1980, ch. 3): rubber
                             bushings and mounts that stiffen with frequency
+``bump_contact``            max(d - g, 0) / d_ref: a spring met beyond a gap ``g`` of bump (a jounce
+                            bumper, coils coming to block; with ``g`` 0 a spring stiffer in bump than in
+                            rebound)
+``rebound_contact``         min(d + g, 0) / d_ref: a spring met beyond a gap ``g`` of rebound (a
+                            rebound or top-out spring)
 ==========================  =======================================================================
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
@@ -67,7 +72,8 @@ from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 
 FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
-            "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection")
+            "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection", "bump_contact",
+            "rebound_contact")
 N_FEATURES = len(FEATURES)
 #: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
 FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force")
@@ -77,9 +83,9 @@ WEAKENING = "velocity_weakening"
 LAW_SHAPE_FEATURES = (WEAKENING,)
 #: the shape parameters after the coefficients, in this order
 SHAPES = ("deflection_ref", "velocity_ref", "force_ref", "knee_velocity", "free_play", "presliding", "memory",
-          "stribeck_velocity", "relaxation_time")
+          "stribeck_velocity", "relaxation_time", "contact_gap")
 _O_SHAPE = 4 * N_FEATURES
-_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS, _TAU = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
+_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS, _TAU, _CGAP = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
 PRESLIDING, STRIBECK_VELOCITY = SHAPES[5], SHAPES[7]
 _Z, _DEF, _AMP, _REL = 0, 4, 8, 12
 _C_D, _C_DD, _C_FX, _C_FY, _C_DT = C_INDEX["D"], C_INDEX["DD"], C_INDEX["FX"], C_INDEX["FY"], C_INDEX["DT"]
@@ -87,7 +93,7 @@ _C_OIL = C_INDEX["OIL"]
 
 
 @njit(cache=True, inline="always")
-def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref, knee, gap, vs):
+def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref, knee, gap, vs, cgap):
     """Feature ``k`` of :data:`FEATURES` at one corner (module docstring)."""
     x = d / dref
     u = v / vref
@@ -119,7 +125,17 @@ def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref,
         return min(max(roll, -gap), gap) / dref
     if k == 12:
         return z * math.exp(-abs(v) / vs)
-    return rel / dref
+    return _spring_state_feature(k, d, rel, dref, cgap)
+
+
+@njit(cache=True, inline="always")
+def _spring_state_feature(k, d, rel, dref, cgap):
+    """Features 13-15 of :data:`FEATURES` (a relaxing spring, springs met beyond a contact gap)."""
+    if k == 13:
+        return rel / dref
+    if k == 14:
+        return max(d - cgap, 0.0) / dref
+    return min(d + cgap, 0.0) / dref
 
 
 @njit(cache=True, inline="always")
@@ -133,7 +149,7 @@ def learned_force_force(p, po, s, so, i, c):
     z = s[so + _Z + i]
     sgn = (1.0 if v > 0.0 else 0.0) - (1.0 if v < 0.0 else 0.0)
     roll = d - s[so + _DEF + o]
-    gap = p[po + _GAP + i]
+    gap, cgap = p[po + _GAP + i], p[po + _CGAP + i]
     q = po + i
     oil = c[i, _C_OIL]
     return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * oil * u * abs(u)
@@ -141,7 +157,8 @@ def learned_force_force(p, po, s, so, i, c):
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
                    + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i]))
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
-            + p[q + 52] * s[so + _REL + i] / dref)
+            + p[q + 52] * s[so + _REL + i] / dref
+            + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + cgap, 0.0)) / dref)
 
 
 @njit(cache=True, inline="always")
@@ -169,7 +186,7 @@ def learned_force_update(p, po, s, so, i, c, dx):
 
 
 @njit(cache=True)
-def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, tau, out):
+def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, tau, cgap, out):
     n = D.shape[0]
     z = np.zeros(4)
     amp = np.zeros(4)
@@ -178,7 +195,7 @@ def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, m
         for i in range(4):
             o = i + 1 if i % 2 == 0 else i - 1
             out[t, i] = corner_feature(k, D[t, i], D[t, o], V[t, i], FX[t, i], FY[t, i], OIL[i], z[i], amp[i],
-                                       rel[i], dref, vref, fref, knee, gap, vs)
+                                       rel[i], dref, vref, fref, knee, gap, vs, cgap)
         if t + 1 < n:
             for i in range(4):
                 z[i], _, amp[i], rel[i] = advance_states(z[i], D[t, i], amp[i], rel[i], D[t + 1, i] - D[t, i],
@@ -199,7 +216,8 @@ def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: 
     OIL = np.ones(4) if oil is None else np.ascontiguousarray(oil, float).reshape(4)
     _series(D, V, FX, FY, OIL, float(dt), FEATURES.index(name), float(sh["deflection_ref"]), float(sh["velocity_ref"]),
             float(sh["force_ref"]), float(sh["knee_velocity"]), float(sh["free_play"]), float(sh["presliding"]),
-            float(sh["memory"]), float(sh["stribeck_velocity"]), float(sh["relaxation_time"]), out)
+            float(sh["memory"]), float(sh["stribeck_velocity"]), float(sh["relaxation_time"]), float(sh["contact_gap"]),
+            out)
     return out
 
 
@@ -213,7 +231,9 @@ _COEF_MEANING = {
     "velocity_weakening": "friction level at rest above the sliding level (falls with exp(-|v| / v_s))",
     "roll_deflection": "force at a left-right difference d_ref",
     "roll_free_play": "force at a left-right difference d_ref within the play",
-    "relaxing_deflection": "spring force at a change of d_ref faster than the relaxation time"}
+    "relaxing_deflection": "spring force at a change of d_ref faster than the relaxation time",
+    "bump_contact": "spring force d_ref of bump beyond the contact gap",
+    "rebound_contact": "spring force d_ref of rebound beyond the contact gap"}
 
 LEARNED_FORCE = register_term(PhysicsTerm(
     name="unlisted_force", component="axle",
@@ -232,7 +252,9 @@ LEARNED_FORCE = register_term(PhysicsTerm(
         TermParam("stribeck_velocity", "m/s", "sliding velocity over which velocity_weakening's friction falls "
                   "by 1/e (Stribeck velocity)", 0.01, 1e-4, 1.0),
         TermParam("relaxation_time", "s", "relaxation time of relaxing_deflection's spring (its Maxwell element's "
-                  "damping over its rate)", 0.07, 1e-3, 10.0)),
+                  "damping over its rate)", 0.07, 1e-3, 10.0),
+        TermParam("contact_gap", "m", "deflection from static beyond which bump_contact (in bump) and rebound_contact "
+                  "(in rebound) act", 0.02, 0.0, 0.2)),
     n_states=4, force=learned_force_force, update=learned_force_update,
     gains=tuple(f"c_{f}" for f in FEATURES)))
 

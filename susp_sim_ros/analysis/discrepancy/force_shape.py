@@ -87,6 +87,9 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
                            "(free play in the anti-roll bar)",
          "relaxing_deflection": "a spring that relaxes in {tau:.2f} s, stiffer the faster the deflection changes "
                                 "(viscoelastic: a rubber bushing or mount)",
+         "bump_contact": "a spring met beyond {gap_mm:.0f} mm of bump (a jounce bumper, coils coming to block; "
+                         "at 0 mm a spring stiffer in bump than in rebound)",
+         "rebound_contact": "a spring met beyond {gap_mm:.0f} mm of rebound (a rebound or top-out spring)",
          "road_height": "follows the road height under the wheel (an input, not a state)",
          "road_rate": "follows the rate of the road height under the wheel (an input, not a state)",
          **{f"rotation_{t}{k}": f"follows the wheel's rotation, harmonic {k}, {part} part (an input, not a state)"
@@ -96,7 +99,7 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
 #: what a positive and a negative coefficient of a dependence mean (the force is positive up on the body)
 SENSE = {"constant": ("pushes the body up", "pulls the body down"),
          **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play",
-                                                "relaxing_deflection")},
+                                                "relaxing_deflection", "bump_contact", "rebound_contact")},
          **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
                                                            "velocity_beyond_knee")},
          **{f: ("more friction", "less friction") for f in ("sign_velocity", "peak_deflection", "lateral_force",
@@ -121,13 +124,14 @@ def group_key(key: tuple[str, str]) -> tuple[str, str]:
 
 #: the shape parameter of the features that have one
 _SHAPE_OF = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play",
-             "relaxing_deflection": "relaxation_time"}
+             "relaxing_deflection": "relaxation_time", "bump_contact": "contact_gap", "rebound_contact": "contact_gap"}
 #: the config entry of each such shape parameter's range in the learned term's fit
 _SHAPE_RANGE = {"knee_velocity": "fit.knee_velocity_range_m_s", "free_play": "fit.free_play_range_m",
-                "relaxation_time": "fit.relaxation_time_range_s"}
+                "relaxation_time": "fit.relaxation_time_range_s", "contact_gap": "fit.contact_gap_range_m"}
 #: the config entry of the values each such feature is offered at in the regression
 _SHAPE_VALUES = {"velocity_beyond_knee": "library.knee_velocities_m_s", "roll_free_play": "library.free_plays_m",
-                 "relaxing_deflection": "library.relaxation_times_s"}
+                 "relaxing_deflection": "library.relaxation_times_s", "bump_contact": "library.contact_gaps_m",
+                 "rebound_contact": "library.contact_gaps_m"}
 
 
 def learned_in(variant) -> bool:
