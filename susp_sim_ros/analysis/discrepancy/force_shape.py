@@ -3,7 +3,8 @@
 What the model still lacks is regressed on features of the model's own corner states
 (:data:`~susp_sim_ros.model.learned_force.FEATURES`: deflection and its cube, deflection velocity, its
 square and a knee in it, friction-like states, stroke amplitude, wheel forces, the left-right
-deflection difference and a free play of it), one coefficient [N] per (feature, axle). The regression
+deflection difference and a free play of it, a spring that relaxes, springs met beyond a contact gap of bump
+or rebound), one coefficient [N] per (feature, axle). The regression
 runs through the model's own dynamics: each column is the effect of a feature's force, acting at the
 axle's two corners as a suspension force does, on every compared signal of every drive (the
 forward-difference Jacobian of the whitened residual, as the finder's criteria see it), and the target
