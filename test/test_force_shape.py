@@ -336,6 +336,23 @@ def test_the_learned_candidate_writes_its_coefficients_and_shape_into_the_term()
     assert written["c_roll_free_play"] == {"front": 120.0, "rear": 0.0}
 
 
+def test_a_contact_at_static_starts_the_fit_at_gap_zero_with_a_step_of_its_range():
+    """A spring met at static (``bump_contact`` at gap 0: stiffer in bump than in rebound) is fitted from gap 0
+    within the config's range; its step is a share of that range (a step of 0 would stall the fit), and the words
+    give the gap."""
+    cfg = fs.settings()
+    col = fs.Column("bump_contact", "rear", 0.0)
+    sel = fs.Selection({col.key: 0.9}, [col], np.array([150.0]), np.array([1.0]), 24)
+    gap = fs.learned_candidate(sel, cfg).params[-1]
+    assert gap.name == "contact_gap" and gap.shape and gap.neutral == 0.0
+    assert (gap.lower, gap.upper) == tuple(float(v) for v in cfg["fit.contact_gap_range_m"])
+    assert 0.0 < gap.step < gap.upper - gap.lower
+    assert "met beyond 0 mm of bump" in sel.description() and "rear stiffer" in sel.description()
+    assert "beyond 15 mm of rebound" in fs.Selection({("rebound_contact", "front"): 0.9},
+                                                     [fs.Column("rebound_contact", "front", 0.02)], np.array([90.0]),
+                                                     np.array([1.0]), 24).description(shapes={"contact_gap": 0.015})
+
+
 def test_a_learned_knee_ranges_over_its_physics_and_sizes_no_effect():
     """The knee the regression picked from the library is the fit's start, free over the config's plausible
     range of valve knees (not a band around the library value: x/4..4x around 0.1 m/s held a rear valve's knee

@@ -37,7 +37,8 @@ drives, recalibration) and which competes with them on the criterion. When liste
 every stable dependence (:data:`LISTED_FOR`), the learned term is not offered: those listed terms are
 in the competition already (``listed_rivals`` in the record). Limits: the dependences and the offered
 knee or free play are selected on all drives, so the held-out test refits the learned term's values, not
-its choice of dependences; one knee and one free play serve both axles.
+its choice of dependences; one knee, one free play and one contact gap serve both axles (and one contact
+gap both senses).
 
 Input features (issue 26, item 5): beside the state features, the regression offers forces that follow
 an input and no state (:data:`~susp_sim_ros.model.input_force.INPUT_FEATURES`: the road height under
@@ -446,7 +447,8 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     for name, value in shapes.items():
         p = LEARNED_FORCE.params[LEARNED_FORCE.param_index(name)]
         lo, hi = (float(v) for v in cfg[_SHAPE_RANGE[name]])
-        params.append(CandParam(name, p.unit, value, lo, hi, value / 5, p.meaning + " (one value for both axles)",
+        step = value / 5 if value > 0 else (hi - lo) / 50   # a contact at static (gap 0): a step of its range
+        params.append(CandParam(name, p.unit, value, lo, hi, step, p.meaning + " (one value for both axles)",
                                 shape=True))
         users = {c.axle for c in sel.stable if c.shape is not None and _SHAPE_OF.get(c.feature) == name}
         axle_of.append(users.pop() if len(users) == 1 else None)
