@@ -267,6 +267,15 @@ def _zero_effect(term: dict) -> bool:
     return bool(ci) and ci[0] is not None and ci[0] <= 0.0
 
 
+def optional_right(optional: set, leading, learned_deps) -> set:
+    """The optional terms that count as right when named: a learned force (``unlisted_force``) only when its
+    leading dependence (``learned_deps``, strongest first) is one of the form's ``leading`` (a gas form's
+    learned force must be a spring of the deflection); a learned force of another kind is a false positive."""
+    if "unlisted_force" in optional and leading and not (learned_deps and learned_deps[0] in leading):
+        return set(optional) - {"unlisted_force"}
+    return set(optional)
+
+
 def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, car: TruthCar, fr: TruthFriction,
            hid: TruthHidden, t_gen: float, t0: float) -> dict:
     f = DiscrepancyFinder(variant=spec["base"]).fit(paths)
@@ -281,6 +290,8 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         spec = dict(spec, handled_if_not_identifiable=spec["expect"])
     expect, optional = set(spec["expect"]), set(spec.get("optional", []))
     ni_ok = set(spec.get("handled_if_not_identifiable", []))
+    learned_deps = next((t.get("dependences", []) for t in rep["terms"] if t["name"] == "unlisted_force"), [])
+    optional = optional_right(optional, spec.get("leading", []), learned_deps)
     tp = sorted(set(named) & (expect | optional))
     handled_ni = sorted((expect & ni_ok & set(ni)) - set(named))
     fp = sorted(set(named) - expect - optional)
@@ -340,8 +351,7 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         "coverage_hits": sum(c["contains_truth"] for c in cov), "coverage_n": len(cov),
         # issue 26: what the learned term (unlisted_force) depends on, and whether its leading dependence is
         # one an engineer would call right for the form (GeneratorForm.leading)
-        "unlisted_dependences": next((t.get("dependences", []) for t in rep["terms"] if t["name"] == "unlisted_force"),
-                                     []),
+        "unlisted_dependences": learned_deps,
         "leading_expected": spec.get("leading", []),
         "diagnostics": _diagnostics(f),
         "generate_s": t_gen, "elapsed_s": time.perf_counter() - t0,

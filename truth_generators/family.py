@@ -94,7 +94,12 @@ class GeneratorForm:
 def _forms() -> dict[str, GeneratorForm]:
     amp = dict(effect="amplitude_friction", expect=("friction_amplitude",))
     visc = dict(effect="extra_viscous", expect=("extra_viscous_damping",))
-    gas = dict(effect="gas_spring", optional=("damper_gas_preload",))
+    # a gas spring's preload and linear rate are damper_gas_preload's; a progressive gas spring's cubic part is a
+    # law no listed term has, which the learned term (issue 26, written after these forms) may name, right only
+    # as a spring of the deflection (amended 2026-11-28 after the first run of the law-family stability named a
+    # learned spring on gas/progressive and the bench scored it a false positive: benchmarks/RESULTS.md)
+    gas = dict(effect="gas_spring", optional=("damper_gas_preload", "unlisted_force"),
+               leading=("deflection", "deflection_cubed", "bump_contact", "rebound_contact"))
     unl = dict(effect="unlisted_force", expect=("unlisted_force",))
     lat = dict(effect="lateral_force_friction", base="no_horizontal", expect=("friction_lateral_force",),
                optional=("friction_longitudinal_force",))

@@ -795,7 +795,9 @@ class DiscrepancyFinder:
         self.force_shape_.append({
             "step": step, "read_against": against, "resamples": sel.resamples,
             "selection_frequency": {f"{k[0]}:{k[1]}": q for k, q in sorted(sel.frequency.items())},
-            "stable": [f"{c.feature}:{c.axle}" for c in sel.stable], "dependences": sel.dependences,
+            "law_frequency": {f"{k[0]}:{k[1]}": q for k, q in sorted(sel.law_frequency.items())},
+            "stable": [f"{c.feature}:{c.axle}" for c in sel.stable],
+            "stable_by_law": [f"{k[0]}:{k[1]}" for k in sel.by_law], "dependences": sel.dependences,
             "description": sel.description() if sel.stable else "", "listed_rivals": phys.listed_rivals(),
             "input_led": sel.input_led})
         return sel

@@ -24,7 +24,10 @@ column that, fitted with those chosen before, best predicts the drives left out 
 number of dependences, none included, chosen on the same left-out drives by the one-standard-error rule
 (:func:`_forward_cv`), all from each drive's sufficient statistics, repeated on drive-bootstrap resamples;
 a dependence is *stable* when it is selected in most resamples that can test it (stability selection,
-Meinshausen and Buehlmann 2010; :func:`select`). Until 2026-11-28 the step was orthogonal matching
+Meinshausen and Buehlmann 2010; :func:`select`), and so is a law family (:data:`LAW_OF`: the spring forms
+of one axle, its damping forms, ...) whose members split the resamples' votes, none of them stable on
+its own, through the member chosen most often (cluster stability selection, Faletto and Bien 2022).
+Until 2026-11-28 the step was orthogonal matching
 pursuit's (scikit-learn's ``orthogonal_mp_gram``), which adds the column most correlated with the target
 on all drives: it split the votes of correlated dependences (a plain friction level against one growing
 with the amplitude) and named neither (benchmarks/RESULTS.md, 2026-11-28). Why not PySINDy: it regresses
@@ -54,7 +57,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -114,6 +117,18 @@ SENSE = {"constant": ("pushes the body up", "pulls the body down"),
 GROUP_OF = {f"rotation_{t}{k}": f"rotation_{k}" for t in ("sin", "cos") for k in (1, 2)}
 
 
+#: the law family of a dependence (cluster stability selection, Faletto and Bien 2022, arXiv:2201.00494): the
+#: features of one kind of law of one corner state, whose simulated effects correlate over a bump crossing and
+#: a sine steer, so the resamples may split their votes between the members (a progressive spring read as
+#: a cubic in some, a spring stiffer in rebound than in bump in others); a family selected in most resamples
+#: is a stable dependence of its kind although no single member is (:func:`select`). Features not listed are
+#: a family of their own (the relaxing spring, both spring and damper; the constant; the inputs).
+LAW_OF = {**{f: "spring" for f in ("deflection", "deflection_cubed", "bump_contact", "rebound_contact")},
+          **{f: "damping" for f in ("deflection_velocity", "velocity_squared", "velocity_beyond_knee")},
+          **{f: "friction" for f in FRICTION_LIKE},
+          **{f: "roll" for f in ("roll_deflection", "roll_free_play")}}
+
+
 def group_of(feature: str) -> str:
     """The dependence a feature belongs to for stability: the feature itself, or its pair (:data:`GROUP_OF`)."""
     return GROUP_OF.get(feature, feature)
@@ -122,6 +137,12 @@ def group_of(feature: str) -> str:
 def group_key(key: tuple[str, str]) -> tuple[str, str]:
     """:func:`group_of` a (feature, axle) key, with its axle."""
     return group_of(key[0]), key[1]
+
+
+def law_key(key: tuple[str, str]) -> tuple[str, str]:
+    """The law family (:data:`LAW_OF`) of a (feature, axle) key, with its axle."""
+    g = group_of(key[0])
+    return LAW_OF.get(g, g), key[1]
 
 
 #: the shape parameter of the features that have one
@@ -210,6 +231,10 @@ class Selection:
     coef: np.ndarray
     share: np.ndarray
     resamples: int
+    #: per (law family, axle) (:func:`law_key`) the fraction of the resamples that can test it selecting any member
+    law_frequency: dict[tuple[str, str], float] = field(default_factory=dict)
+    #: the stable dependences that stand for a stable law family no single member of which is stable
+    by_law: tuple[tuple[str, str], ...] = ()
 
     @property
     def dependences(self) -> list[str]:
@@ -252,8 +277,10 @@ class Selection:
         """The selection without its input features (what a learned term may stand for), shares renormalised."""
         keep = [k for k, c in enumerate(self.stable) if c.feature not in INPUT_FEATURES]
         share = self.share[keep]
-        return Selection(self.frequency, [self.stable[k] for k in keep], self.coef[keep],
-                         share / max(float(share.sum()), 1e-300), self.resamples)
+        stable = [self.stable[k] for k in keep]
+        return Selection(self.frequency, stable, self.coef[keep], share / max(float(share.sum()), 1e-300),
+                         self.resamples, self.law_frequency, tuple(k for k in self.by_law
+                                                                   if k in {c.key for c in stable}))
 
     def listed_rivals(self) -> list[str]:
         """The listed TERMs that stand for every stable dependence (empty when one has none)."""
@@ -376,9 +403,14 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
     rng = np.random.default_rng(int(cfg["selection.seed"]))
     B, max_f = int(cfg["selection.resamples"]), int(cfg["selection.max_features"])
     keys = [group_key(c.key) for c in design.columns]
-    acts = {g: {keys[j] for j in np.flatnonzero(np.diag(t.G) > 0.0)} for g, t in stats.items()}
+    laws = [law_key(k) for k in keys]
+    acting = {g: np.flatnonzero(np.diag(t.G) > 0.0) for g, t in stats.items()}
+    acts = {g: {keys[j] for j in js} for g, js in acting.items()}
+    law_acts = {g: {laws[j] for j in js} for g, js in acting.items()}
     counts: Counter = Counter()
     testable: Counter = Counter()
+    law_counts: Counter = Counter()
+    law_testable: Counter = Counter()
     shapes: dict[tuple[str, str], Counter] = {}
     done = 0
     for _ in range(B):
@@ -387,19 +419,24 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
             continue
         sel = _forward_cv(stats, pick, max_f)
         done += 1
-        can = _testable(acts, pick)
+        can, law_can = _testable(acts, pick), _testable(law_acts, pick)
         testable.update(can)
-        for k in set(keys[j] for j in np.flatnonzero(sel)) & can:
-            counts[k] += 1
-        for j in np.flatnonzero(sel):
+        law_testable.update(law_can)
+        chosen = np.flatnonzero(sel)
+        counts.update(set(keys[j] for j in chosen) & can)
+        law_counts.update(set(laws[j] for j in chosen) & law_can)
+        for j in chosen:
             if keys[j] in can:
                 shapes.setdefault(design.columns[j].key, Counter())[design.columns[j].shape] += 1
     if done == 0:
         return None
     freq = {k: n / testable[k] for k, n in counts.items()}   # counted only where testable: never 0 / 0
+    law_freq = {k: n / law_testable[k] for k, n in law_counts.items()}
     stable_keys = [k for k, q in freq.items() if q >= float(cfg["selection.min_frequency"])]
+    by_law = _law_representatives(freq, law_freq, stable_keys, float(cfg["selection.min_frequency"]))
+    stable_keys += by_law
     if not stable_keys:
-        return Selection(freq, [], np.zeros(0), np.zeros(0), done)
+        return Selection(freq, [], np.zeros(0), np.zeros(0), done, law_freq)
     members = [(f, a) for g, a in stable_keys for f in dict.fromkeys(c.feature for c in design.columns)
                if group_key((f, a)) == (g, a)]
     cols = [Column(f, a, shapes[(f, a)].most_common(1)[0][0] if (f, a) in shapes else None) for f, a in members]
@@ -413,7 +450,22 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
     keep = share >= float(cfg["selection.min_share"])
     cols = [c for c, k in zip(cols, keep) if k]
     coef, share = coef[keep], share[keep]
-    return Selection(freq, cols, coef, share, done)
+    return Selection(freq, cols, coef, share, done, law_freq, tuple(k for k in by_law if k in {c.key for c in cols}))
+
+
+def _law_representatives(freq: dict, law_freq: dict, stable_keys: list, min_frequency: float) -> list:
+    """Per law family (and axle) selected in at least ``min_frequency`` of the resamples that can test it and
+    none of whose members is stable on its own, the member selected most often (cluster stability selection:
+    Faletto and Bien 2022, arXiv:2201.00494, whose clusters' votes are pooled the same way; ties: the first
+    in the vocabulary's order): the family is a stable dependence, its form the one the resamples preferred."""
+    stable_laws = {law_key(k) for k in stable_keys}
+    reps = []
+    for law, q in sorted(law_freq.items()):
+        if q < min_frequency or law in stable_laws:
+            continue
+        members = [k for k in freq if law_key(k) == law]
+        reps.append(max(members, key=lambda k: (freq[k], -FEATURES.index(k[0]) if k[0] in FEATURES else 0)))
+    return reps
 
 
 def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:

@@ -761,9 +761,20 @@ def _md_force_shape(f, rep: dict, paths: dict, name: str) -> list[str]:
          "| step | stable dependences (feature:axle) | selection frequency of the stable | in words |",
          "|---|---|---|---|"]
     for e in steps:
-        freq = ", ".join(f"{e['selection_frequency'][k]:.2f}" for k in e["stable"]) or "-"
+        freq = ", ".join(_stable_frequency(e, k) for k in e["stable"]) or "-"
         L.append(f"| {e['step']} | {', '.join(e['stable']) or 'none'} | {freq} | {e['description'] or '-'} |")
     return L
+
+
+def _stable_frequency(e: dict, key: str) -> str:
+    """A stable dependence's selection frequency; for one that stands for its law family (no single form of
+    the law stable on its own: force_shape.LAW_OF), the family's too."""
+    q = f"{e['selection_frequency'][key]:.2f}"
+    if key not in e.get("stable_by_law", []):
+        return q
+    feature, axle = key.split(":")
+    law = force_shape.law_key((feature, axle))[0]
+    return f"{q} ({law} law {e['law_frequency'][f'{law}:{axle}']:.2f})"
 
 
 def _md_files(f, rep: dict, paths: dict, name: str) -> list[str]:
