@@ -535,3 +535,15 @@ def test_a_weakening_friction_holds_more_at_rest_than_it_slides_with():
         c[:, C_INDEX["DD"]] = v
         got = [learned_force_force(p, 0, s, 0, i, c) for i in range(4)]
         np.testing.assert_allclose(got, [0.0, 0.0, want, want], rtol=1e-12, atol=1e-12)
+
+
+def test_the_report_gives_a_form_that_stands_for_its_law_family_the_familys_frequency():
+    from susp_sim_ros.analysis.discrepancy.report import _md_force_shape
+    step = {"step": 1, "stable": ["rebound_contact:rear", "roll_deflection:front"],
+            "selection_frequency": {"rebound_contact:rear": 0.58, "roll_deflection:front": 0.95},
+            "law_frequency": {"spring:rear": 0.92, "roll:front": 0.95}, "stable_by_law": ["rebound_contact:rear"],
+            "description": "A force the model lacks: ..."}
+    row = _md_force_shape(None, {"force_shape": [step]}, {}, "x")[-1]
+    assert "0.58 (spring law 0.92), 0.95 |" in row
+    old = {k: v for k, v in step.items() if k not in ("law_frequency", "stable_by_law")}   # records before
+    assert "| 0.58, 0.95 |" in _md_force_shape(None, {"force_shape": [old]}, {}, "x")[-1]
