@@ -79,6 +79,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -267,7 +268,7 @@ def _zero_effect(term: dict) -> bool:
     return bool(ci) and ci[0] is not None and ci[0] <= 0.0
 
 
-def optional_right(optional: set, leading, learned_deps) -> set:
+def optional_right(optional: set, leading: Sequence[str], learned_deps: Sequence[str]) -> set:
     """The optional terms that count as right when named: a learned force (``unlisted_force``) only when its
     leading dependence (``learned_deps``, strongest first) is one of the form's ``leading`` (a gas form's
     learned force must be a spring of the deflection); a learned force of another kind is a false positive."""

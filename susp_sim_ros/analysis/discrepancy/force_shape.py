@@ -279,8 +279,7 @@ class Selection:
         share = self.share[keep]
         stable = [self.stable[k] for k in keep]
         return Selection(self.frequency, stable, self.coef[keep], share / max(float(share.sum()), 1e-300),
-                         self.resamples, self.law_frequency, tuple(k for k in self.by_law
-                                                                   if k in {c.key for c in stable}))
+                         self.resamples, self.law_frequency, _kept(self.by_law, stable))
 
     def listed_rivals(self) -> list[str]:
         """The listed TERMs that stand for every stable dependence (empty when one has none)."""
@@ -450,7 +449,13 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
     keep = share >= float(cfg["selection.min_share"])
     cols = [c for c, k in zip(cols, keep) if k]
     coef, share = coef[keep], share[keep]
-    return Selection(freq, cols, coef, share, done, law_freq, tuple(k for k in by_law if k in {c.key for c in cols}))
+    return Selection(freq, cols, coef, share, done, law_freq, _kept(by_law, cols))
+
+
+def _kept(by_law, cols: list[Column]) -> tuple[tuple[str, str], ...]:
+    """The keys of ``by_law`` that are still among the columns ``cols``."""
+    keys = {c.key for c in cols}
+    return tuple(k for k in by_law if k in keys)
 
 
 def _law_representatives(freq: dict, law_freq: dict, stable_keys: list, min_frequency: float) -> list:
@@ -459,12 +464,13 @@ def _law_representatives(freq: dict, law_freq: dict, stable_keys: list, min_freq
     Faletto and Bien 2022, arXiv:2201.00494, whose clusters' votes are pooled the same way; ties: the first
     in the vocabulary's order): the family is a stable dependence, its form the one the resamples preferred."""
     stable_laws = {law_key(k) for k in stable_keys}
+    families = set(LAW_OF.values())   # any other key is a family of its own: stable or not as itself
     reps = []
     for law, q in sorted(law_freq.items()):
-        if q < min_frequency or law in stable_laws:
+        if law[0] not in families or q < min_frequency or law in stable_laws:
             continue
         members = [k for k in freq if law_key(k) == law]
-        reps.append(max(members, key=lambda k: (freq[k], -FEATURES.index(k[0]) if k[0] in FEATURES else 0)))
+        reps.append(max(members, key=lambda k: (freq[k], -FEATURES.index(k[0]))))
     return reps
 
 
