@@ -3,6 +3,7 @@ and kernel force, and the stability selection's behaviour on known regression pr
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -547,3 +548,20 @@ def test_the_report_gives_a_form_that_stands_for_its_law_family_the_familys_freq
     assert "0.58 (spring law 0.92), 0.95 |" in row
     old = {k: v for k, v in step.items() if k not in ("law_frequency", "stable_by_law")}   # records before
     assert "| 0.58, 0.95 |" in _md_force_shape(None, {"force_shape": [old]}, {}, "x")[-1]
+
+
+def test_the_stable_set_is_in_the_same_order_whatever_the_interpreters_string_hashing():
+    """The resampling has a fixed seed so a diagnosis is reproducible; the stable set's order (the learned
+    term's parameter order) must not follow the order of Python sets, which changes with PYTHONHASHSEED."""
+    import os
+    import subprocess
+    import sys
+    code = ("import sys; sys.path.insert(0, 'test'); from test_force_shape import _design; "
+            "from susp_sim_ros.analysis.discrepancy import force_shape as fs; "
+            "t = {('velocity_beyond_knee', 'rear'): -3.0, ('sign_velocity', 'rear'): 1.5, "
+            "('roll_deflection', 'front'): 2.0, ('deflection_velocity', 'front'): 2.5}; "
+            "s = fs.select(_design(truth=t)); print([c.key for c in s.stable], list(s.frequency))")
+    root = Path(__file__).resolve().parents[1]
+    out = {subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True, check=True,
+                          env={**os.environ, "PYTHONHASHSEED": str(h)}).stdout for h in (1, 2, 3)}
+    assert len(out) == 1, out

@@ -429,8 +429,10 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
                 shapes.setdefault(design.columns[j].key, Counter())[design.columns[j].shape] += 1
     if done == 0:
         return None
-    freq = {k: n / testable[k] for k, n in counts.items()}   # counted only where testable: never 0 / 0
-    law_freq = {k: n / law_testable[k] for k, n in law_counts.items()}
+    # in the design's column order, not the counters' (filled from sets, whose order follows the interpreter's
+    # string hashing): the stable set's order, and so the learned term's parameters, the same in every process
+    freq = {k: counts[k] / testable[k] for k in dict.fromkeys(keys) if counts[k]}   # never 0 / 0: testable
+    law_freq = {k: law_counts[k] / law_testable[k] for k in dict.fromkeys(laws) if law_counts[k]}
     stable_keys = [k for k, q in freq.items() if q >= float(cfg["selection.min_frequency"])]
     by_law = _law_representatives(freq, law_freq, stable_keys, float(cfg["selection.min_frequency"]))
     stable_keys += by_law
