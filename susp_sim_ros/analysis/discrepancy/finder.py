@@ -1103,8 +1103,8 @@ class DiscrepancyFinder:
 
     def _recalibrate(self, ev: Evaluator, cur: FitResult) -> FitResult:
         """The current structure with every value the vehicle file gives a range refitted within its prior
-        (the calibration's informed values and the held ones, :meth:`_held_values`: tyre damping, roll
-        centres, ...): the most a recalibration of the known physics
+        (the calibration's informed values and the held ones, :meth:`_held_values`: unsprung masses, tyre
+        damping, roll centres, ...): the most a recalibration of the known physics
         can explain. A candidate term is named only when it explains more than this (its fit's residual
         is below this one's): "no recalibration within the priors explains the same residual"."""
         if not self.calibrate:
