@@ -3,6 +3,9 @@ and kernel force, and the stability selection's behaviour on known regression pr
 from __future__ import annotations
 
 import dataclasses
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -553,9 +556,6 @@ def test_the_report_gives_a_form_that_stands_for_its_law_family_the_familys_freq
 def test_the_stable_set_is_in_the_same_order_whatever_the_interpreters_string_hashing():
     """The resampling has a fixed seed so a diagnosis is reproducible; the stable set's order (the learned
     term's parameter order) must not follow the order of Python sets, which changes with PYTHONHASHSEED."""
-    import os
-    import subprocess
-    import sys
     code = ("import sys; sys.path.insert(0, 'test'); from test_force_shape import _design; "
             "from susp_sim_ros.analysis.discrepancy import force_shape as fs; "
             "t = {('velocity_beyond_knee', 'rear'): -3.0, ('sign_velocity', 'rear'): 1.5, "

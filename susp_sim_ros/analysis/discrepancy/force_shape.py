@@ -433,8 +433,9 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
     # string hashing): the stable set's order, and so the learned term's parameters, the same in every process
     freq = {k: counts[k] / testable[k] for k in dict.fromkeys(keys) if counts[k]}   # never 0 / 0: testable
     law_freq = {k: law_counts[k] / law_testable[k] for k in dict.fromkeys(laws) if law_counts[k]}
-    stable_keys = [k for k, q in freq.items() if q >= float(cfg["selection.min_frequency"])]
-    by_law = _law_representatives(freq, law_freq, stable_keys, float(cfg["selection.min_frequency"]))
+    min_frequency = float(cfg["selection.min_frequency"])
+    stable_keys = [k for k, q in freq.items() if q >= min_frequency]
+    by_law = _law_representatives(freq, law_freq, stable_keys, min_frequency)
     stable_keys += by_law
     if not stable_keys:
         return Selection(freq, [], np.zeros(0), np.zeros(0), done, law_freq)
