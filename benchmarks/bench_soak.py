@@ -12,7 +12,8 @@ checks the recording. Reported (``--json``: one JSON object on stdout, logs on s
   and ``jitter_max_ms``, from the node's last ``/diagnostics``;
 - ``host_stall_max_ms`` and ``misses_unexplained`` as in ``bench_node.py``: the longest stall a plain
   sleeping-thread probe (:mod:`host_probe`) saw during the run, and the misses no host stall
-  explains (:mod:`susp_sim_ros.analysis.host_stalls`); ``misses_by_host`` lists the explained ones;
+  explains (:mod:`susp_sim_ros.analysis.host_stalls`); ``misses_by_host`` lists the explained ones,
+  ``misses_not_by_host`` the others with the nearest stall and the most host time one CPU lost inside each;
 - the recording: ``published_inputs`` (what this process sent) and ``recorded_inputs`` per topic,
   ``recorded_sim`` per ``/sim`` topic, ``sim_gaps`` (missing 10 ms ticks in the recorded
   ``/sim/imu/data`` stamps), ``sequence_gaps`` (per topic), ``node_published_samples``, and
@@ -267,12 +268,16 @@ def check_recording(path: Path, sent: dict[str, int], period_ns: int = 10_000_00
 
 
 def _nearest_stall(m, stalls, t_wall0_ns: int) -> dict:
-    """A miss the host does not explain, with the probe's longest stall within 50 ms of it (for the reader)."""
+    """A miss the host does not explain, with the probe's longest stall within 50 ms of it and the most
+    host time one CPU lost inside it (for the reader)."""
+    from susp_sim_ros.analysis.host_stalls import summed_on_one_cpu
+    summed = summed_on_one_cpu(m, stalls)
     near = [st for st in stalls if st.start_ns - 50_000_000 <= m.end_ns and st.end_ns + 50_000_000 >= m.tick_ns]
     st = max(near, key=lambda x: x.lateness_ns) if near else None
     return {"t_s": round((m.tick_ns - t_wall0_ns) * 1e-9, 3), "late_ms": round(m.lateness_ns * 1e-6, 2),
             "nearest_stall_ms": round(st.lateness_ns * 1e-6, 2) if st else None,
-            "nearest_stall_at_s": round((st.end_ns - t_wall0_ns) * 1e-9, 3) if st else None}
+            "nearest_stall_at_s": round((st.end_ns - t_wall0_ns) * 1e-9, 3) if st else None,
+            "host_ms_inside_one_cpu": round(summed.lateness_ns * 1e-6, 2) if summed else 0.0}
 
 
 def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: float = 100.0,

@@ -156,7 +156,7 @@ class HostProbe:
             if p.returncode != 0 or not out.strip():
                 raise RuntimeError(f"host probe on cpu {cpu} failed (exit {p.returncode}): {err.strip()[-300:]}")
             d = json.loads(out)
-            self.stalls += [Stall(*s) for s in d["stalls"]]
+            self.stalls += [Stall(*s, cpu=cpu) for s in d["stalls"]]
             self.lateness_max_ns = max(self.lateness_max_ns, int(d["lateness_max_ns"]))
             self.wakes += int(d["wakes"])
         self._procs = []

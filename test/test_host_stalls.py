@@ -68,13 +68,44 @@ def test_mixed_timeline_counts_each_miss_once_and_names_the_longest_stall():
     assert a.unexplained == misses[2:]
 
 
+def test_short_stalls_of_one_cpu_add_up():
+    # steal time in slices: the hypervisor took CPU 1 away four times for 3 ms within a 12 ms-late tick
+    m = Miss(1000 * MS, 12 * MS)                                  # occupies [1000, 1012] ms
+    slices = [Stall(s.start_ns, s.end_ns, s.lateness_ns, 1) for s in (stall(1003, 3), stall(1006, 3),
+                                                                      stall(1009, 3), stall(1012, 3))]
+    a = attribute([m], slices, tolerance_ns=int(1.5 * MS))
+    assert [x for x, _ in a.explained] == [m]
+    assert a.explained[0][1].lateness_ns == 12 * MS and a.explained[0][1].cpu == 1
+    # one slice fewer leaves 9 ms of host time: not enough for a 12 ms miss with 1.5 ms of tolerance
+    assert attribute([m], slices[1:], tolerance_ns=int(1.5 * MS)).unexplained == [m]
+
+
+def test_stalls_of_different_cpus_or_unknown_cpus_are_not_added():
+    m = Miss(1000 * MS, 12 * MS)
+    shape = [stall(1003, 3), stall(1006, 3), stall(1009, 3), stall(1012, 3)]
+    split = [Stall(s.start_ns, s.end_ns, s.lateness_ns, k % 2) for k, s in enumerate(shape)]
+    assert attribute([m], split, tolerance_ns=int(1.5 * MS)).unexplained == [m]
+    assert attribute([m], shape, tolerance_ns=int(1.5 * MS)).unexplained == [m]  # cpu None
+
+
+def test_only_the_part_of_a_stall_inside_the_miss_counts():
+    m = Miss(1000 * MS, 12 * MS)                                  # occupies [1000, 1012] ms
+    # 8 ms stall ending 4 ms into the miss: 4 ms inside; 6 ms stall ending at 1010: all inside -> 10 ms
+    parts = [Stall(990 * MS, 1004 * MS, 8 * MS, 0), Stall(1003 * MS, 1010 * MS, 6 * MS, 0)]
+    a = attribute([m], parts, tolerance_ns=1 * MS)
+    assert a.unexplained == [m]                                   # 10 + 1 < 12
+    a = attribute([m], parts, tolerance_ns=2 * MS)
+    assert a.explained[0][1].lateness_ns == 10 * MS               # 10 + 2 >= 12
+
+
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.tuples(st.integers(0, 10_000), st.integers(PERIOD + 1, 60 * MS)), max_size=20),
-       st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 60 * MS)), max_size=20),
+       st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 60 * MS), st.sampled_from([None, 0, 1])),
+                max_size=20),
        st.integers(0, 3 * MS))
 def test_attribution_partitions_the_misses(miss_spec, stall_spec, tol):
     misses = [Miss(t * MS, late) for t, late in miss_spec]
-    stalls = [Stall(t * MS, t * MS + late + MS, late) for t, late in stall_spec]
+    stalls = [Stall(t * MS, t * MS + late + MS, late, cpu) for t, late, cpu in stall_spec]
     a = attribute(misses, stalls, tol)
     assert sorted([m for m, _ in a.explained] + a.unexplained, key=lambda m: (m.tick_ns, m.lateness_ns)) == \
         sorted(misses, key=lambda m: (m.tick_ns, m.lateness_ns))

@@ -9,11 +9,21 @@ least that long (for at most the whole interval).
 A *deadline miss* of the node is a tick published more than one period after its deadline; it occupies
 the interval from the deadline to the publish.
 
-A miss is *explained* by the host when a stall overlaps it and the stall is at least as long as the
-miss is late, less ``tolerance_ns``: the probe sees a stall only to within its own period (a stall of D
-shows as a lateness between D - period and D), and a stall that hits while the node is stepping a tick
-delays that tick by the stall plus the tick's ordinary work. So the tolerance is the probe's period plus
-the node's ordinary lateness (its p99 in the same run). Every other miss is *unexplained*: the node's own.
+A miss is *explained* by the host when the host took at least as long as the miss is late, less
+``tolerance_ns``, in one of two ways:
+
+- one stall overlaps it and is that long; or
+- the stalls of one CPU within the miss interval add up to that long. A hypervisor that shares a busy
+  host often takes a virtual CPU away in several short slices rather than one long one (steal time): a
+  thread on that CPU loses their sum, while the probe records each slice apart. A stall of lateness L
+  that ended at E kept the probe off at least over [E - L, E]; only that part inside the miss interval
+  counts. Stalls of different CPUs are never added (the same pause of the whole machine would count
+  twice), nor stalls whose CPU is not known (``cpu`` None).
+
+The probe sees a stall only to within its own period (a stall of D shows as a lateness between
+D - period and D), and a stall that hits while the node is stepping a tick delays that tick by the stall
+plus the tick's ordinary work. So the tolerance is the probe's period plus the node's ordinary lateness
+(its p99 in the same run). Every other miss is *unexplained*: the node's own.
 
 Times are integer nanoseconds on one clock (``time.time_ns``, the clock the node stamps its ticks with).
 """
@@ -22,16 +32,18 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from collections.abc import Iterable, Sequence
 
-__all__ = ["Stall", "Miss", "Attribution", "attribute", "parse_miss_log", "format_miss_log"]
+__all__ = ["Stall", "Miss", "Attribution", "attribute", "summed_on_one_cpu", "parse_miss_log", "format_miss_log"]
 
 
 @dataclass(frozen=True)
 class Stall:
     """The probe was not run between ``start_ns`` (its previous wake) and ``end_ns`` (the late wake),
-    and woke ``lateness_ns`` after its deadline [ns]."""
+    and woke ``lateness_ns`` after its deadline [ns]; ``cpu``: the CPU the probe was pinned to (None:
+    not known)."""
     start_ns: int
     end_ns: int
     lateness_ns: int
+    cpu: int | None = None
 
     def __post_init__(self):
         if self.end_ns < self.start_ns or self.lateness_ns < 0 or self.lateness_ns > self.end_ns - self.start_ns:
@@ -51,7 +63,9 @@ class Miss:
 
 @dataclass
 class Attribution:
-    """``explained``: (miss, the longest overlapping stall that explains it); ``unexplained``: the rest."""
+    """``explained``: (miss, the stall that explains it: the longest single one, else the stalls of one
+    CPU inside the miss interval as one ``Stall`` spanning them with their summed lateness);
+    ``unexplained``: the rest."""
     explained: list[tuple[Miss, Stall]] = field(default_factory=list)
     unexplained: list[Miss] = field(default_factory=list)
 
@@ -66,11 +80,28 @@ def attribute(misses: Iterable[Miss], stalls: Sequence[Stall], tolerance_ns: int
     for m in sorted(misses, key=lambda m: m.tick_ns):
         over = [s for s in stalls if s.start_ns <= m.end_ns and s.end_ns >= m.tick_ns
                 and s.lateness_ns + tolerance_ns >= m.lateness_ns]
+        summed = summed_on_one_cpu(m, stalls) if not over else None
         if over:
             out.explained.append((m, max(over, key=lambda s: s.lateness_ns)))
+        elif summed is not None and summed.lateness_ns + tolerance_ns >= m.lateness_ns:
+            out.explained.append((m, summed))
         else:
             out.unexplained.append(m)
     return out
+
+
+def summed_on_one_cpu(m: Miss, stalls: Sequence[Stall]) -> Stall | None:
+    """The stalls of the CPU that lost most time inside ``m``'s interval, as one ``Stall`` spanning them
+    whose lateness is that time (only the part [end - lateness, end] of each inside the interval counts);
+    None when no stall of a known CPU reaches into it."""
+    best: Stall | None = None
+    for cpu in sorted({s.cpu for s in stalls if s.cpu is not None}):
+        inside = [s for s in stalls if s.cpu == cpu and s.end_ns > m.tick_ns and s.end_ns - s.lateness_ns < m.end_ns]
+        lost = sum(min(s.end_ns, m.end_ns) - max(s.end_ns - s.lateness_ns, m.tick_ns) for s in inside)
+        if inside and (best is None or lost > best.lateness_ns):
+            start, end = min(s.start_ns for s in inside), max(s.end_ns for s in inside)
+            best = Stall(start, end, min(lost, end - start), cpu)
+    return best
 
 
 def format_miss_log(misses: Iterable[tuple[int, int]]) -> str:
