@@ -2,8 +2,9 @@
 (``benchmarks/bench_soak.py`` runs the same for 5 minutes). Asserted: RSS growth after the 5 s warm-up
 under 5 MB, no deadline miss that a host stall does not explain (a plain sleeping-thread probe runs
 beside the node: this VM stalls every thread, the probe's too, by 10-17 ms now and then, or takes a CPU
-away in short slices that add up; a miss the host did not cause fails the test as before), no rejected input, a clean exit on SIGINT, and a complete
-recording (every input sent is recorded, no 10 ms tick missing on the /sim topics, no sequence gap, finalised)."""
+away in short slices that add up; a miss the host did not cause fails the test as before), no rejected
+input, a clean exit on SIGINT, and a complete recording (every input sent is recorded, no 10 ms tick
+missing on the /sim topics, no sequence gap, finalised)."""
 from __future__ import annotations
 
 import importlib.util
