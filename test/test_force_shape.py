@@ -49,6 +49,12 @@ def test_features_are_what_their_names_say():
     oil = np.array([1.0, 0.5, 0.0, 0.25])
     np.testing.assert_allclose(feature_series("velocity_beyond_knee", D, V, FX, FY, DT, oil=oil), beyond * oil)
     np.testing.assert_allclose(feature_series("velocity_squared", D, V, FX, FY, DT, oil=oil), u * np.abs(u) * oil)
+    # the damper's forces in rebound (v < 0) are the rebound ratio times the compression law's at that speed
+    rb = np.where(V < 0.0, 2.5, 1.0)
+    assert np.any(V < -knee) and np.any(V > knee)
+    for name, want in (("velocity_squared", u * np.abs(u)), ("velocity_beyond_knee", beyond)):
+        np.testing.assert_allclose(feature_series(name, D, V, FX, FY, DT, shape={"rebound_ratio": 2.5}), rb * want)
+    np.testing.assert_allclose(feature_series("deflection_velocity", D, V, FX, FY, DT, shape={"rebound_ratio": 2.5}), u)
     np.testing.assert_allclose(feature_series("deflection_velocity", D, V, FX, FY, DT, oil=oil), u)
     other = D[:, [1, 0, 3, 2]]
     np.testing.assert_allclose(get["roll_deflection"], (D - other) / sh["deflection_ref"])
@@ -191,6 +197,29 @@ def test_the_learned_valve_and_orifice_act_only_as_far_as_the_damper_holds_oil()
         for key in ("PITCH_RATE", "AZ_SF"):
             np.testing.assert_array_equal(rear[key], plain[key])
             assert np.max(np.abs(front[key] - plain[key])) > 1e-2 * np.max(np.abs(plain[key])), (name, key)
+
+
+def test_the_learned_valves_rebound_ratio_in_the_kernel_is_its_feature_on_the_run():
+    """A learned valve with a rebound ratio of 2.5: along a bump crossing the kernel's force is the coefficient
+    times the feature on the run's own deflection velocities, 2.5 times the compression law in rebound, and
+    the ratio changes the motion."""
+    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
+                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
+    coef, knee, ratio = 400.0, 0.05, 2.5   # more damping beyond the knee
+    man = build_maneuver("bump_crossing", vp.wheelbase)
+    outs = [f"{o}_{w}" for o in ("DEFL_VEL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
+
+    def run(r):
+        model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
+            _learned(c_velocity_beyond_knee=coef, knee_velocity=knee, rebound_ratio=r),)))
+        return simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs).values
+    res, sym = run(ratio), run(1.0)
+    V, F = res[:, :4], res[:, 4:8]
+    want = coef * np.where(V < 0.0, ratio, 1.0) * np.sign(V) * np.maximum(np.abs(V) - knee, 0.0) \
+        / shape_defaults()["velocity_ref"]
+    assert np.any(V < -knee) and np.any(V > knee) and np.abs(F).max() > 10.0
+    np.testing.assert_allclose(F[1:], want[:-1], rtol=0, atol=1e-9 * np.abs(F).max())
+    assert np.max(np.abs(res[:, 8] - sym[:, 8])) > 1e-3 * np.max(np.abs(sym[:, 8]))
 
 
 def _learned(**coefs):
@@ -410,19 +439,24 @@ def test_a_learned_knee_ranges_over_its_physics_and_sizes_no_effect():
     sel = fs.select(_design(truth=truth))
     assert sel is not None and {c.key for c in sel.stable} == set(truth)
     cand = fs.learned_candidate(sel)
-    knee = cand.params[-1]
+    knee, ratio = cand.params[-2:]
     assert knee.name == "knee_velocity" and knee.shape
+    # a valve brings its rebound ratio: from 1 (symmetric) within the config's range, a shape like the knee
+    assert ratio.name == "rebound_ratio" and ratio.shape and ratio.neutral == 1.0 and ratio.step > 0.0
+    assert (ratio.lower, ratio.upper) == tuple(float(v) for v in cfg["fit.rebound_ratio_range"])
+    assert "in rebound 2.0x what it gives in compression" in sel.description(shapes={"rebound_ratio": 2.0})
     assert (knee.lower, knee.upper) == tuple(float(v) for v in cfg["fit.knee_velocity_range_m_s"])
     assert knee.upper > 4 * min(float(v) for v in cfg["library.knee_velocities_m_s"])
     assert cand.gain_indices == (0, 1)
-    lo, hi = np.array([-200.0, -150.0, 0.3]), np.array([50.0, 40.0, 0.5])   # the knee's interval clear of its start
+    # the knee's and the ratio's intervals clear of their starts
+    lo, hi = np.array([-200.0, -150.0, 0.3, 1.5]), np.array([50.0, 40.0, 0.5, 2.5])
     assert cand.effect_in_interval(lo, hi)
-    assert not cand.effect_in_interval(np.array([-200.0, -150.0, 0.3]), np.array([-10.0, 40.0, 0.5]))
+    assert not cand.effect_in_interval(np.array([-200.0, -150.0, 0.3, 1.5]), np.array([-10.0, 40.0, 0.5, 2.5]))
     assert "0.45 m/s" in sel.description(shapes={"knee_velocity": 0.45})
     # where: no coefficient resolved on its own, the axles it was selected on (both), not the larger one
-    x = np.array([-80.0, -60.0, 0.4])
+    x = np.array([-80.0, -60.0, 0.4, 2.0])
     assert _where(cand, x, lo, hi, sel.axles) == "all"
-    assert _where(cand, x, np.array([-200.0, -150.0, 0.3]), np.array([-10.0, 40.0, 0.5]), sel.axles) == \
+    assert _where(cand, x, np.array([-200.0, -150.0, 0.3, 1.5]), np.array([-10.0, 40.0, 0.5, 2.5]), sel.axles) == \
         cand.axle_of[0]
 
 
@@ -511,6 +545,7 @@ def test_a_learned_friction_brings_its_laws_shape_into_the_fit():
     assert written["c_velocity_weakening"] == {"front": 0.0, "rear": 45.0}
     no_friction = fs.learned_candidate(fs.select(_design(truth={("roll_free_play", "front"): 5.0})), cfg)
     assert not {"presliding", "stribeck_velocity", "velocity_weakening_front"} & {p.name for p in no_friction.params}
+    assert "rebound_ratio" not in {p.name for p in no_friction.params} | {p.name for p in cand.params}
     assert "velocity_weakening" not in {f for f, _ in fs.library(cfg)}
 
     short, long_ = (_run([_learned(c_sign_velocity=(0.0, 0.0, 60.0, 60.0), presliding=xp_)], variant="dahl_only")

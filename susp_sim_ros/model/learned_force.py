@@ -20,6 +20,11 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             a knee velocity (a blow-off valve opening, a valve at its stop); a valve acts
                             on the damper's oil, so the force scales with the damper's oil level ``oil``
                             (0 empty, 1 intact: an oil-empty damper builds no pressure to open a valve)
+                            (in rebound, v < 0, both damper forces above are ``r`` times what the same
+                            speed gives in compression, ``r`` the rebound ratio: a damper's rebound and
+                            compression stages are valved apart, its rebound force commonly 2-3x its
+                            compression force at the same speed: Dixon, The Shock Absorber Handbook,
+                            2007, ch. 5; ``r`` 1 is a symmetric law)
 ``sign_velocity``           z: friction-like (``z`` a unit Dahl element, -1..1, presliding travel x_p)
 ``peak_deflection``         z A / d_ref: friction growing with the deflection amplitude (``A`` the peak
                             |d|, forgotten with time constant ``memory``)
@@ -48,7 +53,7 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
 reference scales make every coefficient a force [N] at a typical excursion; they and the shape values
-(knee, free play, presliding travel, memory) are parameters with declared defaults like any term's.
+(knee, rebound ratio, free play, presliding travel, memory) are parameters with declared defaults like any term's.
 
 States per corner: 0 the unit Dahl element ``z``, 1 the deflection at the start of the step (the context's
 deflection plus the step's increment, stored after each step: the other wheel's deflection is read from
@@ -83,21 +88,24 @@ WEAKENING = "velocity_weakening"
 LAW_SHAPE_FEATURES = (WEAKENING,)
 #: the shape parameters after the coefficients, in this order
 SHAPES = ("deflection_ref", "velocity_ref", "force_ref", "knee_velocity", "free_play", "presliding", "memory",
-          "stribeck_velocity", "relaxation_time", "contact_gap")
+          "stribeck_velocity", "relaxation_time", "contact_gap", "rebound_ratio")
 _O_SHAPE = 4 * N_FEATURES
-_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS, _TAU, _CGAP = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
-PRESLIDING, STRIBECK_VELOCITY = SHAPES[5], SHAPES[7]
+_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS, _TAU, _CGAP, _RR = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
+PRESLIDING, STRIBECK_VELOCITY, REBOUND_RATIO = SHAPES[5], SHAPES[7], SHAPES[10]
+#: the damper's own forces of the oil, whose law in rebound the rebound ratio scales
+DAMPER_OIL = ("velocity_squared", "velocity_beyond_knee")
 _Z, _DEF, _AMP, _REL = 0, 4, 8, 12
 _C_D, _C_DD, _C_FX, _C_FY, _C_DT = C_INDEX["D"], C_INDEX["DD"], C_INDEX["FX"], C_INDEX["FY"], C_INDEX["DT"]
 _C_OIL = C_INDEX["OIL"]
 
 
 @njit(cache=True, inline="always")
-def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref, knee, gap, vs, cgap):
+def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref, knee, gap, vs, cgap, rr):
     """Feature ``k`` of :data:`FEATURES` at one corner (module docstring)."""
     x = d / dref
     u = v / vref
     sgn = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+    rb = rr if v < 0.0 else 1.0
     roll = d - d_other
     if k == 0:
         return 1.0
@@ -108,9 +116,9 @@ def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref,
     if k == 3:
         return u
     if k == 4:
-        return oil * u * abs(u)
+        return rb * oil * u * abs(u)
     if k == 5:
-        return oil * sgn * max(abs(v) - knee, 0.0) / vref
+        return rb * oil * sgn * max(abs(v) - knee, 0.0) / vref
     if k == 6:
         return z
     if k == 7:
@@ -151,7 +159,7 @@ def learned_force_force(p, po, s, so, i, c):
     roll = d - s[so + _DEF + o]
     gap, cgap = p[po + _GAP + i], p[po + _CGAP + i]
     q = po + i
-    oil = c[i, _C_OIL]
+    oil = c[i, _C_OIL] * (1.0 + (p[po + _RR + i] - 1.0) * (1.0 if v < 0.0 else 0.0))  # the rebound ratio
     return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * oil * u * abs(u)
             + p[q + 20] * oil * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
@@ -186,7 +194,7 @@ def learned_force_update(p, po, s, so, i, c, dx):
 
 
 @njit(cache=True)
-def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, tau, cgap, out):
+def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, tau, cgap, rr, out):
     n = D.shape[0]
     z = np.zeros(4)
     amp = np.zeros(4)
@@ -195,7 +203,7 @@ def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, m
         for i in range(4):
             o = i + 1 if i % 2 == 0 else i - 1
             out[t, i] = corner_feature(k, D[t, i], D[t, o], V[t, i], FX[t, i], FY[t, i], OIL[i], z[i], amp[i],
-                                       rel[i], dref, vref, fref, knee, gap, vs, cgap)
+                                       rel[i], dref, vref, fref, knee, gap, vs, cgap, rr)
         if t + 1 < n:
             for i in range(4):
                 z[i], _, amp[i], rel[i] = advance_states(z[i], D[t, i], amp[i], rel[i], D[t + 1, i] - D[t, i],
@@ -217,7 +225,7 @@ def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: 
     _series(D, V, FX, FY, OIL, float(dt), FEATURES.index(name), float(sh["deflection_ref"]), float(sh["velocity_ref"]),
             float(sh["force_ref"]), float(sh["knee_velocity"]), float(sh["free_play"]), float(sh["presliding"]),
             float(sh["memory"]), float(sh["stribeck_velocity"]), float(sh["relaxation_time"]), float(sh["contact_gap"]),
-            out)
+            float(sh["rebound_ratio"]), out)
     return out
 
 
@@ -254,7 +262,9 @@ LEARNED_FORCE = register_term(PhysicsTerm(
         TermParam("relaxation_time", "s", "relaxation time of relaxing_deflection's spring (its Maxwell element's "
                   "damping over its rate)", 0.07, 1e-3, 10.0),
         TermParam("contact_gap", "m", "deflection from static beyond which bump_contact (in bump) and rebound_contact "
-                  "(in rebound) act", 0.02, 0.0, 0.2)),
+                  "(in rebound) act", 0.02, 0.0, 0.2),
+        TermParam("rebound_ratio", "1", "force of velocity_squared and velocity_beyond_knee in rebound over the force "
+                  "at the same speed in compression (1: a symmetric law)", 1.0, 0.0, 10.0)),
     n_states=4, force=learned_force_force, update=learned_force_update,
     gains=tuple(f"c_{f}" for f in FEATURES)))
 

@@ -62,8 +62,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...model.input_force import INPUT_FEATURES, INPUT_FORCE, INPUT_KIND
-from ...model.learned_force import FEATURES, FRICTION_LIKE, LAW_SHAPE_FEATURES, LEARNED_FORCE, PRESLIDING, \
-    STRIBECK_VELOCITY, WEAKENING
+from ...model.learned_force import DAMPER_OIL, FEATURES, FRICTION_LIKE, LAW_SHAPE_FEATURES, LEARNED_FORCE, \
+    PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING
 from ...model.params import AXLE_CORNERS, load_settings
 from .candidates import PHYSICS, CandParam, Candidate, axle_map
 from .fit import debias, fd_jacobian
@@ -290,7 +290,8 @@ class Selection:
         """One sentence in words, strongest dependence first, each with its axles, sense (from ``coef``,
         the fitted coefficients in :attr:`stable` order, when given; else the regression's) and share; a
         knee or free play at its fitted value in ``shapes`` (``{"knee_velocity": m/s, "free_play": m}``)
-        when given, else at the value the regression selected."""
+        when given, else at the value the regression selected; a damper force's rebound ratio when
+        ``shapes`` has it."""
         coef = self.coef if coef is None else np.asarray(coef, float)
         shapes = shapes or {}
         parts = []
@@ -300,6 +301,8 @@ class Selection:
             shape = _SHAPE_OF.get(feature)
             value = float(shapes[shape]) if shape in shapes else c.shape or 0.0
             w = WORDS[feature].format(knee=value, gap_mm=1e3 * value, tau=value)
+            if feature in DAMPER_OIL and REBOUND_RATIO in shapes:
+                w += f", in rebound {float(shapes[REBOUND_RATIO]):.1f}x what it gives in compression"
             more, less = SENSE[feature]
             where = ", ".join(f"{self.stable[k].axle} {more if coef[k] > 0 else less} "
                               f"{100 * self.share[k]:.0f} %" for k in ks)
@@ -484,7 +487,8 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     which held a valve's knee at its edge). A stable
     friction-like dependence brings its law's shape (:func:`friction_law`): the presliding travel and,
     per axle with a plain friction level (``sign_velocity``), a level at rest above the sliding one that
-    falls over a Stribeck velocity (coefficient neutral 0, after the stable ones)."""
+    falls over a Stribeck velocity (coefficient neutral 0, after the stable ones). A stable force of the
+    damper's oil (an orifice, a valve) brings its rebound ratio (:func:`damper_law`)."""
     cfg = settings() if cfg is None else cfg
     bound = float(cfg["fit.coefficient_bound_N"])
     params = []
@@ -495,6 +499,7 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
                                 f"coefficient of {c.feature}, {c.axle} axle"))
         axle_of.append(c.axle)
     law, law_shapes = friction_law(sel, cfg)
+    law_shapes.update(damper_law(sel, cfg))
     for c in law:
         params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound,
                                 float(cfg["fit.weakening_step_N"]),
@@ -563,6 +568,20 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
         vs_lo, vs_hi = (float(v) for v in cfg["fit.stribeck_velocity_range_m_s"])
         shapes[STRIBECK_VELOCITY] = (vs_lo, vs_hi, plain)
     return [Column(WEAKENING, a) for a in plain], shapes
+
+
+def damper_law(sel: Selection, cfg: dict) -> dict[str, tuple[float, float, list[str]]]:
+    """The shape of a learned force of the damper's oil (:data:`DAMPER_OIL`: an orifice, a valve), fitted
+    beside its coefficients: none stable, none. Else its rebound ratio, the force in rebound over the force
+    at the same speed in compression (neutral 1, a symmetric law): a damper's rebound and compression stages
+    are valved apart, so a valve that opens or an orifice changes the two senses by different amounts (the
+    regression's features are symmetric, so that they compete with the others on one column each). Returns
+    ``{shape: (lower, upper, axles)}`` (bounds from ``config/force_shape.yaml``)."""
+    axles = sorted({c.axle for c in sel.stable if c.feature in DAMPER_OIL}, key=AXLES.index)
+    if not axles:
+        return {}
+    lo, hi = (float(v) for v in cfg["fit.rebound_ratio_range"])
+    return {REBOUND_RATIO: (lo, hi, axles)}
 
 
 def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
