@@ -354,6 +354,10 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         # one an engineer would call right for the form (GeneratorForm.leading)
         "unlisted_dependences": learned_deps,
         "leading_expected": spec.get("leading", []),
+        # the named learned term as the report gives it: its values (coefficients and shape values: knee,
+        # rebound ratio, free play, contact gap, relaxation time), their 95 % intervals, its words
+        "unlisted_force": next(({k: t.get(k) for k in ("params", "ci95", "description")} for t in rep["terms"]
+                                if t["name"] == "unlisted_force"), None),
         "diagnostics": _diagnostics(f),
         "generate_s": t_gen, "elapsed_s": time.perf_counter() - t0,
     }

@@ -15,10 +15,11 @@ speed and steering at 100 Hz from this process for ``--duration`` seconds, and r
   period, SCHED_FIFO above the node's threads when permitted), running from before the node starts
   until after it stops;
 - ``misses_unexplained``: deadline misses no host stall explains (:mod:`susp_sim_ros.analysis.host_stalls`:
-  neither one stall that overlapped the miss nor the stalls of one CPU inside it added up were at least
-  as long as the miss was late, less the probe's period and the node's ordinary lateness p99 in the same
-  run). The node lists its misses with their deadlines
-  on ``/diagnostics`` (``deadline_miss_log``); a miss it could not list counts as unexplained.
+  neither one stall that overlapped the miss nor the time any CPU was stalled inside it were at least as
+  long as the miss was late, less the probe's period and the node's ordinary lateness p99 in the same run;
+  a tick due while the previous one was still late is weighed from that publish on). The node lists its
+  misses with their deadlines on ``/diagnostics`` (``deadline_miss_log``); a miss it could not list counts
+  as unexplained.
 
 The node runs with its defaults, i.e. its threads at SCHED_FIFO when permitted (``realtime_priority``).
 The probe here (input publisher and output subscriber) gets SCHED_FIFO too when permitted, as a real-time

@@ -13,7 +13,8 @@ checks the recording. Reported (``--json``: one JSON object on stdout, logs on s
 - ``host_stall_max_ms`` and ``misses_unexplained`` as in ``bench_node.py``: the longest stall a plain
   sleeping-thread probe (:mod:`host_probe`) saw during the run, and the misses no host stall
   explains (:mod:`susp_sim_ros.analysis.host_stalls`); ``misses_by_host`` lists the explained ones,
-  ``misses_not_by_host`` the others with the nearest stall and the most host time one CPU lost inside each;
+  ``misses_not_by_host`` the others with the nearest stall and the host time (any CPU) inside each,
+  ``timeline_near_unexplained`` every miss and stall within 100 ms of them;
 - the recording: ``published_inputs`` (what this process sent) and ``recorded_inputs`` per topic,
   ``recorded_sim`` per ``/sim`` topic, ``sim_gaps`` (missing 10 ms ticks in the recorded
   ``/sim/imu/data`` stamps), ``sequence_gaps`` (per topic), ``node_published_samples``, and
@@ -268,16 +269,27 @@ def check_recording(path: Path, sent: dict[str, int], period_ns: int = 10_000_00
 
 
 def _nearest_stall(m, stalls, t_wall0_ns: int) -> dict:
-    """A miss the host does not explain, with the probe's longest stall within 50 ms of it and the most
-    host time one CPU lost inside it (for the reader)."""
-    from susp_sim_ros.analysis.host_stalls import summed_on_one_cpu
-    summed = summed_on_one_cpu(m, stalls)
+    """A miss the host does not explain, with the probe's longest stall within 50 ms of it and the host
+    time inside it, any CPU (for the reader)."""
+    from susp_sim_ros.analysis.host_stalls import host_time
     near = [st for st in stalls if st.start_ns - 50_000_000 <= m.end_ns and st.end_ns + 50_000_000 >= m.tick_ns]
     st = max(near, key=lambda x: x.lateness_ns) if near else None
     return {"t_s": round((m.tick_ns - t_wall0_ns) * 1e-9, 3), "late_ms": round(m.lateness_ns * 1e-6, 2),
             "nearest_stall_ms": round(st.lateness_ns * 1e-6, 2) if st else None,
             "nearest_stall_at_s": round((st.end_ns - t_wall0_ns) * 1e-9, 3) if st else None,
-            "host_ms_inside_one_cpu": round(summed.lateness_ns * 1e-6, 2) if summed else 0.0}
+            "host_ms_inside": round(host_time(stalls, m.tick_ns, m.end_ns) * 1e-6, 2)}
+
+
+def _timeline_near(unexplained, misses, stalls, t_wall0_ns: int, window_ns: int = 100_000_000) -> dict:
+    """Misses and host stalls within ``window_ns`` of an unexplained miss (at most 200 of each), as
+    ``{"misses": [[t_s, late_ms]], "stalls": [[cpu, start_s, end_s, late_ms]]}``."""
+    def near(a, b):
+        return any(a - window_ns <= m.end_ns and b + window_ns >= m.tick_ns for m in unexplained)
+    s = lambda ns: round((ns - t_wall0_ns) * 1e-9, 4)
+    return {"misses": [[s(m.tick_ns), round(m.lateness_ns * 1e-6, 2)] for m in sorted(misses, key=lambda m: m.tick_ns)
+                       if near(m.tick_ns, m.end_ns)][:200],
+            "stalls": [[st.cpu, s(st.start_ns), s(st.end_ns), round(st.lateness_ns * 1e-6, 2)] for st in stalls
+                       if near(st.start_ns, st.end_ns)][:200]}
 
 
 def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: float = 100.0,
@@ -367,6 +379,10 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
         "misses_by_host": [{"late_ms": round(m.lateness_ns * 1e-6, 2), "host_stall_ms": round(st.lateness_ns * 1e-6, 2)}
                            for m, st in att.explained][:20],
         "misses_not_by_host": [_nearest_stall(m, host.stalls, t_wall0) for m in att.unexplained][:20],
+        # the raw timeline around them, for a reader who wants to weigh them: every miss and every stall
+        # (CPU, ms) within 100 ms of an unexplained miss, seconds into the run
+        "timeline_near_unexplained": _timeline_near(att.unexplained, [Miss(t_, late) for t_, late in
+                                                                     probe.miss_log.items()], host.stalls, t_wall0),
         "rtf": float(timing.get("real_time_factor", "nan")), "jitter_p99_ms": float(timing.get("jitter_p99_ms", "nan")),
         "jitter_max_ms": float(timing.get("jitter_max_ms", "nan")),
         "rejected_inputs": int(inputs.get("rejected_total", -1)),

@@ -1,8 +1,8 @@
 """Soak, short version: susp_sim_node in real time for 20 s with inputs at 100 Hz and recording on
 (``benchmarks/bench_soak.py`` runs the same for 5 minutes). Asserted: RSS growth after the 5 s warm-up
 under 5 MB, no deadline miss that a host stall does not explain (a plain sleeping-thread probe runs
-beside the node: this VM stalls every thread, the probe's too, by 10-17 ms now and then, or takes a CPU
-away in short slices that add up; a miss the host did not cause fails the test as before), no rejected
+beside the node: this VM stalls every thread, the probe's too, by 10-17 ms now and then, or takes its CPUs
+away in many short slices; a miss the host did not cause fails the test as before), no rejected
 input, a clean exit on SIGINT, and a complete recording (every input sent is recorded, no 10 ms tick
 missing on the /sim topics, no sequence gap, finalised)."""
 from __future__ import annotations

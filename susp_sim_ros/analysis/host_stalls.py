@@ -13,12 +13,18 @@ A miss is *explained* by the host when the host took at least as long as the mis
 ``tolerance_ns``, in one of two ways:
 
 - one stall overlaps it and is that long; or
-- the stalls of one CPU within the miss interval add up to that long. A hypervisor that shares a busy
-  host often takes a virtual CPU away in several short slices rather than one long one (steal time): a
-  thread on that CPU loses their sum, while the probe records each slice apart. A stall of lateness L
-  that ended at E kept the probe off at least over [E - L, E]; only that part inside the miss interval
-  counts. Stalls of different CPUs are never added (the same pause of the whole machine would count
-  twice), nor stalls whose CPU is not known (``cpu`` None).
+- the host time inside the miss interval adds up to that long: the time during which any CPU was
+  stalled (the union of the stalls, so a pause of the whole machine counts once). A hypervisor that
+  shares a busy host often takes a virtual CPU away in many short slices rather than one long one
+  (steal time), which the probe records one by one; and a stall of either CPU can hold the tick thread,
+  which needs the interpreter's lock that a thread of the node on the stalled CPU may hold. This is the
+  most the host can have taken: a miss beyond it is the node's for sure. A stall of lateness L that
+  ended at E kept the probe off at least over [E - L, E]; only that part inside the interval counts.
+
+A tick due while the previous one was still being published carries its backlog: it could not start
+before that publish, so the part of its lateness up to it is the previous miss's, and only the rest,
+from the previous publish to its own, is weighed against the host time in between; it is the host's when
+that previous miss was too (a backlog the node caused stays the node's).
 
 The probe sees a stall only to within its own period (a stall of D shows as a lateness between
 D - period and D), and a stall that hits while the node is stepping a tick delays that tick by the stall
@@ -32,7 +38,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from collections.abc import Iterable, Sequence
 
-__all__ = ["Stall", "Miss", "Attribution", "attribute", "summed_on_one_cpu", "parse_miss_log", "format_miss_log"]
+__all__ = ["Stall", "Miss", "Attribution", "attribute", "host_time", "parse_miss_log", "format_miss_log"]
 
 
 @dataclass(frozen=True)
@@ -63,9 +69,9 @@ class Miss:
 
 @dataclass
 class Attribution:
-    """``explained``: (miss, the stall that explains it: the longest single one, else the stalls of one
-    CPU inside the miss interval as one ``Stall`` spanning them with their summed lateness);
-    ``unexplained``: the rest."""
+    """``explained``: (miss, the stall that explains it: the longest single one, else the host time inside
+    the miss's own interval, from the previous publish when it carries a backlog, as one ``Stall`` spanning
+    that interval, ``cpu`` None); ``unexplained``: the rest."""
     explained: list[tuple[Miss, Stall]] = field(default_factory=list)
     unexplained: list[Miss] = field(default_factory=list)
 
@@ -77,31 +83,38 @@ def attribute(misses: Iterable[Miss], stalls: Sequence[Stall], tolerance_ns: int
     if tolerance_ns < 0:
         raise ValueError(f"tolerance_ns must be >= 0, got {tolerance_ns}")
     out = Attribution()
+    prev_end: int | None = None   # the latest publish of a miss so far
+    prev_host = True              # whether that miss was the host's
     for m in sorted(misses, key=lambda m: m.tick_ns):
+        backlog = prev_end is not None and prev_end > m.tick_ns
+        start = min(prev_end, m.end_ns) if prev_end is not None and backlog else m.tick_ns
         over = [s for s in stalls if s.start_ns <= m.end_ns and s.end_ns >= m.tick_ns
                 and s.lateness_ns + tolerance_ns >= m.lateness_ns]
-        summed = summed_on_one_cpu(m, stalls) if not over else None
+        lost = host_time(stalls, start, m.end_ns)
+        host = bool(over) or ((prev_host or not backlog) and lost + tolerance_ns >= m.end_ns - start)
         if over:
             out.explained.append((m, max(over, key=lambda s: s.lateness_ns)))
-        elif summed is not None and summed.lateness_ns + tolerance_ns >= m.lateness_ns:
-            out.explained.append((m, summed))
+        elif host:
+            out.explained.append((m, Stall(start, m.end_ns, lost)))
         else:
             out.unexplained.append(m)
+        if prev_end is None or m.end_ns >= prev_end:
+            prev_end, prev_host = m.end_ns, host
     return out
 
 
-def summed_on_one_cpu(m: Miss, stalls: Sequence[Stall]) -> Stall | None:
-    """The stalls of the CPU that lost most time inside ``m``'s interval, as one ``Stall`` spanning them
-    whose lateness is that time (only the part [end - lateness, end] of each inside the interval counts);
-    None when no stall of a known CPU reaches into it."""
-    best: Stall | None = None
-    for cpu in sorted({s.cpu for s in stalls if s.cpu is not None}):
-        inside = [s for s in stalls if s.cpu == cpu and s.end_ns > m.tick_ns and s.end_ns - s.lateness_ns < m.end_ns]
-        lost = sum(min(s.end_ns, m.end_ns) - max(s.end_ns - s.lateness_ns, m.tick_ns) for s in inside)
-        if inside and (best is None or lost > best.lateness_ns):
-            start, end = min(s.start_ns for s in inside), max(s.end_ns for s in inside)
-            best = Stall(start, end, min(lost, end - start), cpu)
-    return best
+def host_time(stalls: Sequence[Stall], start_ns: int, end_ns: int) -> int:
+    """How long [ns] any CPU was stalled between ``start_ns`` and ``end_ns``: the union of the stalls'
+    parts [end - lateness, end] inside that interval (a pause of several CPUs at once counts once)."""
+    parts = sorted((max(s.end_ns - s.lateness_ns, start_ns), min(s.end_ns, end_ns)) for s in stalls
+                   if s.end_ns > start_ns and s.end_ns - s.lateness_ns < end_ns)
+    total, reach = 0, start_ns
+    for a, b in parts:
+        a = max(a, reach)
+        if b > a:
+            total += b - a
+            reach = b
+    return total
 
 
 def format_miss_log(misses: Iterable[tuple[int, int]]) -> str:
