@@ -159,9 +159,10 @@ def learned_force_force(p, po, s, so, i, c):
     roll = d - s[so + _DEF + o]
     gap, cgap = p[po + _GAP + i], p[po + _CGAP + i]
     q = po + i
-    oil = c[i, _C_OIL] * (1.0 + (p[po + _RR + i] - 1.0) * (1.0 if v < 0.0 else 0.0))  # the rebound ratio
-    return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * oil * u * abs(u)
-            + p[q + 20] * oil * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
+    # the damper's oil level, times the rebound ratio in rebound: the scale of its orifice and valve forces
+    damper = c[i, _C_OIL] * (1.0 + (p[po + _RR + i] - 1.0) * (1.0 if v < 0.0 else 0.0))
+    return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * damper * u * abs(u)
+            + p[q + 20] * damper * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
                    + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i]))
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
