@@ -50,6 +50,7 @@ import numpy as np
 # the host-stall probe lives beside the benchmarks (not installed); this file may be loaded from anywhere
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from host_probe import HostProbe  # noqa: E402
+from susp_sim_ros.analysis.host_stalls import Miss, attribute, host_time, parse_miss_log  # noqa: E402
 
 MB = 1024 * 1024
 
@@ -122,7 +123,6 @@ class Probe:
         for st in msg.status:
             self.diag[st.name.split(": ")[-1]] = {kv.key: kv.value for kv in st.values}
         t = self.diag.get("timing", {})
-        from susp_sim_ros.analysis.host_stalls import parse_miss_log
         self.miss_log.update((m.tick_ns, m.lateness_ns) for m in parse_miss_log(t.get("deadline_miss_log", "")))
         self.timeline.append((time.monotonic(), int(t.get("deadline_misses", 0)), float(t.get("jitter_max_ms", 0))))
 
@@ -271,7 +271,6 @@ def check_recording(path: Path, sent: dict[str, int], period_ns: int = 10_000_00
 def _nearest_stall(m, stalls, t_wall0_ns: int) -> dict:
     """A miss the host does not explain, with the probe's longest stall within 50 ms of it and the host
     time inside it, any CPU (for the reader)."""
-    from susp_sim_ros.analysis.host_stalls import host_time
     near = [st for st in stalls if st.start_ns - 50_000_000 <= m.end_ns and st.end_ns + 50_000_000 >= m.tick_ns]
     st = max(near, key=lambda x: x.lateness_ns) if near else None
     return {"t_s": round((m.tick_ns - t_wall0_ns) * 1e-9, 3), "late_ms": round(m.lateness_ns * 1e-6, 2),
@@ -300,7 +299,6 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
     path = out_dir / "soak.mcap"
     if path.exists():
         path.unlink()
-    from susp_sim_ros.analysis.host_stalls import Miss, attribute
     host = HostProbe(max_duration_s=duration + 300.0).start()  # the machine's own stalls, whole run
     try:
         probe = Probe(rate_hz, realtime=realtime_probe)
@@ -367,7 +365,8 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
                             "steal_max": float(steal[near].max()) if near.any() else None})
     misses = int(timing.get("deadline_misses", -1))
     tolerance_ns = host.period_ns + int(float(timing.get("lateness_p99_ms", 0.0)) * 1e6)
-    att = attribute([Miss(t_, late) for t_, late in probe.miss_log.items()], host.stalls, tolerance_ns)
+    logged = [Miss(t_, late) for t_, late in probe.miss_log.items()]
+    att = attribute(logged, host.stalls, tolerance_ns)
     res = {
         "duration_s": duration, "warmup_s": warmup, "rate_hz": rate_hz,
         "rss_start_mb": float(r[0]), "rss_after_warmup_mb": at_warm, "rss_end_mb": float(r[-1]),
@@ -381,8 +380,7 @@ def run_soak(duration: float = 300.0, warmup: float | None = None, rate_hz: floa
         "misses_not_by_host": [_nearest_stall(m, host.stalls, t_wall0) for m in att.unexplained][:20],
         # the raw timeline around them, for a reader who wants to weigh them: every miss and every stall
         # (CPU, ms) within 100 ms of an unexplained miss, seconds into the run
-        "timeline_near_unexplained": _timeline_near(att.unexplained, [Miss(t_, late) for t_, late in
-                                                                     probe.miss_log.items()], host.stalls, t_wall0),
+        "timeline_near_unexplained": _timeline_near(att.unexplained, logged, host.stalls, t_wall0),
         "rtf": float(timing.get("real_time_factor", "nan")), "jitter_p99_ms": float(timing.get("jitter_p99_ms", "nan")),
         "jitter_max_ms": float(timing.get("jitter_max_ms", "nan")),
         "rejected_inputs": int(inputs.get("rejected_total", -1)),

@@ -90,13 +90,15 @@ def attribute(misses: Iterable[Miss], stalls: Sequence[Stall], tolerance_ns: int
         start = min(prev_end, m.end_ns) if prev_end is not None and backlog else m.tick_ns
         over = [s for s in stalls if s.start_ns <= m.end_ns and s.end_ns >= m.tick_ns
                 and s.lateness_ns + tolerance_ns >= m.lateness_ns]
-        lost = host_time(stalls, start, m.end_ns)
-        host = bool(over) or ((prev_host or not backlog) and lost + tolerance_ns >= m.end_ns - start)
+        host = bool(over)
         if over:
             out.explained.append((m, max(over, key=lambda s: s.lateness_ns)))
-        elif host:
-            out.explained.append((m, Stall(start, m.end_ns, lost)))
-        else:
+        elif prev_host or not backlog:
+            lost = host_time(stalls, start, m.end_ns)
+            host = lost + tolerance_ns >= m.end_ns - start
+            if host:
+                out.explained.append((m, Stall(start, m.end_ns, lost)))
+        if not host:
             out.unexplained.append(m)
         if prev_end is None or m.end_ns >= prev_end:
             prev_end, prev_host = m.end_ns, host
