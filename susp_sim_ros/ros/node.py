@@ -38,12 +38,13 @@ from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 
 from ..io import messages as M
+from ..io.sim_cdr import imu_cdr, odom_cdr, suspension_cdr
 from ..io.live_integrity import ERROR, FindingBoard, LiveFinding, LiveIntegrity
 from ..runtime.lockstep import simulated_metadata
 from ..model.vehicle import Model, check_oil
 from .ride_diagnostics import SemiActiveDiagnostics
 from ..runtime.sim_core import DIAGNOSTICS, SIM_IMU, SIM_ODOM, SIM_SUSPENSION, RateLimitedLog, Sample, SimCore
-from .conversion import diagnostic_array, fill
+from .conversion import diagnostic_array
 from .inputs import InputHandler
 from .parameters import DEFAULTS, RuntimeChange, RuntimeParameters, declare_parameters, warm_up
 from .qos import OUTPUT_QOS
@@ -131,8 +132,7 @@ class SuspSimNode(Node):
                               float(p["record_flush_interval_s"]), self.get_logger().error)
 
     def _init_publishers(self) -> None:
-        """The ``/sim`` publishers, ``/diagnostics``, and the messages reused on every publish tick."""
-        self._imu, self._odom, self._susp = Imu(), Odometry(), Float64MultiArray()
+        """The ``/sim`` publishers (they publish CDR bytes, :mod:`~susp_sim_ros.io.sim_cdr`) and ``/diagnostics``."""
         self.pub_imu = self.create_publisher(Imu, SIM_IMU, OUTPUT_QOS)
         self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
         self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
@@ -184,20 +184,18 @@ class SuspSimNode(Node):
     def _publish_samples(self, samples: list[Sample]) -> None:
         if samples:
             self.semiactive.published(samples)
-        for s in samples:
-            imu = fill(self._imu, M.imu_msg(s.t_ns, s.y))
-            odom = fill(self._odom, M.odom_msg(s.t_ns, s.y))
-            susp = fill(self._susp, M.suspension_msg(s.y))
+        for s in samples:  # encoded once (sim_cdr), published and recorded as the same bytes
+            imu, odom, susp = imu_cdr(s.t_ns, s.y), odom_cdr(s.t_ns, s.y), suspension_cdr(s.y)
             self.pub_imu.publish(imu)
             if not self.sim_time:  # whichever thread published this tick (tick thread or an input)
                 self.timing.record(s.t_ns, time.time_ns())
             self.pub_odom.publish(odom)
             self.pub_susp.publish(susp)
             self.published += 1
-            if self.recorder is not None:  # the message objects are reused: serialise now
-                self._record(SIM_IMU, M.IMU, s.t_ns, serialize_message(imu))
-                self._record(SIM_ODOM, M.ODOMETRY, s.t_ns, serialize_message(odom))
-                self._record(SIM_SUSPENSION, M.FLOAT64_ARRAY, s.t_ns, serialize_message(susp))
+            if self.recorder is not None:
+                self._record(SIM_IMU, M.IMU, s.t_ns, imu)
+                self._record(SIM_ODOM, M.ODOMETRY, s.t_ns, odom)
+                self._record(SIM_SUSPENSION, M.FLOAT64_ARRAY, s.t_ns, susp)
 
     def tick(self, t_ns: int | None = None) -> int:
         """Step to ``t_ns`` (default: now) and publish the samples passed; returns how many."""
