@@ -19,7 +19,7 @@ from pathlib import Path
 
 from ..analysis.discrepancy import DiscrepancyFinder
 from ..analysis.discrepancy.calibration import outside_statement
-from ..analysis.discrepancy.data import load_cases
+from ..analysis.discrepancy.data import cases_of_read
 from ..analysis.discrepancy.report import verdict, write_outputs
 from ..errors import RecordingError, SuspInputError
 from ..io.drive import check_drive, read_drive
@@ -47,13 +47,16 @@ def add_arguments(p) -> None:
 MIN_IMU_SAMPLES = 10  # the finder needs this many measured samples per drive
 
 
-def check_drives(paths, topic_map=None) -> list[dict]:
-    """Read and check every drive (RecordingError/SuspInputError naming the file); one summary each."""
+def check_drives(paths, topic_map=None, read: list | None = None) -> list[dict]:
+    """Read and check every drive (RecordingError/SuspInputError naming the file); one summary each.
+    ``read``: a list the ``(path, drive)`` pairs read are appended to (the fit uses them, not a second read)."""
     out = []
     for d in paths:
         if not Path(d).exists():  # a file, or a rosbag2 directory
             raise SuspInputError(f"{d}: no such recorded test drive")
         drive = check_drive(read_drive(d, topic_map=topic_map), d)
+        if read is not None:
+            read.append((d, drive))
         imu_topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
         if drive.imu is None or len(drive.imu) < MIN_IMU_SAMPLES:
             raise RecordingError(f"{d}: fewer than {MIN_IMU_SAMPLES} measured IMU samples on {imu_topic} "
@@ -67,7 +70,8 @@ def check_drives(paths, topic_map=None) -> list[dict]:
 
 def run(args) -> dict:
     topic_map = getattr(args, "topic_map", None)
-    checked = check_drives(args.drives, topic_map)
+    read: list = []
+    checked = check_drives(args.drives, topic_map, read)
     if args.dry_run:
         return {"dry_run": True, "drives": checked,
                 "summary": "\n".join(f"{c['drive']}: {c['maneuver'] or 'drive'}, {c['duration_s']:.2f} s, "
@@ -76,10 +80,7 @@ def run(args) -> dict:
     cands = [c.strip() for c in args.candidates.split(",") if c.strip()] if args.candidates else None
     f = DiscrepancyFinder(vehicle=args.config, variant=args.variant, candidates=cands,
                           heldout=not args.no_heldout, progress=not args.no_progress)
-    if topic_map is not None:  # read through the map; the finder gets the prepared cases
-        f.fit(load_cases(args.drives, wheelbase=load_vehicle(args.config).wheelbase, topic_map=topic_map))
-    else:
-        f.fit(args.drives)
+    f.fit(cases_of_read(read, wheelbase=load_vehicle(args.config).wheelbase))  # each drive read once
     base = Path(args.variant).stem
     name = args.name or f"diagnosed_{base}"
     paths = write_outputs(f, args.out, name, plots=not args.no_plots)

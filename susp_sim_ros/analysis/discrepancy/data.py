@@ -290,13 +290,21 @@ def load_cases(paths: Sequence[str | Path], *, wheelbase: float, dt: float = 0.0
     :class:`SuspInputError` naming the file on unreadable input."""
     if not paths:
         raise SuspInputError("give at least one recorded test drive (MCAP)")
-    cases: list[DriveCase] = []
-    names: set[str] = set()
+    read = []
     for p in paths:
         p = Path(p)
         if not p.exists():  # a file, or a rosbag2 directory
             raise SuspInputError(f"{p}: no such file")
-        drive = read_drive(p, topic_map=topic_map)
+        read.append((p, read_drive(p, topic_map=topic_map)))
+    return cases_of_read(read, wheelbase=wheelbase, dt=dt)
+
+
+def cases_of_read(read: Sequence[tuple[str | Path, TestDrive]], *, wheelbase: float,
+                  dt: float = 0.001) -> list[DriveCase]:
+    """:func:`load_cases` of drives already read: ``(path, drive from read_drive)`` pairs."""
+    cases: list[DriveCase] = []
+    names: set[str] = set()
+    for p, drive in read:
         require_sound_imu(p, drive)  # io/integrity.py findings; other dead/saturated signals are left out
         case = prepare_case(p, drive, wheelbase=wheelbase, dt=dt)
         if case.name in names:
