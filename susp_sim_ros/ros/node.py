@@ -209,6 +209,8 @@ class SuspSimNode(Node):
                 return 0
             self._publish_samples(self.core.advance_to(t, allow_restart=self.sim_time))
             self._check_failure()
+            if self.recorder is not None:
+                self.recorder.kick()  # the writer works while this thread waits for its next tick
             return self.published - n0
 
     def _check_failure(self) -> None:

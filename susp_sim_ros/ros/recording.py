@@ -1,10 +1,10 @@
-"""The node's recording, off the real-time path: a queue and a writer thread in front of
+"""The node's recording, off the real-time path: a deque and a writer thread in front of
 :class:`~susp_sim_ros.io.recorder.McapRecorder` (no rclpy)."""
 from __future__ import annotations
 
 import heapq
-import queue
 import threading
+from collections import deque
 from collections.abc import Callable
 
 from ..io.recorder import McapRecorder
@@ -17,20 +17,30 @@ from ..io.recorder import McapRecorder
 RECORD_REORDER_NS = 50_000_000
 
 
+#: Longest wait [s] of the recording thread for a :meth:`RecordingQueue.kick` before it writes what is queued
+#: anyway (sim time paused, no ticks): the recording reaches the disk in idle periods too.
+RECORD_IDLE_WAKE_S = 0.1
+
+
 class RecordingQueue:
-    """The node's recording, off the real-time path: the tick thread and the callbacks only enqueue
-    ``(topic, type, time, CDR bytes or a function making them)``; a writer thread encodes input messages,
-    writes (mcap, chunk compression, the kill-safe commits of :class:`McapRecorder`) and flushes. It
-    holds each message until one at least :data:`RECORD_REORDER_NS` later (log time) is queued and writes
-    in log-time order, so the file is sorted even where the producing threads raced (a kill loses at most
-    that window more than the recorder's flush interval). A full queue (``max_items``, a disk that cannot
-    keep up) drops messages, counted in ``dropped``; a write error (disk full) stops the recording with
-    one error log (``error``) instead of the node."""
+    """The node's recording, off the real-time path: the tick thread and the callbacks only append
+    ``(topic, type, time, CDR bytes or a function making them)`` to a deque (no lock, no wake-up); a writer
+    thread encodes input messages, writes (mcap, chunk compression, the kill-safe commits of
+    :class:`McapRecorder`) and flushes. It works when kicked (:meth:`kick`, after each publish tick: then
+    the tick thread sleeps until its next deadline, so the two do not take turns at the interpreter lock
+    within a tick), or after :data:`RECORD_IDLE_WAKE_S` without a kick. A wake-up per message (a
+    ``queue.Queue``) cost 18 us a message in the tick thread and a lock hand-over to the writer inside
+    every tick. It holds each message until one at least :data:`RECORD_REORDER_NS` later (log time) is
+    queued and writes in log-time order, so the file is sorted even where the producing threads raced (a
+    kill loses at most that window more than the recorder's flush interval). A full queue (``max_items``,
+    a disk that cannot keep up) drops messages, counted in ``dropped``; a write error (disk full) stops
+    the recording with one error log (``error``) instead of the node."""
 
     def __init__(self, recorder: McapRecorder, log_error, max_items: int = 200_000):
         self.recorder, self._log_error = recorder, log_error
-        self._q: "queue.Queue" = queue.Queue(maxsize=max_items)
-        self._full = queue.Full
+        self._items: deque = deque()  # append and popleft are atomic: no lock needed
+        self._wake = threading.Event()
+        self.max_items = max_items
         self.dropped = 0
         self.error = ""
         self.closed = False
@@ -40,36 +50,44 @@ class RecordingQueue:
     def write(self, topic: str, msgtype: str, t_ns: int, data, latched: bool = False) -> None:
         if self.closed or self.error:
             return
-        try:
-            self._q.put_nowait((topic, msgtype, t_ns, data, latched))
-        except self._full:
+        if len(self._items) >= self.max_items:
             self.dropped += 1
+            return
+        self._items.append((topic, msgtype, t_ns, data, latched))
+
+    def kick(self) -> None:
+        """Let the writer work now (the node calls this after a publish tick)."""
+        self._wake.set()
 
     def flush_if_due(self) -> None:
         if not self.closed:
-            try:
-                self._q.put_nowait(None)
-            except self._full:
-                pass
+            self._items.append(None)
+            self._wake.set()
 
     def _run(self) -> None:
         held: list = []  # (log time, arrival number, item) heap
         arrived, newest = 0, None
         while True:
-            item = self._q.get()
-            if item is StopIteration:
-                if not self.error:
-                    self._write_held(held, None)
-                return
-            if self.error:
-                continue
-            if item is None:
-                self._write_held([], None, flush=True)
-                continue
-            arrived += 1
-            heapq.heappush(held, (item[2], arrived, item))
-            newest = item[2] if newest is None else max(newest, item[2])
-            self._write_held(held, newest - RECORD_REORDER_NS)
+            self._wake.wait(RECORD_IDLE_WAKE_S)
+            self._wake.clear()
+            while self._items:
+                item = self._items.popleft()
+                if item is StopIteration:
+                    if not self.error:
+                        self._write_held(held, None)
+                    return
+                if self.error:
+                    continue
+                if item is None:  # what is due first, then the flush
+                    if newest is not None:
+                        self._write_held(held, newest - RECORD_REORDER_NS)
+                    self._write_held([], None, flush=True)
+                    continue
+                arrived += 1
+                heapq.heappush(held, (item[2], arrived, item))
+                newest = item[2] if newest is None else max(newest, item[2])
+            if newest is not None and not self.error:
+                self._write_held(held, newest - RECORD_REORDER_NS)
 
     def _write_held(self, held: list, upto: int | None, flush: bool = False) -> None:
         """Write the held messages with log time <= ``upto`` (all: ``None``), oldest first; then flush
@@ -89,7 +107,8 @@ class RecordingQueue:
         if self.closed:
             return
         self.closed = True
-        self._q.put(StopIteration)
+        self._items.append(StopIteration)
+        self._wake.set()
         if self._thread is not threading.current_thread():
             self._thread.join()
         try:
