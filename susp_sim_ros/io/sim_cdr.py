@@ -2,9 +2,9 @@
 
 The wall-time node publishes and records every sample's three messages from its tick thread. Filling
 rclpy message objects (whose setters check every element of the 9- and 36-element covariances), then
-serialising them twice (once by ``publish``, once for the recording) took 0.6-0.9 ms of the tick thread's
-CPU per sample on this 2-vCPU VM (profiled in a soak, 2026-11-29), most of a tick's work and all of it
-under the interpreter lock the node's other threads wait for. Here each message is one precompiled
+serialising them twice (once by ``publish``, once for the recording) made the publishing part of a tick
+0.6-0.8 ms (p90) on this 2-vCPU VM (an instrumented soak, 2026-11-29), most of a tick's work and all of
+it under the interpreter lock the node's other threads wait for. Here each message is one precompiled
 ``struct`` pack (the constant parts, frame ids and array layouts, are encoded once): a few microseconds;
 the node publishes these bytes as they are (``Publisher.publish(bytes)``) and records the same bytes.
 
