@@ -192,13 +192,14 @@ def smooth(em: ErrorModel, intensity: float, y: np.ndarray, valid: np.ndarray, R
     P = np.zeros((_N_X, _N_X))
     tau = -em.dt / np.log(em.F[-1, -1])
     P[2 * _N_Q:, 2 * _N_Q:] = np.diag(intensity * em.d_scale ** 2 * tau / 2)  # stationary d
+    F, H = (np.ascontiguousarray(a, dtype=np.float64) for a in (em.F, em.H))  # one compiled layout
     y = np.ascontiguousarray(y, dtype=np.float64)
-    xp, Pp, xf, Pf, loglik = _kalman_filter(em.F, em.H, Q, np.diag(R).astype(np.float64), P, y,
+    xp, Pp, xf, Pf, loglik = _kalman_filter(F, H, np.ascontiguousarray(Q), np.diag(R).astype(np.float64), P, y,
                                             np.ascontiguousarray(valid, dtype=np.bool_))
     if not smooth_back:
         return Smoothed(xf[:, 2 * _N_Q:], np.sqrt(np.maximum(np.diagonal(Pf, axis1=1, axis2=2)[:, 2 * _N_Q:], 0)),
                         loglik)
-    xs, Ps = _rts_smoother(em.F, xp, Pp, xf, Pf)
+    xs, Ps = _rts_smoother(F, xp, Pp, xf, Pf)
     var = np.diagonal(Ps, axis1=1, axis2=2)[:, 2 * _N_Q:]
     return Smoothed(xs[:, 2 * _N_Q:], np.sqrt(np.maximum(var, 0.0)), loglik)
 
