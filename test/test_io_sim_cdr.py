@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from susp_sim_ros.io import messages as M
 from susp_sim_ros.io.sim_cdr import imu_cdr, odom_cdr, suspension_cdr
-from susp_sim_ros.model.layout import OUTPUT_LABELS
+from susp_sim_ros.model.layout import OUTPUT_LABELS, output_index
 
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 vectors = st.lists(finite, min_size=len(OUTPUT_LABELS), max_size=len(OUTPUT_LABELS)).map(np.array)
@@ -39,7 +39,7 @@ def test_frame_id_and_layout_as_rclpy_reads_them():
     odom = rclpy_ser.deserialize_message(odom_cdr(5, y), Odometry)
     assert (odom.header.frame_id, odom.child_frame_id) == ("odom", "base_link")
     assert len(odom.pose.covariance) == 36 and odom.pose.pose.orientation.w == pytest.approx(
-        np.cos(y[M._I["YAW"]] / 2), abs=1e-15)
+        np.cos(y[output_index("YAW")] / 2), abs=1e-15)
     susp = rclpy_ser.deserialize_message(suspension_cdr(y), Float64MultiArray)
     assert [(d.label, d.size, d.stride) for d in susp.layout.dim] == [("wheel", 4, 36), ("quantity", 9, 9)]
     np.testing.assert_array_equal(susp.data, y[M.SUSPENSION_COLUMNS])
@@ -51,6 +51,6 @@ def test_rosbags_reads_them():
     y = np.arange(len(OUTPUT_LABELS), dtype=float)
     imu = ts.deserialize_cdr(imu_cdr(1_250_000_000, y), M.IMU)
     assert (imu.header.stamp.sec, imu.header.stamp.nanosec) == (1, 250_000_000)
-    assert imu.angular_velocity.z == y[M._I["YAW_RATE"]]
+    assert imu.angular_velocity.z == y[output_index("YAW_RATE")]
     odom = ts.deserialize_cdr(odom_cdr(0, y), M.ODOMETRY)
-    assert odom.twist.twist.linear.x == y[M._I["VEL_X"]]
+    assert odom.twist.twist.linear.x == y[output_index("VEL_X")]

@@ -20,7 +20,8 @@ import struct
 
 import numpy as np
 
-from .messages import SUSPENSION_COLUMNS, SUSPENSION_QUANTITIES, _I, encode_float64_multiarray, quaternion_from_rpy
+from ..model.layout import output_index
+from .messages import SUSPENSION_COLUMNS, encode_float64_multiarray, quaternion_from_rpy, suspension_msg
 
 __all__ = ["imu_cdr", "odom_cdr", "suspension_cdr"]
 
@@ -58,8 +59,9 @@ class _Stamped:
 _IMU: dict[str, _Stamped] = {}
 _ODOM = _Stamped(3 + 4 + 36 + 6 + 36, "odom", "base_link")
 _Z9, _Z36 = (0.0,) * 9, (0.0,) * 36
-_RATES = [_I["ROLL_RATE"], _I["PITCH_RATE"], _I["YAW_RATE"]]
-_ACCEL = [_I["AX_SF"], _I["AY_SF"], _I["AZ_SF"]]
+_I = {k: output_index(k) for k in ("ROLL", "PITCH", "YAW", "POS_X", "POS_Y", "VEL_X", "VEL_Y", "YAW_RATE")}
+_RATES = [output_index(k) for k in ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")]
+_ACCEL = [output_index(k) for k in ("AX_SF", "AY_SF", "AZ_SF")]
 
 
 def imu_cdr(t_ns: int, y: np.ndarray, frame_id: str = "base_link") -> bytes:
@@ -81,12 +83,12 @@ def odom_cdr(t_ns: int, y: np.ndarray) -> bytes:
                              *_Z36))
 
 
-_Q = len(SUSPENSION_QUANTITIES)
-_SUSP_DIMS = [("wheel", 4, 4 * _Q), ("quantity", _Q, _Q)]
-_SUSP_PREFIX = encode_float64_multiarray(_SUSP_DIMS, 0, np.zeros(4 * _Q))[:-8 * 4 * _Q]
-_SUSP_COLUMNS = np.asarray(SUSPENSION_COLUMNS)
-
+_N_SUSP = len(SUSPENSION_COLUMNS)
+_SUSP_LAYOUT = suspension_msg(np.zeros(int(SUSPENSION_COLUMNS.max()) + 1))["layout"]  # the builder's layout
+#: everything of the builder's message before its data
+_SUSP_PREFIX = encode_float64_multiarray([(d["label"], d["size"], d["stride"]) for d in _SUSP_LAYOUT["dim"]],
+                                         _SUSP_LAYOUT["data_offset"], np.zeros(_N_SUSP))[:-8 * _N_SUSP]
 
 def suspension_cdr(y: np.ndarray) -> bytes:
     """``std_msgs/msg/Float64MultiArray`` as :func:`~.messages.suspension_msg` builds it, in CDR."""
-    return _SUSP_PREFIX + np.asarray(y, dtype="<f8")[_SUSP_COLUMNS].tobytes()
+    return _SUSP_PREFIX + np.asarray(y, dtype="<f8")[SUSPENSION_COLUMNS].tobytes()
