@@ -157,7 +157,7 @@ def test_malformed_miss_log_is_a_named_error():
 
 def test_node_timing_lists_its_misses():
     from susp_sim_ros.ros.timing import TimingStats
-    tm = TimingStats(PERIOD, keep=100)
+    tm = TimingStats(PERIOD)
     for k, late in enumerate([MS, 2 * MS, 15 * MS, MS, 30 * MS]):
         tm.record(k * PERIOD, k * PERIOD + late)
     s = tm.summary()
