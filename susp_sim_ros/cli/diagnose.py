@@ -22,7 +22,7 @@ from ..analysis.discrepancy.calibration import outside_statement
 from ..analysis.discrepancy.data import cases_of_read
 from ..analysis.discrepancy.report import verdict, write_outputs
 from ..errors import RecordingError, SuspInputError
-from ..io.drive import check_drive, read_drive
+from ..io.drive import TestDrive, check_drive, read_drive
 from ..io.integrity import append_to_report
 from ..io.topic_map import add_topic_map_argument
 from ..model import load_vehicle
@@ -47,32 +47,36 @@ def add_arguments(p) -> None:
 MIN_IMU_SAMPLES = 10  # the finder needs this many measured samples per drive
 
 
-def check_drives(paths, topic_map=None, read: list | None = None) -> list[dict]:
-    """Read and check every drive (RecordingError/SuspInputError naming the file); one summary each.
-    ``read``: a list the ``(path, drive)`` pairs read are appended to (the fit uses them, not a second read)."""
+def check_drives(paths, topic_map=None) -> list[tuple[str, TestDrive]]:
+    """Read and check every drive (RecordingError/SuspInputError naming the file): ``(path, drive)`` pairs,
+    which the fit then uses (each drive is read once)."""
     out = []
     for d in paths:
         if not Path(d).exists():  # a file, or a rosbag2 directory
             raise SuspInputError(f"{d}: no such recorded test drive")
         drive = check_drive(read_drive(d, topic_map=topic_map), d)
-        if read is not None:
-            read.append((d, drive))
         imu_topic = drive.extra.get("input_topics", {}).get("imu", "/imu/data")
         if drive.imu is None or len(drive.imu) < MIN_IMU_SAMPLES:
             raise RecordingError(f"{d}: fewer than {MIN_IMU_SAMPLES} measured IMU samples on {imu_topic} "
                                  f"(got {0 if drive.imu is None else len(drive.imu)}): nothing to diagnose "
                                  f"against" + ("; file truncated" if drive.extra.get("truncated") else ""))
-        out.append({"drive": str(d), "maneuver": drive.metadata.get("maneuver", ""),
-                    "duration_s": drive.duration_s, "imu_samples": len(drive.imu),
-                    "truncated": bool(drive.extra.get("truncated", False))})
+        out.append((str(d), drive))
     return out
+
+
+def drive_summaries(read: list[tuple[str, TestDrive]]) -> list[dict]:
+    """One line's facts per checked ``(path, drive)``: maneuver, duration [s], IMU samples, truncation."""
+    return [{"drive": path, "maneuver": drive.metadata.get("maneuver", ""), "duration_s": drive.duration_s,
+             "imu_samples": 0 if drive.imu is None else len(drive.imu),
+             "truncated": bool(drive.extra.get("truncated", False))}
+            for path, drive in read]
 
 
 def run(args) -> dict:
     topic_map = getattr(args, "topic_map", None)
-    read: list = []
-    checked = check_drives(args.drives, topic_map, read)
+    read = check_drives(args.drives, topic_map)
     if args.dry_run:
+        checked = drive_summaries(read)
         return {"dry_run": True, "drives": checked,
                 "summary": "\n".join(f"{c['drive']}: {c['maneuver'] or 'drive'}, {c['duration_s']:.2f} s, "
                                      f"{c['imu_samples']} IMU samples" + (" (truncated)" if c["truncated"] else "")
