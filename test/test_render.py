@@ -40,3 +40,24 @@ def test_a_figure_that_fails_is_named(tmp_path):
     with pytest.raises((RuntimeError, ValueError), match="bad.png"):
         r.wait()
     assert good.exists()
+
+
+def _draw_slowly(path, text, seconds):
+    import time
+    time.sleep(seconds)
+    _draw(path, text)
+
+
+@pytest.mark.skipif(FigureRenderer()._spare == 0 or FigureRenderer()._ctx is None,
+                    reason="no spare core or no fork: figures are drawn in place")
+def test_a_child_that_comes_free_takes_part_of_what_is_left(tmp_path):
+    """The early figures' child finishes while the caller draws the late ones: it takes half of what is
+    left (was: the caller drew every late figure alone while the child stood idle)."""
+    early, late = tmp_path / "early.txt", [tmp_path / f"late{k}.txt" for k in range(6)]
+    with FigureRenderer() as r:
+        r.submit(str(early), _draw_slowly, early, "early", 0.3)
+        r.flush()
+        for p in late:
+            r.submit(str(p), _draw_slowly, p, "late", 0.2)
+    pids = {p.read_text().split()[1] for p in late}
+    assert str(os.getpid()) in pids and len(pids) > 1

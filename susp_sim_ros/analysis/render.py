@@ -30,8 +30,9 @@ def _draw_all(tasks: list[Task]) -> None:
 class FigureRenderer:
     """Collect drawing calls with :meth:`submit`; :meth:`flush` hands what is collected to a child
     process (when a spare core is free) and returns at once; :meth:`wait` (or leaving the ``with``
-    block) shares what is left between a free child and the caller, returns once every figure is
-    written and raises when one failed, naming it."""
+    block) shares what is left between the caller and the children as they come free (the caller draws
+    one figure at a time, a free child takes half of what is left), returns once every figure is written
+    and raises when one failed, naming it."""
 
     def __init__(self, parallel: bool = True):
         self._ctx = (multiprocessing.get_context("fork")
@@ -70,11 +71,14 @@ class FigureRenderer:
 
     def wait(self) -> None:
         pending, self._pending = self._pending, []
-        if pending and self._free():
-            half = len(pending) // 2
-            self._start(pending[:half])
-            pending = pending[half:]
-        _draw_all(pending)
+        while pending:  # the caller draws one figure at a time; a child that is free takes half the rest
+            if len(pending) > 1 and self._free():
+                half = len(pending) // 2
+                self._start(pending[half:])
+                pending = pending[:half]
+                continue
+            _draw_all(pending[:1])
+            pending = pending[1:]
         while self._running:
             self._check(*self._running.pop(0))
         if self._failed:
