@@ -275,12 +275,13 @@ class SuspSimNode(Node):
         t = self.now_ns()
         msg = diagnostic_array(t, self.diagnostics(mark=True))
         self.pub_diag.publish(msg)
+        data = serialize_message(msg) if self.recorder is not None else b""  # not under the tick's lock
         with self.lock:
             if self.recorder is not None:
                 # logged no earlier than the samples recorded while this message was built (the tick
                 # thread may have published meanwhile): the file stays in log-time order
                 t_log = max(t, self.core.t_ns or 0, 0)
-                self._record(DIAGNOSTICS, M.DIAGNOSTIC_ARRAY, t_log, serialize_message(msg))
+                self._record(DIAGNOSTICS, M.DIAGNOSTIC_ARRAY, t_log, data)
                 self.recorder.flush_if_due()  # idle periods (sim time paused) still reach the disk
 
     # -- shutdown -------------------------------------------------------------------------------------
