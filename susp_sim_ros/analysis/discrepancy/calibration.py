@@ -85,6 +85,11 @@ class CalParam:
     def sd(self) -> float:
         return max((self.hi - self.lo) / 4.0, 1e-9 * max(abs(self.prior), 1.0))
 
+    def interval_floor(self, value: float) -> float:
+        """The lowest value a reported interval may show: 0 for a quantity that cannot be negative (its
+        documented range starts at or above 0; never above the estimate ``value``), else unbounded."""
+        return min(0.0, value) if self.lo >= 0.0 or self.field in POSITIVE else -math.inf
+
     @property
     def bounds(self) -> tuple[float, float]:
         w = self.hi - self.lo
@@ -282,6 +287,7 @@ def calibration_entries(params: Sequence[CalParam], x: np.ndarray, ci_lo: np.nda
     for p, v, lo, hi, inf in zip(params, x, ci_lo, ci_hi, informed):
         if not inf:
             v, lo, hi = p.prior, p.prior - 1.96 * p.sd, p.prior + 1.96 * p.sd
+        lo = max(lo, p.interval_floor(v))  # a mass, a rate, a length: no interval below zero
         out.append({"param": p.field, "where": p.where, "unit": p.unit, "prior": float(p.prior),
                     "prior_range": [float(p.lo), float(p.hi)], "value": float(v),
                     "ci95": [_finite(lo), _finite(hi)], "informed": bool(inf),

@@ -25,6 +25,8 @@ for the vehicle file). How each maps onto the model (design choice, see also the
 """
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 from collections.abc import Callable
 
@@ -58,6 +60,15 @@ class CandParam:
     #: gains at neutral there is no force whatever it is); "no effect" and "physical" are read from the
     #: other parameters
     shape: bool = False
+
+    def interval_floor(self, value: float) -> float:
+        """The lowest value a reported interval of this parameter may show: a quantity that cannot be
+        negative (a level, a time constant, a stiffness: its lowest physical or fitted value >= 0) is never
+        shown below that value (nor above the estimate ``value``); a signed one is not bounded (-inf). A
+        Gauss-Newton or jackknife interval x +- 1.96 se knows no bound; clipped, it is the interval within
+        the parameter's domain and still holds every value the physics allows."""
+        low = self.lower if self.physical_lower is None else self.physical_lower
+        return min(low, value) if low >= 0.0 else -math.inf
 
 
 @dataclass(frozen=True)

@@ -66,7 +66,8 @@ def term_entries(f) -> list[dict]:
         a, b = st.offsets[k], st.offsets[k + 1]
         x = res.x[a:b]
         params = {p.name: _num(v) for p, v in zip(cand.params, x)}
-        ci = {p.name: [_num(l), _num(h)] for p, l, h in zip(cand.params, lo[a:b], hi[a:b])}
+        ci = {p.name: [_num(max(l, p.interval_floor(v))), _num(h)]
+              for p, v, l, h in zip(cand.params, x, lo[a:b], hi[a:b])}
         ev = dict(acc.get(name, {}))
         ev.pop("name", None)
         ev.update({"kind": cand.kind, "meaning": cand.meaning, "n_params": cand.n_params,
@@ -623,15 +624,25 @@ def _md_calibration(f, rep: dict, paths: dict, name: str) -> list[str]:
           "physics. Not informed = the drives do not determine it: it stays at its prior.", "",
           "| parameter | where | unit | prior | prior range | calibrated | 95 % interval | informed |",
           "|---|---|---|---|---|---|---|---|"]
+    wider = []
     for e in rep["calibration"]:
         flag = "yes" if e["informed"] else "no"
         if e["outside_prior"]:
             flag += " **(outside its range)**"
+        lo, hi = e["ci95"]
+        if e["informed"] and lo is not None and hi is not None and hi - lo > e["prior_range"][1] - e["prior_range"][0]:
+            flag += " (interval wider than its range\\*)"
+            wider.append(e["param"] + ("" if e["where"] == "all" else f" ({e['where']})"))
         L.append(f"| {e['param']} | {e['where']} | {e['unit']} | {_fmt(e['prior'])} | {_fmt(e['prior_range'][0])}-"
                  f"{_fmt(e['prior_range'][1])} | {_fmt(e['value'])} | [{_fmt(e['ci95'][0])}, {_fmt(e['ci95'][1])}] "
                  f"| {flag} |")
     if not rep["calibration"]:
         L.append("| (none) | | | | | | | |")
+    if wider:
+        L += ["", f"\\* {', '.join(wider)}: the drives' information narrows {'it' if len(wider) == 1 else 'each'} to "
+              "half its prior spread or less (informed), yet the 95 % interval is wider than the documented range: "
+              "the leave-one-drive-out refits disagree about it, or a value held at its vehicle-file value weighs on it. "
+              "Read the value as the drives' compromise, not a measurement."]
     for e in rep["calibration"]:
         if e["outside_prior"]:
             L.append(f"\n- **Finding:** {outside_statement(e)}")

@@ -1,0 +1,65 @@
+"""Reported 95 % intervals stay within a quantity's domain: a length, mass, level or time constant is never
+shown below zero, a signed quantity is not bounded (issue 24: honest reports)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+from susp_sim_ros.analysis.discrepancy.calibration import CalParam, calibration_entries
+from susp_sim_ros.analysis.discrepancy.candidates import CandParam
+
+
+def _cal(field: str, lo: float, hi: float, prior: float) -> CalParam:
+    return CalParam(field, field, "all", None, "1", prior, lo, hi, "test range")
+
+
+def test_a_positive_calibration_value_has_no_negative_interval():
+    """The bundled dahl_only diagnosis once reported the relaxation length 0.503 m within [-0.018, 1.024] m."""
+    p = _cal("relaxation_length", 0.3, 0.8, 0.5)
+    (e,) = calibration_entries([p], np.array([0.503]), np.array([-0.01776]), np.array([1.024]), [True])
+    assert e["ci95"] == [0.0, 1.024] and e["value"] == 0.503
+
+
+def test_a_signed_calibration_value_keeps_its_interval():
+    p = _cal("steering_offset", -0.02, 0.02, 0.0)
+    (e,) = calibration_entries([p], np.array([0.001]), np.array([-0.03]), np.array([0.03]), [True])
+    assert e["ci95"] == [-0.03, 0.03]
+
+
+def test_a_term_level_interval_starts_at_zero_and_holds_the_estimate():
+    level = CandParam("extra_front", "N", 0.0, 0.0, 200.0, 1.0)
+    assert level.interval_floor(9.19) == 0.0
+    memory = CandParam("memory", "s", 1.0, 0.05, 30.0, 0.1)
+    assert memory.interval_floor(0.98) == 0.05 and memory.interval_floor(0.01) == 0.01
+    physical = CandParam("gain", "1", 0.0, -1.0, 1.0, 0.1, physical_lower=0.0)
+    assert physical.interval_floor(0.3) == 0.0
+    lag = CandParam("lag", "s", 0.0, -0.05, 0.05, 0.001)
+    assert lag.interval_floor(0.002) == -math.inf
+
+
+@given(st.floats(0.0, 1e3), st.floats(-1e3, 1e3), st.floats(0.0, 1e3))
+def test_clipped_interval_still_holds_the_estimate(value, half_low, half_high):
+    """Whatever the interval's width, clipping never moves its lower end above the estimate."""
+    p = _cal("axle_friction", 30.0, 40.0, 35.0)
+    lo, hi = value - abs(half_low), value + half_high
+    (e,) = calibration_entries([p], np.array([value]), np.array([lo]), np.array([hi]), [True])
+    assert e["ci95"][0] <= value <= e["ci95"][1] and e["ci95"][0] >= 0.0
+
+
+def test_report_says_when_an_informed_value_has_an_interval_wider_than_its_range():
+    """'informed: yes' beside an interval wider than the prior range reads as a contradiction: the report
+    says what it means (the drives' compromise)."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.report import _md_calibration
+    wide = calibration_entries([_cal("relaxation_length", 0.3, 0.8, 0.5)], np.array([0.503]),
+                               np.array([-0.018]), np.array([1.024]), [True])
+    narrow = calibration_entries([_cal("cg_height", 0.48, 0.62, 0.55)], np.array([0.549]),
+                                 np.array([0.501]), np.array([0.597]), [True])
+    text = "\n".join(_md_calibration(SimpleNamespace(), {"calibration": wide + narrow}, {}, "x"))
+    rows = {line.split("|")[1].strip(): line for line in text.splitlines() if line.startswith("| ")}
+    assert "interval wider than its range" in rows["relaxation_length"]
+    assert "interval wider" not in rows["cg_height"]
+    assert "relaxation_length: the drives' information narrows it" in text and "compromise" in text
