@@ -62,13 +62,13 @@ class CandParam:
     shape: bool = False
 
     def interval_floor(self, value: float) -> float:
-        """The lowest value a reported interval of this parameter may show: a quantity that cannot be
-        negative (a level, a time constant, a stiffness: its lowest physical or fitted value >= 0) is never
-        shown below that value (nor above the estimate ``value``); a signed one is not bounded (-inf). A
-        Gauss-Newton or jackknife interval x +- 1.96 se knows no bound; clipped, it is the interval within
-        the parameter's domain and still holds every value the physics allows."""
+        """The lowest value a reported interval of this parameter may show: 0 for a quantity that cannot be
+        negative (a level, a time constant, a stiffness: its lowest physical or fitted value >= 0; never above
+        the estimate ``value``), unbounded (-inf) for a signed one. A Gauss-Newton or jackknife interval
+        x +- 1.96 se knows no bound; cut at 0 it still holds every value the physics allows, and an interval
+        that held zero still does (what "holds no effect" reads is unchanged)."""
         low = self.lower if self.physical_lower is None else self.physical_lower
-        return min(low, value) if low >= 0.0 else -math.inf
+        return min(0.0, value) if low >= 0.0 else -math.inf
 
 
 @dataclass(frozen=True)

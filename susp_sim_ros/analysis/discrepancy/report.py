@@ -641,8 +641,8 @@ def _md_calibration(f, rep: dict, paths: dict, name: str) -> list[str]:
     if wider:
         L += ["", f"\\* {', '.join(wider)}: the drives' information narrows {'it' if len(wider) == 1 else 'each'} to "
               "half its prior spread or less (informed), yet the 95 % interval is wider than the documented range: "
-              "the leave-one-drive-out refits disagree about it, or a value held at its vehicle-file value weighs on it. "
-              "Read the value as the drives' compromise, not a measurement."]
+              "the leave-one-drive-out refits disagree about it, or a value held at its vehicle-file value weighs "
+              "on it. Read the value as the drives' compromise, not a measurement."]
     for e in rep["calibration"]:
         if e["outside_prior"]:
             L.append(f"\n- **Finding:** {outside_statement(e)}")
