@@ -185,3 +185,17 @@ def test_body_accelerations_are_the_kernels_and_the_body_part_is_their_inertial_
                                atol=1e-6 * np.abs(100.0 * acc[:, 0]).max())
     np.testing.assert_allclose(d[:, 2], 0.0, atol=1e-9 * np.abs(100.0 * acc[:, 0]).max())
     assert not np.any(mf.body_force(P, P, acc, c))
+
+
+def test_report_table_says_a_negative_loop_and_never_minus_zero():
+    """A loop half height of -0.3 N is 0 in the table (not "-0"); -9 N stays -9 and the text says what a
+    negative one means (the model has more friction-like force than the car)."""
+    from susp_sim_ros.analysis.discrepancy.missing_force_report import markdown
+    ax = lambda loop: {"rms": 20.0, "loop_half_height_N": loop, "sd_mean": 40.0}  # noqa: E731
+    mf = {"per_drive": {"d1": {"unmeasured_input": False, "front_N": ax(-0.3), "rear_N": ax(-9.2),
+                               "roll_Nm": {"rms": 3.0}}}, "files": []}
+    text = "\n".join(markdown(mf))
+    row = next(line for line in text.splitlines() if line.startswith("| d1"))
+    cells = [c.strip() for c in row.split("|")]
+    assert cells[5] == "0" and cells[6] == "-9"
+    assert "negative where the model has more friction-like force than the car" in text

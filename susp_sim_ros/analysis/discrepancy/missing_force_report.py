@@ -315,7 +315,8 @@ def markdown(mf_json: dict) -> list[str]:
              "specific force). Read its shape in the loop plots: friction is a rectangle in the force-"
              "velocity plot (a jump at zero velocity) and a loop of constant height against deflection; "
              "viscous damping a line through the origin against velocity; a spring a line against deflection. "
-             "The loop half height is the friction-like level of the axle (both wheels). The force the base "
+             "The loop half height is the friction-like level of the axle (both wheels) the model lacks; "
+             "negative where the model has more friction-like force than the car. The force the base "
              "model (the vehicle file's values) lacks has three parts: the calibration's corner part (the "
              "corner force the calibration supplied: calibrated minus base model's spring, damper, friction "
              "and anti-roll bar force along the calibrated run), the calibration's body part (the inertial "
@@ -329,7 +330,7 @@ def markdown(mf_json: dict) -> list[str]:
              "|---|---|---|---|---|---|---|---|---|---|"]
     for drive, e in mf_json["per_drive"].items():
         def num(x):
-            return "-" if x is None else f"{x:.0f}"
+            return "-" if x is None else f"{round(x):d}"  # never "-0"
         lines.append(f"| {drive}{' (input not measured)' if e['unmeasured_input'] else ''} | "
                      f"{e['front_N']['rms']:.0f} | {e['rear_N']['rms']:.0f} | {e['roll_Nm']['rms']:.0f} | "
                      f"{num(e['front_N']['loop_half_height_N'])} | {num(e['rear_N']['loop_half_height_N'])} | "
