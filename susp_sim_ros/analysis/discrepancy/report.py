@@ -682,12 +682,16 @@ def _md_unmeasured(f, rep: dict, paths: dict, name: str) -> list[str]:
 def _md_findings(f, rep: dict, paths: dict, name: str) -> list[str]:
     """The named terms and what could not be identified."""
     L: list[str] = []
-    L += ["", "## Findings (missing physics)", ""]
+    L += ["", "## Findings (missing physics and the measurement chain)", ""]
     for t in rep["terms"]:
         L.append(f"- **{t['name']}** ({t['where']}): {t['evidence'].get('statement', '')}.")
-        L.append("  - parameters: " + ", ".join(
-            f"{k} = {_fmt(val)} [{_fmt(rep_ci(t, k)[0])}, {_fmt(rep_ci(t, k)[1])}]"
-            for k, val in t["params"].items() if not isinstance(val, dict)))
+        scalars = {k: v for k, v in t["params"].items() if not isinstance(v, dict)}
+        if scalars:
+            L.append("  - parameters: " + ", ".join(
+                f"{k} = {_fmt(val)} [{_fmt(rep_ci(t, k)[0])}, {_fmt(rep_ci(t, k)[1])}]" for k, val in scalars.items()))
+        for k, val in t["params"].items():
+            if isinstance(val, dict) and val:
+                L.append("  - " + _md_per_channel(k, val, t))
     if not rep["terms"]:
         L.append("- none")
     L += ["", "## Not identifiable from these drives", ""]
@@ -810,6 +814,16 @@ def markdown(f, rep: dict, paths: dict, name: str) -> str:
                     _md_missing_force, _md_force_shape, _md_files):
         L += section(f, rep, paths, name)
     return "\n".join(L) + "\n"
+
+
+def _md_per_channel(name: str, values: dict, t: dict) -> str:
+    """One line for a parameter given per drive and signal (a sensor bias): how many, the largest in size
+    with its interval, where the rest is (the JSON)."""
+    key = max(values, key=lambda k: abs(values[k]) if values[k] is not None else -1.0)
+    lo, hi = rep_ci(t, key)
+    unit = t["evidence"].get("units", {}).get(name, "")
+    return (f"{name} per drive and signal ({unit}): {len(values)} values, the largest in size {_fmt(values[key])} "
+            f"[{_fmt(lo)}, {_fmt(hi)}] at {key}; every value in the JSON (`terms[].params.{name}`)")
 
 
 def rep_ci(t, k):

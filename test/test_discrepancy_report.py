@@ -1,5 +1,7 @@
-"""Reported 95 % intervals stay within a quantity's domain: a length, mass, level or time constant is never
-shown below zero, a signed quantity is not bounded (issue 24: honest reports)."""
+"""What the diagnosis report says (issue 24: honest reports): 95 % intervals stay within a quantity's domain
+(a length, mass, level or time constant is never shown below zero, a signed quantity is not bounded), an
+informed value with an interval wider than its range says what that means, and a parameter given per drive
+and signal is summarised, not left blank."""
 from __future__ import annotations
 
 import math
@@ -64,3 +66,21 @@ def test_report_says_when_an_informed_value_has_an_interval_wider_than_its_range
     assert "interval wider than its range" in rows["relaxation_length"]
     assert "interval wider" not in rows["cg_height"]
     assert "relaxation_length: the drives' information narrows it" in text and "compromise" in text
+
+
+def test_a_per_drive_sensor_bias_is_summarised_not_left_blank():
+    """The bundled diagnosis listed sensor_bias with an empty "parameters:" line (its values are per drive and
+    signal); now the largest with its interval, and where the rest is."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.report import _md_findings
+    bias = {"term": {"name": "sensor_bias", "where": "all", "evidence": {"statement": "offsets",
+                                                                         "units": {"bias": "deg/s"}},
+                     "params": {"bias": {"a:pitch_rate": 0.002, "b:roll_rate": -0.011, "b:pitch_rate": None}},
+                     "ci95": {"a:pitch_rate": [0.0, 0.004], "b:roll_rate": [-0.015, -0.007]}}}
+    amp = {"name": "friction_amplitude", "where": "rear", "evidence": {"statement": "grows"},
+           "params": {"extra_rear": 24.4}, "ci95": {"extra_rear": [2.5, 46.3]}}
+    f = SimpleNamespace(skipped_=[], competing_=[], in_base_=[])
+    text = "\n".join(_md_findings(f, {"terms": [bias["term"], amp]}, {}, "x"))
+    assert "parameters: \n" not in text + "\n" and "  - parameters: extra_rear = 24.4 [2.5, 46.3]" in text
+    assert "bias per drive and signal (deg/s): 3 values, the largest in size -0.011 [-0.015, -0.007] at b:roll_rate" \
+        in text
