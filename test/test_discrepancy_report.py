@@ -84,3 +84,18 @@ def test_a_per_drive_sensor_bias_is_summarised_not_left_blank():
     assert "parameters: \n" not in text + "\n" and "  - parameters: extra_rear = 24.4 [2.5, 46.3]" in text
     assert "bias per drive and signal (deg/s): 3 values, the largest in size -0.011 [-0.015, -0.007] at b:roll_rate" \
         in text
+
+
+def test_noise_line_says_when_there_is_no_quiet_lead_in(monkeypatch):
+    """The highway drives (no standstill) printed "quiet lead-in cross-check nan deg/s"."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy import report
+    monkeypatch.setattr(report, "verdict", lambda f: ("unmeasured_input", "the road is not in the recording"))
+    noise = {"noise_floors": {"roll_rate": 0.18}, "units": {"roll_rate": "deg/s"}}
+    f = SimpleNamespace(model_=SimpleNamespace(vehicle=SimpleNamespace(name="car")), base_variant_=None,
+                        variant="full", cases_=[1, 2], noise_floor_=0.3965,
+                        noise_={**noise, "quiet_lead_in_pooled_deg_s": None})
+    text = "\n".join(report._md_header(f, {}, {}, "x"))
+    assert "nan" not in text and "no quiet lead-in in the drives to cross-check it" in text
+    f.noise_ = {**noise, "quiet_lead_in_pooled_deg_s": 0.0392}
+    assert "quiet lead-in cross-check 0.0392 deg/s" in "\n".join(report._md_header(f, {}, {}, "x"))

@@ -605,12 +605,15 @@ def _md_header(f, rep: dict, paths: dict, name: str) -> list[str]:
     """The title, the verdict and its reason, the noise floors."""
     L: list[str] = []
     v, why = verdict(f)
+    quiet = f.noise_["quiet_lead_in_pooled_deg_s"]
+    cross = (f"quiet lead-in cross-check {quiet:.4f} deg/s" if quiet is not None and math.isfinite(quiet)
+             else "no quiet lead-in in the drives to cross-check it")
     L += [f"# Discrepancy diagnosis `{name}`", "",
          f"Base model: vehicle `{f.model_.vehicle.name}`, variant `{getattr(f.base_variant_, 'name', f.variant)}`; "
          f"{len(f.cases_)} drives. Rates in deg/s.", "",
          f"**Verdict: {v}** - {why}.", "",
          f"Noise floor of the primary gyro signals (white noise per sample): {f.noise_floor_:.4f} deg/s "
-         f"(quiet lead-in cross-check {f.noise_['quiet_lead_in_pooled_deg_s'] or float('nan'):.4f} deg/s). "
+         f"({cross}). "
          "Per signal: " + ", ".join(f"{k} {v:.4g} {f.noise_['units'][k]}" for k, v in f.noise_["noise_floors"].items())
          + ".", ""]
     return L
