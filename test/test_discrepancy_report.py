@@ -99,3 +99,14 @@ def test_noise_line_says_when_there_is_no_quiet_lead_in(monkeypatch):
     assert "nan" not in text and "no quiet lead-in in the drives to cross-check it" in text
     f.noise_ = {**noise, "quiet_lead_in_pooled_deg_s": 0.0392}
     assert "quiet lead-in cross-check 0.0392 deg/s" in "\n".join(report._md_header(f, {}, {}, "x"))
+
+
+def test_selection_table_says_when_no_step_was_taken(monkeypatch):
+    """A diagnosis that took no selection step (the highway drives: an unmeasured road) printed a table
+    header with no row."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy import report
+    monkeypatch.setattr(report, "ranking_table", lambda f: [])
+    f = SimpleNamespace(path_=[{"step": 0}], windows_=[])
+    text = "\n".join(report._md_selection(f, {}, {}, "x"))
+    assert "| - | nothing | | | | | | no step was taken: the verdict above says why |" in text

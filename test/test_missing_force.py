@@ -199,3 +199,14 @@ def test_report_table_says_a_negative_loop_and_never_minus_zero():
     cells = [c.strip() for c in row.split("|")]
     assert cells[5] == "0" and cells[6] == "-9"
     assert "negative where the model has more friction-like force than the car" in text
+
+
+def test_report_says_an_unmeasured_road_drive_tells_nothing_about_physics():
+    from susp_sim_ros.analysis.discrepancy.missing_force_report import markdown
+    ax = {"rms": 11053.0, "loop_half_height_N": -1300.0, "sd_mean": 1836.0}
+    mf = {"per_drive": {"highway": {"unmeasured_input": True, "front_N": ax, "rear_N": ax, "roll_Nm": {"rms": 443.0}}},
+          "files": []}
+    text = "\n".join(markdown(mf))
+    assert "highway (input not measured)" in text and "say nothing about missing physics" in text
+    mf["per_drive"]["highway"]["unmeasured_input"] = False
+    assert "say nothing about missing physics" not in "\n".join(markdown(mf))

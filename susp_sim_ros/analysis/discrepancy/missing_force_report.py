@@ -337,6 +337,10 @@ def markdown(mf_json: dict) -> list[str]:
                      f"{e['front_N']['sd_mean']:.0f} / {e['rear_N']['sd_mean']:.0f} | "
                      f"{_pair(e.get('calibration'))} | {_pair(e.get('calibration_body'))} | "
                      f"{_pair(e.get('base_model'))} |")
+    if any(e["unmeasured_input"] for e in mf_json["per_drive"].values()):
+        lines += ["", "Drives marked (input not measured) have no road in the recording: their estimate carries the "
+                  "force of the unmeasured road on the car as well, so its size and loops there say nothing about "
+                  "missing physics."]
     lines += ["", "Files: " + ", ".join(Path(p).name for p in mf_json["files"]), ""]
     return lines
 

@@ -745,6 +745,8 @@ def _md_selection(f, rep: dict, paths: dict, name: str) -> list[str]:
                  f"{_pct(p.get('heldout_gain_fraction_of_excess'))} | "
                  f"{_pct(p.get('selected_in_fraction_of_refits'))} | "
                  f"{'yes' if p['accepted'] else 'no'} |")
+    if len(f.path_) <= 1:
+        L.append("| - | nothing | | | | | | no step was taken: the verdict above says why |")
     L += ["", "## Ranking of single candidates at the base model (linearised)", "",
           "| candidate | RMS [x noise] | BIC | held-out RMS (LODO) [x noise] |", "|---|---|---|---|"]
     for r in ranking_table(f):
