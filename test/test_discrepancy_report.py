@@ -110,3 +110,11 @@ def test_selection_table_says_when_no_step_was_taken(monkeypatch):
     f = SimpleNamespace(path_=[{"step": 0}], windows_=[])
     text = "\n".join(report._md_selection(f, {}, {}, "x"))
     assert "| - | nothing | | | | | | no step was taken: the verdict above says why |" in text
+
+
+def test_a_term_profiled_out_per_drive_is_not_said_to_have_zero_parameters():
+    from susp_sim_ros.analysis.discrepancy.candidates import BY_NAME
+    from susp_sim_ros.analysis.discrepancy.report import statement
+    bias, lag = BY_NAME["sensor_bias"], BY_NAME["time_offset"]
+    assert bias.n_params == 0 and "parameter(s)" not in statement(bias, {}, {}, None)
+    assert f"; {lag.n_params} parameter(s)" in statement(lag, {}, {}, None)

@@ -114,7 +114,8 @@ def statement(cand: Candidate, params: dict, ev: dict, f) -> str:
               f"the noise floor left at its step")
     if best:
         s += f"; largest gain in {best}: RMSE {per_b[best]:.3f} -> {per_a[best]:.3f} deg/s"
-    s += f"; {cand.n_params} parameter(s)"
+    if cand.n_params:  # a term without free parameters (the sensor bias, profiled out per drive) says none
+        s += f"; {cand.n_params} parameter(s)"
     if "delta_bic" in ev:
         s += f"; BIC lower by {ev['delta_bic']:.0f}"
     if "heldout_gain_fraction_of_excess" in ev:
