@@ -210,3 +210,33 @@ def test_report_says_an_unmeasured_road_drive_tells_nothing_about_physics():
     assert "highway (input not measured)" in text and "say nothing about missing physics" in text
     mf["per_drive"]["highway"]["unmeasured_input"] = False
     assert "say nothing about missing physics" not in "\n".join(markdown(mf))
+
+
+def test_loop_panels_scale_the_missing_force_to_itself(tmp_path, monkeypatch):
+    """The bundled drives' calibration parts reach +-1500 N beside a missing force of +-100 N: on one axis
+    the loop was a flat line. The missing force has the left axis to itself, the model's forces the right."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from susp_sim_ros.analysis.discrepancy import missing_force as mfm
+    from susp_sim_ros.analysis.discrepancy.missing_force_report import DriveForce, plot
+    n = 2000
+    t = np.linspace(0.0, 4.0, n)
+    d = 0.03 * np.sin(2 * np.pi * t)
+    vel = np.gradient(d, t)
+    force = np.zeros((n, 3))
+    force[:, 0] = 50.0 * np.tanh(vel / 0.005)    # a 50 N friction-like missing force, front
+    big = np.zeros((n, 3))
+    big[:, :2] = 1500.0 * np.sin(2 * np.pi * t + 0.5)[:, None]
+    est = mfm.MissingForce(t, force, np.full((n, 3), 5.0), 1.0, np.ones(n, bool))
+    df = DriveForce("drive", est, np.column_stack([d, d]), np.column_stack([vel, vel]),
+                    np.column_stack([30000 * d, 30000 * d]), False, calibration=big, body=-big)
+    figs = []
+    monkeypatch.setattr(plt, "close", lambda fig=None: figs.append(fig))
+    plot(df, tmp_path / "loops.png", "title")
+    assert (tmp_path / "loops.png").exists()
+    left = [a for a in figs[0].axes if a.get_ylabel() == "front axle missing force [N]"]
+    assert len(left) == 2
+    for a in left:
+        lo, hi = a.get_ylim()
+        assert 100.0 <= hi - lo <= 200.0   # +-50 N with matplotlib's margin, not +-1500 N

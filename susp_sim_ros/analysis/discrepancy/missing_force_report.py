@@ -230,11 +230,12 @@ def write_csv(d: DriveForce, path: Path) -> None:
 
 def plot(d: DriveForce, path: Path, title: str) -> None:
     """Loops of one drive: per axle the missing force against deflection and against deflection
-    velocity, the calibration's corner part (the corner force the calibration supplied, when computed) and
-    its body part (the inertial force of the calibrated mass and inertia change, which the base model's
-    body with its file mass lacks) beside it on the same axis, the model's own suspension force (less its
-    mean) on the right axis; below, the three channels over time with their 95 % band, the calibration's
-    corner parts dashed and its body parts dotted."""
+    velocity on the left axis, scaled to it alone (its shape is what is read); on the right axis the
+    model's own forces: its suspension force (less its mean), the calibration's corner part (the corner
+    force the calibration supplied, when computed) and its body part (the inertial force of the calibrated
+    mass and inertia change, which the base model's body with its file mass lacks), often ten times the
+    missing force. Below, the three channels over time with their 95 % band (left axis), the calibration's
+    corner parts dashed and its body parts dotted (right axis)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -244,39 +245,50 @@ def plot(d: DriveForce, path: Path, title: str) -> None:
         for col, (x, label) in enumerate(((d.deflection[:, row] * 1e3, "deflection [mm] (+ bump)"),
                                          (d.velocity[:, row] * 1e3, "deflection velocity [mm/s]"))):
             a = ax[row, col]
-            a.plot(x[v], e.force[v, row], color="C3", lw=1.0, label="missing force (calibrated model)")
-            if d.calibration is not None:
-                a.plot(x[v], d.calibration[v, row], color="C0", lw=0.8,
-                       label="calibration's corner part (calibrated - base model)")
-                if d.body is not None:
-                    a.plot(x[v], d.body[v, row], color="C2", lw=0.8,
-                           label="calibration's body part (-(mass, inertia change) x acceleration)")
-                a.legend(loc="upper left", fontsize=7)
+            a.plot(x[v], e.force[v, row], color="C3", lw=1.2, label="missing force (calibrated model)")
             a.set_xlabel(label)
             a.set_ylabel(f"{axle} axle missing force [N]", color="C3")
             b = a.twinx()
             m = d.model_force[:, row]
-            b.plot(x[v], m[v] - m[v].mean(), color="0.6", lw=0.7, label="model's suspension force")
-            b.set_ylabel("model's suspension force - mean [N]", color="0.4")
+            b.plot(x[v], m[v] - m[v].mean(), color="0.6", lw=0.7, label="model's suspension force - mean")
+            if d.calibration is not None:
+                b.plot(x[v], d.calibration[v, row], color="C0", lw=0.7,
+                       label="calibration's corner part (calibrated - base model)")
+            if d.body is not None:
+                b.plot(x[v], d.body[v, row], color="C2", lw=0.7,
+                       label="calibration's body part (-(mass, inertia change) x acceleration)")
+            b.set_ylabel("model's forces [N] (grey, blue, green)", color="0.4")
+            a.set_zorder(b.get_zorder() + 1)  # the missing force drawn over the model's forces
+            a.patch.set_visible(False)
+            (h1, l1), (h2, l2) = a.get_legend_handles_labels(), b.get_legend_handles_labels()
+            a.legend(h1 + h2, l1 + l2, loc="upper left", fontsize=7)
             a.set_title(f"{axle} axle" + (" (input not measured: includes the road)" if d.unmeasured_input else ""))
             a.grid(alpha=0.3)
     gs = ax[2, 0].get_gridspec()
     ax[2, 0].remove()
     ax[2, 1].remove()
     a = fig.add_subplot(gs[2, :])
+    b = a.twinx() if d.calibration is not None or d.body is not None else None
     for j, ch in enumerate(mf.CHANNELS):
         unit = "N*m" if ch.endswith("Nm") else "N"
-        a.plot(e.t, np.where(v, e.force[:, j], np.nan), lw=1.0, label=f"{ch[:-2].rstrip('_')} [{unit}]")
-        a.fill_between(e.t, e.force[:, j] - 2 * e.sd[:, j], e.force[:, j] + 2 * e.sd[:, j], alpha=0.2)
-        if d.calibration is not None:
-            a.plot(e.t, np.where(v, d.calibration[:, j], np.nan), lw=0.8, ls="--", color=f"C{j}",
+        a.plot(e.t, np.where(v, e.force[:, j], np.nan), lw=1.0, color=f"C{j}", label=f"{ch[:-2].rstrip('_')} [{unit}]")
+        a.fill_between(e.t, e.force[:, j] - 2 * e.sd[:, j], e.force[:, j] + 2 * e.sd[:, j], color=f"C{j}", alpha=0.2)
+        if b is not None and d.calibration is not None:
+            b.plot(e.t, np.where(v, d.calibration[:, j], np.nan), lw=0.7, ls="--", color=f"C{j}",
                    label=f"{ch[:-2].rstrip('_')}: calibration's corner part")
-        if d.body is not None:
-            a.plot(e.t, np.where(v, d.body[:, j], np.nan), lw=0.8, ls=":", color=f"C{j}",
+        if b is not None and d.body is not None:
+            b.plot(e.t, np.where(v, d.body[:, j], np.nan), lw=0.7, ls=":", color=f"C{j}",
                    label=f"{ch[:-2].rstrip('_')}: calibration's body part (mass, inertia)")
     a.set_xlabel("time [s]")
-    a.set_ylabel("missing force, +-2 sd")
-    a.legend(loc="upper right", fontsize=7, ncol=2)
+    a.set_ylabel("missing force, +-2 sd (solid)")
+    handles, labels = a.get_legend_handles_labels()
+    if b is not None:
+        b.set_ylabel("calibration's parts (dashed, dotted)", color="0.4")
+        a.set_zorder(b.get_zorder() + 1)
+        a.patch.set_visible(False)
+        h2, l2 = b.get_legend_handles_labels()
+        handles, labels = handles + h2, labels + l2
+    a.legend(handles, labels, loc="upper right", fontsize=7, ncol=2)
     a.grid(alpha=0.3)
     fig.suptitle(title)
     fig.tight_layout()
