@@ -206,7 +206,8 @@ def verdict(f) -> tuple[str, str]:
         return "unexplained_residual", why + tried_words
     # Accepted terms passed their own held-out and stability tests: they are named even when a residual
     # remains (hiding them under "unexplained" lost correct terms); the remainder is stated beside them.
-    why = f"{', '.join(phys)} explain {100 * explained:.0f} % of the held-out residual above noise"
+    why = (f"{', '.join(phys)} explain{'s' if len(phys) == 1 else ''} {100 * explained:.0f} % of the held-out "
+           "residual above noise")
     if after > line:
         why += (f"; {after:.2f} x the noise floor remains held-out, above {level}: more is missing than "
                 f"the candidate library names")
