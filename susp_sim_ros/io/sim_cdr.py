@@ -89,6 +89,7 @@ _SUSP_LAYOUT = suspension_msg(np.zeros(int(SUSPENSION_COLUMNS.max()) + 1))["layo
 _SUSP_PREFIX = encode_float64_multiarray([(d["label"], d["size"], d["stride"]) for d in _SUSP_LAYOUT["dim"]],
                                          _SUSP_LAYOUT["data_offset"], np.zeros(_N_SUSP))[:-8 * _N_SUSP]
 
+
 def suspension_cdr(y: np.ndarray) -> bytes:
     """``std_msgs/msg/Float64MultiArray`` as :func:`~.messages.suspension_msg` builds it, in CDR."""
     return _SUSP_PREFIX + np.asarray(y, dtype="<f8")[SUSPENSION_COLUMNS].tobytes()

@@ -44,7 +44,7 @@ import numpy as np
 from ...model import Model
 from ...model.layout import P_INDEX
 from ...model.params import AXLES, FrictionVariant, VehicleParams, load_settings
-from .candidates import CALIBRATION, CandParam, Candidate, neutral_base
+from .candidates import CALIBRATION, CandParam, Candidate, interval_floor, neutral_base
 
 INFORMED_SHRINK = 0.5   # posterior sd / prior sd at most this: informed
 INFORMED_EIGEN = 3.0    # data information above 3x the prior's along a direction: informed combination
@@ -88,7 +88,7 @@ class CalParam:
     def interval_floor(self, value: float) -> float:
         """The lowest value a reported interval may show: 0 for a quantity that cannot be negative (its
         documented range starts at or above 0; never above the estimate ``value``), else unbounded."""
-        return min(0.0, value) if self.lo >= 0.0 or self.field in POSITIVE else -math.inf
+        return interval_floor(self.lo >= 0.0 or self.field in POSITIVE, value)
 
     @property
     def bounds(self) -> tuple[float, float]:

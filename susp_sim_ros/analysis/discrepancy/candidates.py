@@ -40,6 +40,12 @@ PHYSICS, PARAMETER, MEASUREMENT = "physics", "parameter", "measurement"
 CALIBRATION = "calibration"  # the base model's own parameters (see .calibration), never missing physics
 
 
+def interval_floor(nonnegative: bool, value: float) -> float:
+    """The lowest end a reported 95 % interval of a value ``value`` may show: 0 for a quantity that cannot be
+    negative (never above the estimate), else unbounded (-inf)."""
+    return min(0.0, value) if nonnegative else -math.inf
+
+
 @dataclass(frozen=True)
 class CandParam:
     """One free parameter: neutral value (no effect), bounds, finite-difference/scale step, unit."""
@@ -68,7 +74,7 @@ class CandParam:
         x +- 1.96 se knows no bound; cut at 0 it still holds every value the physics allows, and an interval
         that held zero still does (what "holds no effect" reads is unchanged)."""
         low = self.lower if self.physical_lower is None else self.physical_lower
-        return min(0.0, value) if low >= 0.0 else -math.inf
+        return interval_floor(low >= 0.0, value)
 
 
 @dataclass(frozen=True)

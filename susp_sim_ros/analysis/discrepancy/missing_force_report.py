@@ -258,10 +258,7 @@ def plot(d: DriveForce, path: Path, title: str) -> None:
                 b.plot(x[v], d.body[v, row], color="C2", lw=0.7,
                        label="calibration's body part (-(mass, inertia change) x acceleration)")
             b.set_ylabel("model's forces [N] (grey, blue, green)", color="0.4")
-            a.set_zorder(b.get_zorder() + 1)  # the missing force drawn over the model's forces
-            a.patch.set_visible(False)
-            (h1, l1), (h2, l2) = a.get_legend_handles_labels(), b.get_legend_handles_labels()
-            a.legend(h1 + h2, l1 + l2, loc="upper left", fontsize=7)
+            _over_twin(a, b, loc="upper left", fontsize=7)
             a.set_title(f"{axle} axle" + (" (input not measured: includes the road)" if d.unmeasured_input else ""))
             a.grid(alpha=0.3)
     gs = ax[2, 0].get_gridspec()
@@ -281,19 +278,26 @@ def plot(d: DriveForce, path: Path, title: str) -> None:
                    label=f"{ch[:-2].rstrip('_')}: calibration's body part (mass, inertia)")
     a.set_xlabel("time [s]")
     a.set_ylabel("missing force, +-2 sd (solid)")
-    handles, labels = a.get_legend_handles_labels()
     if b is not None:
         b.set_ylabel("calibration's parts (dashed, dotted)", color="0.4")
-        a.set_zorder(b.get_zorder() + 1)
-        a.patch.set_visible(False)
-        h2, l2 = b.get_legend_handles_labels()
-        handles, labels = handles + h2, labels + l2
-    a.legend(handles, labels, loc="upper right", fontsize=7, ncol=2)
+    _over_twin(a, b, loc="upper right", fontsize=7, ncol=2)
     a.grid(alpha=0.3)
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
+
+
+def _over_twin(a, b, **legend) -> None:
+    """Axis ``a`` (the missing force) drawn over its twin ``b`` (the model's forces; None: no twin), with one
+    legend of both."""
+    handles, labels = a.get_legend_handles_labels()
+    if b is not None:
+        a.set_zorder(b.get_zorder() + 1)
+        a.patch.set_visible(False)
+        h2, l2 = b.get_legend_handles_labels()
+        handles, labels = handles + h2, labels + l2
+    a.legend(handles, labels, **legend)
 
 
 def write(f, out: Path, name: str, *, plots: bool = True, renderer: FigureRenderer | None = None) -> dict:
@@ -340,9 +344,10 @@ def markdown(mf_json: dict) -> list[str]:
              "rear [N] | calibration's body part band RMS front / rear [N] "
              "| base model's lack band RMS front / rear [N] |",
              "|---|---|---|---|---|---|---|---|---|---|"]
+    def num(x):
+        return "-" if x is None else f"{round(x):d}"  # never "-0"
+
     for drive, e in mf_json["per_drive"].items():
-        def num(x):
-            return "-" if x is None else f"{round(x):d}"  # never "-0"
         lines.append(f"| {drive}{' (input not measured)' if e['unmeasured_input'] else ''} | "
                      f"{e['front_N']['rms']:.0f} | {e['rear_N']['rms']:.0f} | {e['roll_Nm']['rms']:.0f} | "
                      f"{num(e['front_N']['loop_half_height_N'])} | {num(e['rear_N']['loop_half_height_N'])} | "
