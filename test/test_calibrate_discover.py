@@ -275,12 +275,13 @@ def test_consider_parameters_widen_intervals_by_what_fixing_them_can_cost():
     assert consider_covariance(x, H, np.zeros_like(x), np.array([0.1]), 1.0)[0, 0] == pytest.approx(0, abs=1e-12)
     # the consider set: ranged values calibration may not move; never a definition such as the 1 mm/s
     # friction reference speed, never a calibrated value (the Dahl stiffness is calibrated: the drives
-    # inform it, and held at its file value it pulled the whole car's scale)
+    # inform it, and held at its file value it pulled the whole car's scale; so are the unsprung masses)
     vp, var = load_vehicle("passat_b8_like"), load_variant("full")
     names = {p.name for p in consider_params(vp, var)}
-    assert {"tyre_damping", "unsprung_mass_front"} <= names
-    assert "sv_reference" not in names and "sprung_mass" not in names and "dahl_stiffness" not in names
-    assert "dahl_stiffness" in {p.name for p in calibration_params(vp, var)}
+    assert {"tyre_damping", "roll_centre_height_front"} <= names
+    assert not names & {"sv_reference", "sprung_mass", "dahl_stiffness", "unsprung_mass_front", "unsprung_mass_rear"}
+    calibrated = {p.name for p in calibration_params(vp, var)}
+    assert {"dahl_stiffness", "unsprung_mass_front", "unsprung_mass_rear"} <= calibrated
 
 
 def test_backward_elimination_drops_a_term_a_later_one_made_redundant(monkeypatch):
@@ -368,6 +369,31 @@ def test_a_value_the_other_drives_move_only_together_with_another_is_held_in_the
     assert np.sum(collinear.jac[~held, 0] ** 2) > 100.0   # its own column: far above the prior's 1
     assert _informed_only_by(collinear, held, pw=1.0) == [0]
     assert _informed_only_by(fit(np.column_stack([t, u])), held, pw=1.0) == []
+
+
+def test_a_value_the_held_drive_carries_most_of_is_its_own_even_when_the_others_inform_it():
+    """The oil-empty front damper of a left-out front-empty bump crossing: the state's sine steer informs
+    it (more than its prior), but the bump crossing carries most of its information. Refitted on the sine
+    steer alone the value follows what the model lacks there, and the bump crossing is judged by it; as the
+    left-out drive's own value (``finder.HELD_SHARE``) it keeps the joint fit's value. A value the other
+    drives carry most of is refitted as before."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.finder import HELD_SHARE, _informed_only_by
+    from susp_sim_ros.analysis.discrepancy.fit import FitResult
+    rng = np.random.default_rng(6)
+    st = SimpleNamespace(prior=lambda: (np.array([0]), np.zeros(1), np.ones(1)), prior_gain=1.0, data_weight=1.0)
+    held = np.r_[np.ones(100, bool), np.zeros(400, bool)]
+
+    def fit(held_scale: float) -> FitResult:
+        J = np.r_[held_scale * rng.normal(size=100), 0.5 * rng.normal(size=400)][:, None]
+        return FitResult(structure=st, x=np.zeros(1), rss=500.0, n=500, k_bic=1, bic=0.0, success=True,
+                         message="", nfev=1, residual=np.zeros(500), jac=J, n_eff=500.0)
+
+    strong = fit(3.0)  # held rows' information ~900, the others' ~100: both far above the prior's 1
+    others = float(np.sum(strong.jac[~held, 0] ** 2))
+    assert others > 50.0 and others < HELD_SHARE * float(np.sum(strong.jac[:, 0] ** 2))
+    assert _informed_only_by(strong, held, pw=1.0) == [0]
+    assert _informed_only_by(fit(0.5), held, pw=1.0) == []  # the others carry 4/5 of it: refitted
 
 
 def test_the_measurement_chain_is_decided_again_on_the_model_with_its_physics(monkeypatch):

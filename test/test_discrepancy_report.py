@@ -118,3 +118,24 @@ def test_a_term_profiled_out_per_drive_is_not_said_to_have_zero_parameters():
     bias, lag = BY_NAME["sensor_bias"], BY_NAME["time_offset"]
     assert bias.n_params == 0 and "parameter(s)" not in statement(bias, {}, {}, None)
     assert f"; {lag.n_params} parameter(s)" in statement(lag, {}, {}, None)
+
+
+def test_held_out_table_says_which_values_were_calibrated_on_the_left_out_drive():
+    """A fold's "after" includes the values calibrated on the left-out drive (those the other drives cannot
+    predict): the per-drive table names them and gives the RMSE with the joint fit's values beside it, so
+    a reader sees how much of "held-out" is that calibration."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy import report
+    folds = [{"drive": "bump_front_empty", "rmse_before_deg_s": 0.1675, "rmse_after_deg_s": 0.0608,
+              "rmse_after_joint_values_deg_s": 0.0633,
+              "calibrated_on_drive": {"calibration.damper_measured_empty_front": 0.884}},
+             {"drive": "bump_intact", "rmse_before_deg_s": 0.0628, "rmse_after_deg_s": 0.0581,
+              "rmse_after_joint_values_deg_s": 0.0581, "calibrated_on_drive": {}}]
+    f = SimpleNamespace(heldout_={"folds": folds, "after_joint_values_deg_s": 0.0611},
+                        noise_={"units": {"roll_rate": "deg/s"}})
+    rep = {"heldout_rmse_by_signal": {"roll_rate": {"before": 0.2, "after": 0.06}},
+           "noise_floors": {"roll_rate": 0.05}, "heldout_rmse_before_deg_s": 0.13, "heldout_rmse_after_deg_s": 0.0596}
+    text = "\n".join(report._md_heldout(f, rep, {}, "x"))
+    assert "| bump_front_empty | 0.1675 | 0.0608 | 0.0633 | damper_measured_empty_front |" in text
+    assert "| bump_intact | 0.0628 | 0.0581 | 0.0581 | - |" in text
+    assert "| **pooled** | **0.1300** | **0.0596** | 0.0611 | |" in text

@@ -17,8 +17,8 @@ most :data:`INFORMED_SHRINK` of the prior's; an eigen-direction of ``F`` with ei
 :data:`INFORMED_EIGEN` that no single parameter carries is reported as an informed *combination*. The
 parameters the drives do not inform are held at their prior value and reported as not informed.
 
-Intervals: the values the vehicle file gives a range but does not calibrate (tyre damping, unsprung
-masses, roll centres, ...; :func:`consider_params`) and the calibration values the drives do not inform
+Intervals: the values the vehicle file gives a range but does not calibrate (tyre damping, roll
+centres, ...; :func:`consider_params`) and the calibration values the drives do not inform
 stay at their file value, but the calibrated values' intervals include what that can cost
 (:func:`consider_covariance`), so an estimate that leans on an assumed value carries that value's
 uncertainty. The priors' spread itself is checked against the data: where the calibrated values sit
@@ -150,7 +150,7 @@ NOT_IN_THE_DYNAMICS = frozenset({"rolling_radius"})
 
 def consider_params(vp: VehicleParams, variant: FrictionVariant) -> list[CalParam]:
     """The "consider" parameters: values the vehicle file gives a plausible range but does not let the
-    calibration move (``calibrate: false``, e.g. tyre damping, unsprung mass, steering ratio). They stay
+    calibration move (``calibrate: false``, e.g. tyre damping, steering ratio). They stay
     at their file value, but their range is an uncertainty the calibrated values inherit
     (:func:`consider_covariance`). Degenerate ranges (a definition, such as the 1 mm/s friction reference
     speed) and damper tables are not uncertain in this sense."""

@@ -74,6 +74,7 @@ MIN_HELDOUT_GAIN = 0.02    # a term must lower the held-out residual above noise
 TRIALS = 3                 # best-screened candidates (and pairs) refitted nonlinearly at each step
 TRIAL_NFEV = 10            # iterations of such a trial fit (warm start; the accepted model is polished)
 HELDOUT_NFEV = 6           # least-squares iterations of each final leave-one-drive-out refit (warm start)
+HELD_SHARE = 0.5           # other drives carrying less than this share of a value's information: the held drive's own
 DATA_WEIGHTS = (1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01)  # candidate weights of the data against the priors
 WEIGHT_TOLERANCE = 0.005   # ... the largest within 0.5 % of the best held-out residual is taken
 MIN_STABLE = 0.5           # ... and be selected (train-set BIC test) in at least half the refits
@@ -1103,8 +1104,8 @@ class DiscrepancyFinder:
 
     def _recalibrate(self, ev: Evaluator, cur: FitResult) -> FitResult:
         """The current structure with every value the vehicle file gives a range refitted within its prior
-        (the calibration's informed values and the held ones, :meth:`_held_values`: unsprung masses, tyre
-        damping, roll centres, ...): the most a recalibration of the known physics
+        (the calibration's informed values and the held ones, :meth:`_held_values`: tyre damping, roll
+        centres, ...): the most a recalibration of the known physics
         can explain. A candidate term is named only when it explains more than this (its fit's residual
         is below this one's): "no recalibration within the priors explains the same residual"."""
         if not self.calibrate:
@@ -1240,8 +1241,9 @@ class DiscrepancyFinder:
         """Leave-one-drive-out: the final structure (calibration included) refitted without each drive
         predicts it; against the base model. Per signal and for the primary gyro signals [deg/s].
 
-        Calibration values that only the held-out drive informs (:func:`_informed_only_by`: the
-        oil-empty damper of the only drive with that axle empty) no other drive can predict. They keep
+        Calibration values that only the held-out drive informs, or that it carries most of
+        (:func:`_informed_only_by`: the oil-empty damper of the only drive with that axle empty) no other
+        drive can predict. They keep
         the joint fit's value while the others are refitted without the drive, and are then calibrated
         on the held-out drive with every other value at the fold's (the drive's own calibration, as its
         sensor bias is; :func:`_recalibrate_on_drive`): the fold is judged as a user would run it on a
@@ -1429,7 +1431,10 @@ def _informed_only_by(fit: FitResult, held: np.ndarray, pw: float | None = None)
     What the other rows tell about a value is its information with every other parameter free (the
     Schur complement of the training rows' Gauss-Newton information, the other values' priors included),
     not its own column's: a drive that moves the value only together with others (the rear-empty sine
-    steer, where the oil-empty rear damper trades against the friction terms) does not inform it."""
+    steer, where the oil-empty rear damper trades against the friction terms) does not inform it. Nor do
+    rows that carry less than :data:`HELD_SHARE` of what all rows tell about it: the front-empty sine steer
+    informs the oil-empty front damper, but refitted on it alone, without the bump crossing that carries
+    most of its information, the value follows what the model lacks in the sine steer."""
     if fit.jac is None or not len(fit.x):
         return []
     tr = ~held
@@ -1441,10 +1446,13 @@ def _informed_only_by(fit: FitResult, held: np.ndarray, pw: float | None = None)
         pw = math.sqrt(tr.sum() / ne_t) * fit.structure.prior_gain
     prior_info = np.zeros(len(fit.x))
     prior_info[pidx] = (pw / psd) ** 2
-    J = fit.jac[tr]
-    A = J.T @ J + np.diag(prior_info)
-    info = 1.0 / np.maximum(np.diag(np.linalg.pinv(A, hermitian=True)), 1e-300) - prior_info
-    return [int(j) for j in pidx if info[j] < prior_info[j]]
+
+    def data_info(J: np.ndarray) -> np.ndarray:
+        A = J.T @ J + np.diag(prior_info)
+        return 1.0 / np.maximum(np.diag(np.linalg.pinv(A, hermitian=True)), 1e-300) - prior_info
+
+    info, info_all = data_info(fit.jac[tr]), data_info(fit.jac)
+    return [int(j) for j in pidx if info[j] < prior_info[j] or info[j] < HELD_SHARE * info_all[j]]
 
 
 def _recalibrate_on_drive(ev: Evaluator, st: Structure, x: np.ndarray, r: int, own: Sequence[int]) -> np.ndarray:
