@@ -320,7 +320,8 @@ class DiscrepancyFinder:
     def _one_state_shifts(self, cur: FitResult) -> list[tuple[int, CalParam, str, float]]:
         """The calibrated values of ``cur`` that sit more than :data:`SHIFT_SD` prior standard deviations
         from their prior and that the drives of one vehicle state alone inform (without that state's rows
-        the data tell less about the value than its prior does: :func:`_informed_only_by`), as
+        the data tell less about the value than its prior does, or that state carries most of what all
+        drives tell: :func:`_informed_only_by`), as
         ``(index in cur.x, parameter, state, shift in prior sd)``. Such a value (the oil-empty rear damper
         of the one rear-empty car 39 % stronger than measured) is a hypothesis, not a fact."""
         if cur.jac is None:
@@ -352,7 +353,8 @@ class DiscrepancyFinder:
     def _one_state_values(self, fit: FitResult) -> dict[int, str]:
         """The calibration values of ``fit`` (index in ``fit.x``) that the drives of one vehicle state
         alone inform, with that state: without that state's rows the data tell less about the value than
-        its prior does (:func:`_informed_only_by`); every one when all drives share one state."""
+        its prior does, or less than half of what all rows tell (:func:`_informed_only_by`); every one when
+        all drives share one state."""
         st = fit.structure
         if CALIBRATION not in st.names or fit.jac is None:
             return {}
@@ -1243,8 +1245,8 @@ class DiscrepancyFinder:
 
         Calibration values that only the held-out drive informs, or that it carries most of
         (:func:`_informed_only_by`: the oil-empty damper of the only drive with that axle empty) no other
-        drive can predict. They keep
-        the joint fit's value while the others are refitted without the drive, and are then calibrated
+        drive can predict. They keep the joint fit's value while the others are refitted without the
+        drive, and are then calibrated
         on the held-out drive with every other value at the fold's (the drive's own calibration, as its
         sensor bias is; :func:`_recalibrate_on_drive`): the fold is judged as a user would run it on a
         new drive, not with a joint value fitted next to other values than the fold's. Each fold keeps
