@@ -227,7 +227,7 @@ UNLISTED = ("unlisted/damper_blow_off", "unlisted/arb_free_play", "unlisted/stri
             "unlisted/load_friction", "unlisted/damper_valve_stop_rear", "unlisted/load_friction_front",
             "unlisted/position_friction", "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
             "unlisted/progressive_spring_rear", "unlisted/air_assist_front", "unlisted/rebound_spring_front",
-            "unlisted/jounce_bumper_rear")
+            "unlisted/jounce_bumper_rear", "unlisted/seal_gas_friction")
 #: the split of every form before issue 26 (family_split.yaml may only gain forms, never move them)
 SPLIT_BEFORE_26 = {
     "development": ["structure/nominal", "structure/heun_1ms", "structure/velocity_scaling_ramp",
@@ -259,16 +259,18 @@ def test_existing_forms_keep_their_split_and_their_truth():
     added_later = {"viscous/bilinear_digressive", "unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                    "unlisted/load_friction_front", "unlisted/position_friction", "unlisted/viscoelastic_bushing",
                    "unlisted/bushing_two_branch_front", "unlisted/progressive_spring_rear",
-                   "unlisted/air_assist_front", "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear"}
+                   "unlisted/air_assist_front", "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear",
+                   "unlisted/seal_gas_friction"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
     for name in before:
         h = family.FORMS[name].hidden
         assert (h.blow_off_velocity_m_s, h.arb_free_play_m, h.stribeck_static_N, h.stribeck_coulomb_N,
-                h.load_friction_coefficient, h.position_friction_N, h.position_friction_rate_N_m) == \
+                h.load_friction_coefficient, h.position_friction_N, h.position_friction_rate_N_m, h.seal_friction_N) == \
             (off.blow_off_velocity_m_s, off.arb_free_play_m, off.stribeck_static_N, off.stribeck_coulomb_N,
-             off.load_friction_coefficient, off.position_friction_N, off.position_friction_rate_N_m), name
+             off.load_friction_coefficient, off.position_friction_N, off.position_friction_rate_N_m,
+             off.seal_friction_N), name
         if family.FORMS[name].effect == "gas_spring":   # a learned spring is right there (family.py, gas forms)
             assert family.FORMS[name].leading == ("deflection", "deflection_cubed", "bump_contact", "rebound_contact")
             assert family.FORMS[name].optional == ("damper_gas_preload", "unlisted_force")
@@ -289,11 +291,13 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-26" in text
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
-    assert doc["held_out"][-10:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert "added 2026-11-29 (issue 26)" in text
+    assert doc["held_out"][-11:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
-                                    "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear"]   # appended,
+                                    "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear",
+                                    "unlisted/seal_gas_friction"]   # appended,
     # held out from the start
     for name in UNLISTED:
         form = family.FORMS[name]
@@ -323,6 +327,7 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
                                                                      "deflection")
     assert family.FORMS["unlisted/jounce_bumper_rear"].leading == ("bump_contact", "deflection_cubed",
                                                                    "deflection")
+    assert family.FORMS["unlisted/seal_gas_friction"].leading == ("compression", "sign_velocity")
 
 
 @pytest.mark.parametrize("name", UNLISTED)
@@ -436,6 +441,17 @@ def test_hidden_force_of_the_unlisted_forms():
     fast = np.abs(v) > 0.01
     np.testing.assert_allclose(r.hidden[fast], lim[fast] * np.sign(v[fast]), rtol=1e-3)
     assert np.abs(r.hidden[r.deflection > 0.01]).max() > 40.0
+    # rod-seal friction pressed by the gas charge, every corner: F0 (1 - d / h)^-n with the sign of the deflection
+    # velocity once sliding (v_eps 1.5 mm/s): more in bump, less in rebound, never zero
+    r = family.case_truth(family.FORMS["unlisted/seal_gas_friction"], 1, "bump_front_empty")
+    v = np.gradient(r.deflection, r.t, axis=0)
+    f0 = np.array([35.0, 35.0, 30.0, 30.0])
+    lim = f0 * (1.0 - r.deflection / 0.10) ** -1.4
+    assert np.all(np.abs(r.hidden) <= lim * (1.0 + 1e-12))
+    fast = np.abs(v) > 0.01
+    np.testing.assert_allclose(r.hidden[fast], lim[fast] * np.sign(v[fast]), rtol=1e-3)
+    level = np.abs(r.hidden) / f0
+    assert level[fast & (r.deflection > 0.02)].min() > 1.3 and level[fast & (r.deflection < -0.02)].max() < 0.8
     # viscoelastic bushings, every corner: the Maxwell element's step recursion on the recorded deflection,
     # F+ = F e + c_b (dd / h) (1 - e), e = exp(-h k_b / c_b), with full or empty dampers alike
     form = family.FORMS["unlisted/viscoelastic_bushing"]

@@ -211,6 +211,11 @@ class TruthHidden:
     jounce_bumper_rate_N_m: tuple = (0.0, 0.0)    # an elastomer jounce bumper (front, rear) met beyond gap g of
     jounce_bumper_cubic_N_m3: tuple = (0.0, 0.0)  # bump from static: + k_j e + k_j3 e^3, e = max(d - g, 0) [N]
     jounce_bumper_gap_m: float = 0.025            # (a polyurethane bumper stiffening as it is squeezed)
+    seal_friction_N: tuple = (0.0, 0.0)           # damper rod-seal friction pressed by the gas charge (front,
+    seal_gas_height_m: float = 0.10               # rear): F0 (1 - d / h)^-n tanh(v/v_eps), the gas pressure of
+    seal_gas_exponent: float = 1.4                # a monotube damper's charge over its static value (h its gas
+    #                                               column per metre of deflection, n polytropic) presses the
+    #                                               seal: friction growing, not linearly, with the compression
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -349,7 +354,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
- WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, NW) = range(45)
+ WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, WSEAL, WSEALH, WSEALN, NW) = range(48)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -413,6 +418,8 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WRSK], W[i, WRSG] = hid.rebound_spring_rate_N_m[k], hid.rebound_spring_gap_m
         W[i, WJBK], W[i, WJBK3], W[i, WJBG] = hid.jounce_bumper_rate_N_m[k], hid.jounce_bumper_cubic_N_m3[k], \
             hid.jounce_bumper_gap_m
+        W[i, WSEAL], W[i, WSEALH], W[i, WSEALN] = hid.seal_friction_N[k], hid.seal_gas_height_m, \
+            hid.seal_gas_exponent
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -513,8 +520,8 @@ def _hidden_springs(d, w):
 @njit(cache=True)
 def _strut_friction(w, P, d, dd, Ft):
     """The hidden strut friction laws of one corner (``w`` its row of W) [N, in Fs's sense]: a Stribeck
-    (velocity-weakening) friction, one growing with the vertical tyre load ``Fz0 + Ft`` and one growing with
-    the compression ``d``; 0 when none is set."""
+    (velocity-weakening) friction, one growing with the vertical tyre load ``Fz0 + Ft``, one growing with
+    the compression ``d`` and a rod seal's pressed by the damper's gas charge; 0 when none is set."""
     F = 0.0
     slide = math.tanh(dd / P[STREPS])   # each law's sign of sliding, smoothed over v_eps
     if w[WSTRS] != 0.0 or w[WSTRC] != 0.0:
@@ -526,6 +533,9 @@ def _strut_friction(w, P, d, dd, Ft):
     if w[WPF0] != 0.0 or w[WPFK] != 0.0:
         Fpn = w[WPF0] + w[WPFK] * d
         F += (Fpn if Fpn > 0.0 else 0.0) * slide
+    if w[WSEAL] != 0.0:
+        q = 1.0 - d / w[WSEALH]
+        F += w[WSEAL] * max(q, 0.05) ** -w[WSEALN] * slide
     return F
 
 
