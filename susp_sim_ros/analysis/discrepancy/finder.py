@@ -1449,11 +1449,12 @@ def _informed_only_by(fit: FitResult, held: np.ndarray, pw: float | None = None)
     prior_info = np.zeros(len(fit.x))
     prior_info[pidx] = (pw / psd) ** 2
 
-    def data_info(J: np.ndarray) -> np.ndarray:
-        A = J.T @ J + np.diag(prior_info)
+    def data_info(gram: np.ndarray) -> np.ndarray:
+        A = gram + np.diag(prior_info)
         return 1.0 / np.maximum(np.diag(np.linalg.pinv(A, hermitian=True)), 1e-300) - prior_info
 
-    info, info_all = data_info(fit.jac[tr]), data_info(fit.jac)
+    Jh = fit.jac[held]   # the training rows' product is all rows' less the held rows' (they are few)
+    info, info_all = data_info(fit.gram - Jh.T @ Jh), data_info(fit.gram)
     return [int(j) for j in pidx if info[j] < prior_info[j] or info[j] < HELD_SHARE * info_all[j]]
 
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from collections.abc import Sequence
 
 import numpy as np
@@ -200,6 +201,14 @@ class FitResult:
         ratio = self.n_eff / self.n if self.n_eff > 0 else 1.0
         return ratio / s2 * self.structure.data_weight
 
+    @cached_property
+    def gram(self) -> np.ndarray:
+        """``J.T @ J`` of the whitened residual's Jacobian (every row, unscaled), formed once per fit: the
+        information, the prior scale and each leave-one-drive-out fold's information read it."""
+        J = self.jac
+        k = len(self.x)
+        return np.zeros((k, k)) if J is None else J.T @ J
+
     def information(self, prior_scale: float = 1.0) -> np.ndarray:
         """Posterior information: Gauss-Newton information of the data (scaled by
         :meth:`data_information_scale`, the same weighting as the objective) plus the priors' (the
@@ -208,7 +217,7 @@ class FitResult:
         k = len(self.x)
         if J is None or k == 0:
             return np.zeros((k, k))
-        H = (J.T @ J) * self.data_information_scale()
+        H = self.gram * self.data_information_scale()
         pidx, _, psd = self.structure.prior()
         H[pidx, pidx] += 1.0 / (prior_scale * psd) ** 2
         return H
@@ -236,7 +245,7 @@ class FitResult:
         pidx, mu, psd = self.structure.prior()
         if J is None or len(pidx) < 2:
             return 1.0
-        Hd = (J.T @ J) * self.data_information_scale()
+        Hd = self.gram * self.data_information_scale()
         other = np.setdiff1d(np.arange(len(self.x)), pidx)
         F = Hd[np.ix_(pidx, pidx)]
         if other.size:
