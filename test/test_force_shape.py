@@ -72,6 +72,10 @@ def test_features_are_what_their_names_say():
     moving = np.abs(V) > 0.02   # past the presliding travel the unit friction element has slid
     assert np.mean(np.sign(z[moving]) == np.sign(V[moving])) > 0.95
     np.testing.assert_allclose(get["lateral_force"], z * np.abs(FY) / sh["force_ref"])
+    # friction growing with the compression: the friction element times the signed deflection, so beside
+    # sign_velocity a level F0 + F1 d that is higher in bump than in rebound
+    np.testing.assert_allclose(get["compression"], z * x)
+    assert np.any((D > 0.01) & moving) and np.any((D < -0.01) & moving)
     # Stribeck: the friction element's level falls by 1/e over the Stribeck velocity of sliding
     np.testing.assert_allclose(get["velocity_weakening"], z * np.exp(-np.abs(V) / sh["stribeck_velocity"]))
     # a spring that relaxes: a unit Maxwell element's extension m, dm/dt = v - m / tau, exact per step
@@ -185,6 +189,28 @@ def test_the_learned_contact_spring_in_the_kernel_is_its_feature_on_the_run(feat
     assert np.max(np.abs(res.values[:, 8] - plain["PITCH_RATE"])) > 1e-2 * np.max(np.abs(plain["PITCH_RATE"]))
 
 
+def test_the_learned_friction_growing_with_the_compression_in_the_kernel_is_its_feature_on_the_run():
+    """The kernel's ``compression`` force along a bump crossing is its coefficient times the feature on the
+    run's own deflections (the unit friction element advanced over the same increments; beside a plain
+    friction level it raises the level in bump and lowers it in rebound), and it changes the motion."""
+    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
+                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
+    coef = 60.0   # [N] of friction level at d_ref of bump
+    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
+        _learned(c_compression=coef),)))
+    man = build_maneuver("bump_crossing", vp.wheelbase)
+    outs = [f"{o}_{w}" for o in ("DEFL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
+    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs)
+    D, F = res.values[:, :4], res.values[:, 4:8]
+    zero = np.zeros_like(D)
+    want = coef * feature_series("compression", D, zero, zero, zero, DT)
+    np.testing.assert_allclose(F[1:], want[:-1], rtol=0, atol=1e-9 * np.abs(F).max())
+    ref = shape_defaults()["deflection_ref"]
+    assert np.abs(F[1:][D[:-1] > 2 * ref]).max() > 2.0 * coef   # beyond 2 d_ref of bump: more than twice
+    plain = _run([], variant="dahl_only", vehicle=vp)
+    assert np.max(np.abs(res.values[:, 8] - plain["PITCH_RATE"])) > 1e-2 * np.max(np.abs(plain["PITCH_RATE"]))
+
+
 def test_the_learned_valve_and_orifice_act_only_as_far_as_the_damper_holds_oil():
     """``velocity_beyond_knee`` (a valve) and ``velocity_squared`` (an orifice) are forces of the damper's oil:
     on the rear-empty car (oil 1, 1, 0, 0) either learned on the rear axle changes nothing (to the bit), the
@@ -249,8 +275,9 @@ def test_the_learned_viscous_and_spring_features_are_the_listed_terms_in_the_ker
 #: draws the same problem as before (a column more shifts every later draw). Over 40 seeds of
 #: _one_drive_dominant the truth was the stable set in 25 with the earlier library and in 27 with the
 #: relaxing spring's six columns drawn in (2026-11-28): the step rule is not weakened by them.
-#: The contact springs (bump_contact, rebound_contact) left out the same way.
-DRAWN_BEFORE = ("relaxing_deflection", "bump_contact", "rebound_contact")
+#: The contact springs (bump_contact, rebound_contact) and the friction growing with the compression left out
+#: the same way.
+DRAWN_BEFORE = ("relaxing_deflection", "bump_contact", "rebound_contact", "compression")
 
 
 def _design(n_drives=6, n=600, seed=1, truth=None, noise=1.0):

@@ -267,7 +267,8 @@ def test_existing_forms_keep_their_split_and_their_truth():
     for name in before:
         h = family.FORMS[name].hidden
         assert (h.blow_off_velocity_m_s, h.arb_free_play_m, h.stribeck_static_N, h.stribeck_coulomb_N,
-                h.load_friction_coefficient, h.position_friction_N, h.position_friction_rate_N_m, h.seal_friction_N) == \
+                h.load_friction_coefficient, h.position_friction_N, h.position_friction_rate_N_m,
+                h.seal_friction_N) == \
             (off.blow_off_velocity_m_s, off.arb_free_play_m, off.stribeck_static_N, off.stribeck_coulomb_N,
              off.load_friction_coefficient, off.position_friction_N, off.position_friction_rate_N_m,
              off.seal_friction_N), name
@@ -312,9 +313,9 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/damper_blow_off"].leading == ("velocity_beyond_knee", "velocity_squared")
     assert family.FORMS["unlisted/arb_free_play"].leading == ("roll_free_play", "roll_deflection")
     assert family.FORMS["unlisted/stribeck_friction"].leading == ("sign_velocity",)
-    assert family.FORMS["unlisted/load_friction"].leading == ("sign_velocity",)
-    assert family.FORMS["unlisted/load_friction_front"].leading == ("sign_velocity",)
-    assert family.FORMS["unlisted/position_friction"].leading == ("sign_velocity",)
+    assert family.FORMS["unlisted/load_friction"].leading == ("sign_velocity", "compression")
+    assert family.FORMS["unlisted/load_friction_front"].leading == ("sign_velocity", "compression")
+    assert family.FORMS["unlisted/position_friction"].leading == ("sign_velocity", "compression")
     assert family.FORMS["unlisted/damper_valve_stop_rear"].leading == ("velocity_beyond_knee", "velocity_squared")
     assert family.FORMS["unlisted/viscoelastic_bushing"].leading == ("deflection_velocity", "deflection")
     assert family.FORMS["unlisted/bushing_two_branch_front"].leading == ("relaxing_deflection", "deflection_velocity",

@@ -207,7 +207,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       "load at the rear corners: mu Fz tanh(v/v_eps), mu 0.02, v_eps 1 mm/s (a friction law of "
                       "another shape: no candidate depends on the vertical load)",
                       hidden=TruthHidden(load_friction_coefficient=(0.0, 0.02), stribeck_eps_m_s=0.001),
-                      leading=("sign_velocity",), **unl),
+                      leading=("sign_velocity", "compression"), **unl),
         # added 2026-11-27 (issue 26), held out from the start, before the learned knee's change was run: a
         # valve of another sense, knee and axle than the blow-off form
         GeneratorForm("unlisted/damper_valve_stop_rear", description="a rear damper valve at its stop: beyond "
@@ -222,7 +222,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       "vertical load at the front corners: mu Fz tanh(v/v_eps), mu 0.012, v_eps 3 mm/s (the "
                       "load-dependent law of unlisted/load_friction on the other axle, with other values)",
                       hidden=TruthHidden(load_friction_coefficient=(0.012, 0.0), stribeck_eps_m_s=0.003),
-                      leading=("sign_velocity",), **unl),
+                      leading=("sign_velocity", "compression"), **unl),
         # added 2026-11-28 (issue 26), held out from the start, before any run of the finder on it and before the
         # selection's change of that day (forward selection on left-out drives) was run on it
         GeneratorForm("unlisted/position_friction", description="strut friction growing with the compression at "
@@ -231,7 +231,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       "another shape, on both axles, falling in rebound)",
                       hidden=TruthHidden(position_friction_N=(30.0, 25.0), position_friction_rate_N_m=(1500.0, 1200.0),
                                          stribeck_eps_m_s=0.002),
-                      leading=("sign_velocity",), **unl),
+                      leading=("sign_velocity", "compression"), **unl),
         # added 2026-11-28 (issue 26), held out from the start, before any run of the finder on it: the issue's
         # third example, a bushing that stiffens with frequency (no candidate depends on frequency)
         GeneratorForm("unlisted/viscoelastic_bushing", description="a viscoelastic bushing at every corner, "
@@ -291,6 +291,9 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(jounce_bumper_rate_N_m=(0.0, 5000.0), jounce_bumper_cubic_N_m3=(0.0, 1.5e7),
                                          jounce_bumper_gap_m=0.025),
                       leading=("bump_contact", "deflection_cubed", "deflection"), **unl),
+        # (the three load- and compression-dependent friction forms' leading dependences gained the friction growing
+        # with the compression with the vocabulary, 2026-11-29: their level follows the tyre load or the deflection,
+        # which is that feature beside a plain level; no score of a run before that feature changes)
         # added 2026-11-29 (issue 26), held out from the start, before any run of the finder on it and before the
         # learned term's friction growing with the compression (made after the load and position friction forms
         # read a constant friction) it is to test blind: a friction level of another law of the deflection

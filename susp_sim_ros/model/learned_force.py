@@ -49,6 +49,12 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             rebound)
 ``rebound_contact``         min(d + g, 0) / d_ref: a spring met beyond a gap ``g`` of rebound (a
                             rebound or top-out spring)
+``compression``             z d / d_ref: friction whose level grows with the compression and falls in
+                            rebound (beside ``sign_velocity`` a level F0 + F1 d: Coulomb friction in a
+                            strut's rod guide and seal is proportional to their normal force, and that
+                            follows the deflection where the spring's side load or a damper's gas
+                            pressure presses them: Reimpell, Stoll and Betzler, The Automotive Chassis,
+                            2nd ed., 2001, on the McPherson strut's friction from the spring's side load)
 ==========================  =======================================================================
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
@@ -78,10 +84,10 @@ from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
             "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection", "bump_contact",
-            "rebound_contact")
+            "rebound_contact", "compression")
 N_FEATURES = len(FEATURES)
 #: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
-FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force")
+FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force", "compression")
 #: a friction law's velocity weakening: a shape of a learned friction, not a dependence of its own
 WEAKENING = "velocity_weakening"
 #: features that shape a law rather than stand for a dependence (not offered to the regression)
@@ -133,6 +139,8 @@ def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref,
         return min(max(roll, -gap), gap) / dref
     if k == 12:
         return z * math.exp(-abs(v) / vs)
+    if k == 16:
+        return z * x
     return _spring_state_feature(k, d, rel, dref, cgap)
 
 
@@ -164,7 +172,8 @@ def learned_force_force(p, po, s, so, i, c):
     return (p[q] + p[q + 4] * x + p[q + 8] * x * x * x + p[q + 12] * u + p[q + 16] * damper * u * abs(u)
             + p[q + 20] * damper * sgn * max(abs(v) - p[po + _KNEE + i], 0.0) / vref
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
-                   + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i]))
+                   + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i])
+                   + p[q + 64] * x)
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
             + p[q + 52] * s[so + _REL + i] / dref
             + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + cgap, 0.0)) / dref)
@@ -242,7 +251,8 @@ _COEF_MEANING = {
     "roll_free_play": "force at a left-right difference d_ref within the play",
     "relaxing_deflection": "spring force at a change of d_ref faster than the relaxation time",
     "bump_contact": "spring force d_ref of bump beyond the contact gap",
-    "rebound_contact": "spring force d_ref of rebound beyond the contact gap"}
+    "rebound_contact": "spring force d_ref of rebound beyond the contact gap",
+    "compression": "friction level at d = d_ref of bump over its level at static (less in rebound)"}
 
 LEARNED_FORCE = register_term(PhysicsTerm(
     name="unlisted_force", component="axle",

@@ -4,7 +4,7 @@ What the model still lacks is regressed on features of the model's own corner st
 (:data:`~susp_sim_ros.model.learned_force.FEATURES`: deflection and its cube, deflection velocity, its
 square and a knee in it, friction-like states, stroke amplitude, wheel forces, the left-right
 deflection difference and a free play of it, a spring that relaxes, springs met beyond a contact gap of bump
-or rebound), one coefficient [N] per (feature, axle). The regression
+or rebound, friction growing with the compression), one coefficient [N] per (feature, axle). The regression
 runs through the model's own dynamics: each column is the effect of a feature's force, acting at the
 axle's two corners as a suspension force does, on every compared signal of every drive (the
 forward-difference Jacobian of the whitened residual, as the finder's criteria see it), and the target
@@ -95,6 +95,8 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
          "bump_contact": "a spring met beyond {gap_mm:.0f} mm of bump (a jounce bumper, coils coming to block; "
                          "at 0 mm a spring stiffer in bump than in rebound)",
          "rebound_contact": "a spring met beyond {gap_mm:.0f} mm of rebound (a rebound or top-out spring)",
+         "compression": "friction-like, growing with the compression and falling in rebound (a strut's guide or "
+                        "seal pressed harder as the spring or the damper's gas is compressed)",
          "road_height": "follows the road height under the wheel (an input, not a state)",
          "road_rate": "follows the rate of the road height under the wheel (an input, not a state)",
          **{f"rotation_{t}{k}": f"follows the wheel's rotation, harmonic {k}, {part} part (an input, not a state)"
@@ -107,8 +109,7 @@ SENSE = {"constant": ("pushes the body up", "pulls the body down"),
                                                 "relaxing_deflection", "bump_contact", "rebound_contact")},
          **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
                                                            "velocity_beyond_knee")},
-         **{f: ("more friction", "less friction") for f in ("sign_velocity", "peak_deflection", "lateral_force",
-                                                             "longitudinal_force")},
+         **{f: ("more friction", "less friction") for f in FRICTION_LIKE},
          **{f: ("positive", "negative") for f in INPUT_FEATURES}}
 
 
