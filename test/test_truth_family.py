@@ -10,6 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from scipy import stats
 import pytest
 import yaml
 
@@ -196,22 +197,41 @@ def _structure_level_module():
     return mod
 
 
+def _grid(form_effect, seed_effect, rng, sd=0.005):
+    """Rows of structure-only development runs, every form at every seed: log-ratio 0.1 + form + seed + noise."""
+    return [{"effect": "none", "split": "development", "family_form": f"structure/f{i}", "seed": j + 1,
+             "heldout_after_over_noise": float(np.exp(0.1 + fe + se + rng.normal(0.0, sd)))}
+            for i, fe in enumerate(form_effect) for j, se in enumerate(seed_effect)]
+
+
+def _iid_bound(rows):
+    logs = np.log([r["heldout_after_over_noise"] for r in rows])
+    n = len(logs)
+    return float(np.exp(logs.mean() + stats.t.ppf(0.95, n - 1) * logs.std(ddof=1) * np.sqrt(1 + 1 / n)))
+
+
 def test_the_structure_level_is_an_upper_prediction_bound_of_development_runs_only():
-    """benchmarks/structure_level.py: the line above which "nothing missing" is not said, from
-    development structure-only runs only; above their median and their largest run (a 95 % bound for one
-    more run), below a wide margin; held-out forms refused."""
+    """benchmarks/structure_level.py: the line above which "nothing missing" is not said, from development
+    structure-only runs only, every form at the same seeds: above their median, below a wide margin; a seed
+    that raises every form alike is no independent evidence, so the line is wider than if the runs were
+    independent draws (and about the same when they are); held-out forms and an incomplete grid refused."""
     mod = _structure_level_module()
-    ratios = [1.13, 1.23, 1.13, 1.25, 1.20, 1.21, 1.13, 1.25, 1.20, 1.17, 1.18, 1.28]
-    rows = [{"effect": "none", "split": "development", "family_form": f"structure/f{k % 6}",
-             "heldout_after_over_noise": r} for k, r in enumerate(ratios)]
-    rows.append({"effect": "viscous", "split": "development", "family_form": "viscous/linear",
-                 "heldout_after_over_noise": 9.0})  # a physics case does not set the line
+    rng = np.random.default_rng(3)
+    forms = [0.0, 0.01, -0.01, 0.02, 0.005, 0.05]
+    shared = _grid(forms, [0.0, 0.025, -0.01, -0.012], rng)
+    rows = shared + [{"effect": "viscous", "split": "development", "family_form": "viscous/linear", "seed": 1,
+                      "heldout_after_over_noise": 9.0}]   # a physics case does not set the line
     out = mod.structure_level(rows)
-    assert out["runs"] == 12 and max(ratios) < out["structure_level_over_noise"] < 1.4
-    logs = np.log(ratios)
-    assert out["structure_level_over_noise"] > np.exp(logs.mean() + 1.645 * logs.std(ddof=1))  # t, not z
+    assert out["runs"] == 24 and len(out["forms"]) == 6 and out["seeds"] == [1, 2, 3, 4]
+    assert out["median"] < out["structure_level_over_noise"] < 1.4
+    assert out["structure_level_over_noise"] > _iid_bound(shared) * 1.005
+    assert out["degrees_of_freedom"] < 23     # fewer than 24 independent runs would have
+    alone = _grid([0.0] * 6, [0.0] * 4, rng, sd=0.03)   # no form or seed effect: the runs are independent
+    assert mod.structure_level(alone)["structure_level_over_noise"] == pytest.approx(_iid_bound(alone), rel=0.02)
     with pytest.raises(SystemExit, match="held-out"):
         mod.structure_level(rows + [dict(rows[0], split="held_out", family_form="structure/combined")])
+    with pytest.raises(SystemExit, match=r"missing: structure/f5#4"):
+        mod.structure_level(shared[:-1])
 
 
 def test_the_recorded_structure_level_is_measured_on_development_forms():
