@@ -540,7 +540,8 @@ def test_the_shape_is_read_against_the_calibration_with_its_far_shifts_undone():
 def test_a_learned_friction_brings_its_laws_shape_into_the_fit():
     """A friction-like dependence brings its law's shape into the fit (force_shape.friction_law): the unit
     Dahl element's presliding travel, and on the axle with a plain friction level a velocity weakening (a
-    level at rest above the sliding one, coefficient neutral 0) with its Stribeck velocity; shapes marked
+    level at rest above the sliding one, coefficient neutral 0) with its Stribeck velocity and the level's
+    growth with the compression (coefficient neutral 0); shapes marked
     as such (one value for both axles, the term's declared default to start, bounded by
     config/force_shape.yaml), all written into the term like the coefficients. A learned force without
     friction has none, and the regression is never offered the weakening (it is a law's shape). It
@@ -551,10 +552,13 @@ def test_a_learned_friction_brings_its_laws_shape_into_the_fit():
     sel = fs.select(_design(truth={("sign_velocity", "rear"): 3.0, ("lateral_force", "rear"): 2.0}))
     cand = fs.learned_candidate(sel, cfg)
     names = [p.name for p in cand.params]
-    assert names[len(sel.stable):] == ["velocity_weakening_rear", "presliding", "stribeck_velocity"]
+    assert names[len(sel.stable):] == ["velocity_weakening_rear", "compression_rear", "presliding",
+                                       "stribeck_velocity"]
     xp, vs = cand.params[-2], cand.params[-1]
     assert xp.shape and vs.shape and cand.axle_of[-2:] == ("rear", "rear")
-    assert cand.params[len(sel.stable)].neutral == 0.0 and not cand.params[len(sel.stable)].shape
+    for law in cand.params[len(sel.stable):len(sel.stable) + 2]:   # coefficients, neutral none
+        assert law.neutral == 0.0 and not law.shape
+    assert cand.params[len(sel.stable) + 1].step == cfg["fit.level_growth_step_N"]
     assert (xp.neutral, vs.neutral) == (shape_defaults()["presliding"], shape_defaults()["stribeck_velocity"])
     assert (xp.lower, xp.upper) == tuple(cfg["fit.presliding_range_m"])
     assert (vs.lower, vs.upper) == tuple(cfg["fit.stribeck_velocity_range_m_s"])
@@ -562,14 +566,20 @@ def test_a_learned_friction_brings_its_laws_shape_into_the_fit():
     full = load_variant("full")
     model = Model("passat_b8_like", dataclasses.replace(full, terms=full.terms + (_learned(),)))
     P = np.stack([model.params((1, 1, 1, 1))])
-    x = np.array([60.0] * len(sel.stable) + [45.0, 2e-5, 0.015])
+    x = np.array([60.0] * len(sel.stable) + [45.0, 12.0, 2e-5, 0.015])
     cand.apply(P, P.copy(), x, model)
     np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "presliding")], [2e-5] * 4)
     np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "stribeck_velocity")], [0.015] * 4)
     np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "c_velocity_weakening")], [0, 0, 45, 45])
+    np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "c_compression")], [0, 0, 12, 12])
     written = cand.term_params(x, None)
     assert written["presliding"] == {"front": 2e-5, "rear": 2e-5}
     assert written["c_velocity_weakening"] == {"front": 0.0, "rear": 45.0}
+    assert written["c_compression"] == {"front": 0.0, "rear": 12.0}
+    # a growth with the compression that is stable itself is a dependence, not brought twice
+    grown = dataclasses.replace(sel, stable=list(sel.stable) + [fs.Column("compression", "rear")],
+                                coef=np.append(sel.coef, 5.0), share=np.append(sel.share, 0.1))
+    assert [c.coefficient for c in fs.friction_law(grown, cfg)[0]] == ["velocity_weakening_rear"]
     no_friction = fs.learned_candidate(fs.select(_design(truth={("roll_free_play", "front"): 5.0})), cfg)
     assert not {"presliding", "stribeck_velocity", "velocity_weakening_front"} & {p.name for p in no_friction.params}
     assert "rebound_ratio" not in {p.name for p in no_friction.params} | {p.name for p in cand.params}

@@ -92,6 +92,9 @@ FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudi
 WEAKENING = "velocity_weakening"
 #: features that shape a law rather than stand for a dependence (not offered to the regression)
 LAW_SHAPE_FEATURES = (WEAKENING,)
+#: a friction level's growth with the compression: offered to the regression and, beside a stable plain
+#: friction level, fitted as a shape of its law too (analysis/discrepancy/force_shape.friction_law)
+LEVEL_GROWTH = "compression"
 #: the shape parameters after the coefficients, in this order
 SHAPES = ("deflection_ref", "velocity_ref", "force_ref", "knee_velocity", "free_play", "presliding", "memory",
           "stribeck_velocity", "relaxation_time", "contact_gap", "rebound_ratio")

@@ -866,12 +866,13 @@ class DiscrepancyFinder:
                                sel: force_shape.Selection) -> FitResult:
         """The learned trial's fit (term at offset ``a`` of ``st``). With a friction law's velocity weakening
         (:func:`force_shape.friction_law`) in two stages, since a sticking friction's residual is rough in
-        its levels: the plain levels first with the weakening held at none, then from the fitted level
+        its levels: the plain levels (and their growth with the compression) first with the weakening held
+        at none, then from the fitted level
         split between sliding and rest (``fit.weakening_start_share`` of it at rest); the better fit is kept
         (refitted with every value free when it is the first)."""
         allidx = tuple(range(len(ev.cases)))
         cfg = force_shape.settings()
-        law, _ = force_shape.friction_law(sel, cfg)
+        law = [c for c in force_shape.friction_law(sel, cfg)[0] if c.feature == force_shape.WEAKENING]
         if not law:
             return fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV)
         labels = st.labels()

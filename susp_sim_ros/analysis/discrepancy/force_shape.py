@@ -63,7 +63,7 @@ import numpy as np
 
 from ...model.input_force import INPUT_FEATURES, INPUT_FORCE, INPUT_KIND
 from ...model.learned_force import DAMPER_OIL, FEATURES, FRICTION_LIKE, LAW_SHAPE_FEATURES, LEARNED_FORCE, \
-    PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING
+    LEVEL_GROWTH, PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING
 from ...model.params import AXLE_CORNERS, load_settings
 from .candidates import PHYSICS, CandParam, Candidate, axle_map
 from .fit import debias, fd_jacobian
@@ -488,7 +488,8 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     which held a valve's knee at its edge). A stable
     friction-like dependence brings its law's shape (:func:`friction_law`): the presliding travel and,
     per axle with a plain friction level (``sign_velocity``), a level at rest above the sliding one that
-    falls over a Stribeck velocity (coefficient neutral 0, after the stable ones). A stable force of the
+    falls over a Stribeck velocity and the level's growth with the compression (coefficients neutral 0,
+    after the stable ones). A stable force of the
     damper's oil (an orifice, a valve) brings its rebound ratio (:func:`damper_law`)."""
     cfg = settings() if cfg is None else cfg
     bound = float(cfg["fit.coefficient_bound_N"])
@@ -502,10 +503,11 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     law, law_shapes = friction_law(sel, cfg)
     law_shapes.update(damper_law(sel, cfg))
     for c in law:
+        weak = c.feature == WEAKENING
         params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound,
-                                float(cfg["fit.weakening_step_N"]),
-                                f"coefficient of {c.feature}, {c.axle} axle: the friction's level at rest above "
-                                "its sliding level"))
+                                float(cfg["fit.weakening_step_N" if weak else "fit.level_growth_step_N"]),
+                                f"coefficient of {c.feature}, {c.axle} axle: the friction's level "
+                                + ("at rest above its sliding level" if weak else "at d_ref of bump over static")))
         axle_of.append(c.axle)
     shapes: dict[str, float] = {}
     for c in sel.stable:
@@ -554,11 +556,15 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
     """The shape of a learned friction's law, fitted beside its levels: no friction-like dependence stable,
     none. Else the presliding travel of the unit Dahl element (how far a contact deflects before it
     slides is the contact's own: micrometres in a metal joint, up to a millimetre in an elastomer seal lip),
-    and on each axle with a plain friction level a ``velocity_weakening`` coefficient and the Stribeck
-    velocity (a lubricated contact's friction falls from its level at rest to its sliding level, the
-    Stribeck effect: which it does, and how fast, the drives decide; the bump and the sine steer slide at
-    different deflection velocities). Returns the weakening columns and ``{shape: (lower, upper, axles)}``
-    (bounds from ``config/force_shape.yaml``)."""
+    and on each axle with a plain friction level (``sign_velocity``) how that level varies: a
+    ``velocity_weakening`` coefficient and the Stribeck velocity (a lubricated contact's friction falls from
+    its level at rest to its sliding level, the Stribeck effect: which it does, and how fast, the drives
+    decide; the bump and the sine steer slide at different deflection velocities), and a ``compression``
+    coefficient unless that is stable there itself (a Coulomb friction is proportional to its contact's
+    normal force, and where the spring's side load or a damper's gas presses a strut's guide or seal that
+    force follows the deflection: the level then grows in bump and falls in rebound; a growth the
+    resamples' votes split with the plain level, one law family, :data:`LAW_OF`). Returns those columns
+    (weakening first) and ``{shape: (lower, upper, axles)}`` (bounds from ``config/force_shape.yaml``)."""
     friction = [c for c in sel.stable if c.feature in FRICTION_LIKE]
     if not friction:
         return [], {}
@@ -568,7 +574,9 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
     if plain:
         vs_lo, vs_hi = (float(v) for v in cfg["fit.stribeck_velocity_range_m_s"])
         shapes[STRIBECK_VELOCITY] = (vs_lo, vs_hi, plain)
-    return [Column(WEAKENING, a) for a in plain], shapes
+    stable = {(c.feature, c.axle) for c in sel.stable}
+    growth = [Column(LEVEL_GROWTH, a) for a in plain if (LEVEL_GROWTH, a) not in stable]
+    return [Column(WEAKENING, a) for a in plain] + growth, shapes
 
 
 def damper_law(sel: Selection, cfg: dict) -> dict[str, tuple[float, float, list[str]]]:
