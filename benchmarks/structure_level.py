@@ -46,8 +46,8 @@ def structure_level(cases: list[dict]) -> dict:
                          "split only")
     runs = [c for c in runs if c.get("heldout_after_over_noise")]
     forms = sorted({c["family_form"] for c in runs})
-    seeds = sorted({c.get("seed") for c in runs}, key=str)
-    if len(forms) < 2 or len(seeds) < 2 or None in seeds:
+    seeds = sorted({c["seed"] for c in runs if c.get("seed") is not None})
+    if len(forms) < 2 or len(seeds) < 2 or any(c.get("seed") is None for c in runs):
         raise SystemExit(f"structure_level: {len(runs)} structure-only runs of {len(forms)} forms at seeds {seeds}; "
                          "at least 2 forms at the same 2 or more seeds needed, each run with its seed")
     cell = {(c["family_form"], c["seed"]): c["heldout_after_over_noise"] for c in runs}

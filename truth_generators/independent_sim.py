@@ -492,10 +492,15 @@ def _air_spring(d, k, h, n):
     ``h`` [m] and polytropic exponent ``n`` at deflection ``d`` [m] (positive in bump) beyond its static rate's
     share: k h / n ((1 - d / h)^-n - 1) - k d (the static load and rate belong to the vehicle file). The
     column is held at 5 % of its height (beyond the bump stops' travel)."""
+    return k * h / n * (_gas_column(d, h) ** -n - 1.0) - k * d
+
+
+@njit(cache=True)
+def _gas_column(d, h):
+    """The gas column's length over its static length at deflection ``d`` [m] (positive in bump) of a column
+    ``h`` [m] per metre of deflection, 1 - d / h, held at 5 % (beyond the bump stops' travel)."""
     q = 1.0 - d / h
-    if q < 0.05:
-        q = 0.05
-    return k * h / n * (q ** -n - 1.0) - k * d
+    return q if q > 0.05 else 0.05
 
 
 @njit(cache=True)
@@ -534,8 +539,7 @@ def _strut_friction(w, P, d, dd, Ft):
         Fpn = w[WPF0] + w[WPFK] * d
         F += (Fpn if Fpn > 0.0 else 0.0) * slide
     if w[WSEAL] != 0.0:
-        q = 1.0 - d / w[WSEALH]
-        F += w[WSEAL] * max(q, 0.05) ** -w[WSEALN] * slide
+        F += w[WSEAL] * _gas_column(d, w[WSEALH]) ** -w[WSEALN] * slide
     return F
 
 
