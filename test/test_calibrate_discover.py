@@ -461,3 +461,38 @@ def test_a_term_and_a_one_state_damper_value_compete_until_another_state_separat
     effect = {t["name"]: t for t in rep["terms"]}["extra_viscous_damping"]["effect"]
     assert 0.0 < effect["ci95_fraction"][0] < 1.0 < effect["ci95_fraction"][1]
     assert "extra_viscous_damping" not in {x["name"] for x in rep["not_identifiable"]}
+
+
+def test_two_structures_compared_on_a_held_drive_hold_the_same_values():
+    """The acceptance check's leave-one-drive-out refits the current structure and the one with the new term
+    under one rule: a calibration value the held drive carries most of in EITHER structure keeps its joint
+    value in both folds. Here value ``a`` is the held drive's own in the current structure (its column is
+    strong there, weak elsewhere), but the new term ``b`` moves the held rows exactly as ``a`` does, so in the
+    new structure the other drives carry most of what is left to tell about ``a`` and its own rule would
+    refit it: with one rule both hold it, and the other values are still refitted."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.finder import _fold_step, _held_in_both, _informed_only_by
+    from susp_sim_ros.analysis.discrepancy.fit import FitResult
+    rng = np.random.default_rng(7)
+    held = np.r_[np.ones(100, bool), np.zeros(400, bool)]
+    col_a = np.r_[3.0 * rng.normal(size=100), 0.5 * rng.normal(size=400)]
+    col_c = rng.normal(size=500)
+    col_b = np.r_[col_a[:100], np.zeros(400)]   # a force only the held drive shows, as a does there
+
+    def fit(cols, labels):
+        k = len(cols)
+        st = SimpleNamespace(prior=lambda: (np.array([0]), np.zeros(1), np.ones(1)), prior_gain=1.0,
+                             data_weight=1.0, labels=lambda: labels,
+                             bounds=lambda: (np.full(k, -np.inf), np.full(k, np.inf)))
+        return FitResult(structure=st, x=np.zeros(k), rss=500.0, n=500, k_bic=k, bic=0.0, success=True, message="",
+                         nfev=1, residual=rng.normal(size=500), jac=np.column_stack(cols), n_eff=500.0)
+
+    cur = fit([col_a, col_c], [("calibration", "a"), ("calibration", "c")])
+    new = fit([col_a, col_c, col_b], [("calibration", "a"), ("calibration", "c"), ("term", "b")])
+    assert _informed_only_by(cur, held) == [0]       # the held drive's own value in the current structure
+    assert _informed_only_by(new, held) == []        # ... not in the new one: its own rule would refit it
+    fix_cur, fix_new = _held_in_both(cur, new, held)
+    assert fix_cur == [0] and fix_new == [0]
+    d_own, d_one = _fold_step(new, held), _fold_step(new, held, fixed=fix_new)
+    assert abs(d_own[0]) > 0.0 and d_one[0] == 0.0  # one rule: held at its joint value
+    assert abs(d_one[1]) > 0.0                       # the other values refitted on the other drives
