@@ -247,7 +247,7 @@ UNLISTED = ("unlisted/damper_blow_off", "unlisted/arb_free_play", "unlisted/stri
             "unlisted/load_friction", "unlisted/damper_valve_stop_rear", "unlisted/load_friction_front",
             "unlisted/position_friction", "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
             "unlisted/progressive_spring_rear", "unlisted/air_assist_front", "unlisted/rebound_spring_front",
-            "unlisted/jounce_bumper_rear", "unlisted/seal_gas_friction")
+            "unlisted/jounce_bumper_rear", "unlisted/seal_gas_friction", "unlisted/bushing_rear")
 #: the split of every form before issue 26 (family_split.yaml may only gain forms, never move them)
 SPLIT_BEFORE_26 = {
     "development": ["structure/nominal", "structure/heun_1ms", "structure/velocity_scaling_ramp",
@@ -280,7 +280,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/load_friction_front", "unlisted/position_friction", "unlisted/viscoelastic_bushing",
                    "unlisted/bushing_two_branch_front", "unlisted/progressive_spring_rear",
                    "unlisted/air_assist_front", "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear",
-                   "unlisted/seal_gas_friction"}
+                   "unlisted/seal_gas_friction", "unlisted/bushing_rear"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -313,12 +313,12 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-11:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert doc["held_out"][-12:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
                                     "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear",
-                                    "unlisted/seal_gas_friction"]   # appended,
+                                    "unlisted/seal_gas_friction", "unlisted/bushing_rear"]   # appended,
     # held out from the start
     for name in UNLISTED:
         form = family.FORMS[name]
@@ -349,6 +349,8 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/jounce_bumper_rear"].leading == ("bump_contact", "deflection_cubed",
                                                                    "deflection")
     assert family.FORMS["unlisted/seal_gas_friction"].leading == ("compression", "sign_velocity")
+    assert family.FORMS["unlisted/bushing_rear"].leading == ("relaxing_deflection", "deflection_velocity",
+                                                             "deflection")
 
 
 @pytest.mark.parametrize("name", UNLISTED)
@@ -501,6 +503,19 @@ def test_hidden_force_of_the_unlisted_forms():
             for n in range(r.t.size - 1):
                 F[n + 1, b] = F[n, b] * e + c * dd[n] / h * (1.0 - e)
         np.testing.assert_allclose(r.hidden[:, i], F.sum(axis=1), atol=1e-9)
+    # one branch at the rear corners only (another rubber): its recursion, the front untouched
+    form = family.FORMS["unlisted/bushing_rear"]
+    r = family.case_truth(form, 1, "bump_rear_empty")
+    h = form.step_s
+    assert np.all(r.hidden[:, :2] == 0.0)
+    e = np.exp(-h * 7000.0 / 700.0)
+    for i in (2, 3):
+        F = np.zeros(r.t.size)
+        dd = np.diff(r.deflection[:, i])
+        for n in range(r.t.size - 1):
+            F[n + 1] = F[n] * e + 700.0 * dd[n] / h * (1.0 - e)
+        np.testing.assert_allclose(r.hidden[:, i], F, atol=1e-9)
+    assert np.abs(r.hidden[:, 2:]).max() > 20.0
     # progressive rear coils: k2 d^2 in bump, nothing in rebound, the front untouched
     r = family.case_truth(family.FORMS["unlisted/progressive_spring_rear"], 1, "bump_intact")
     assert np.all(r.hidden[:, :2] == 0.0)
