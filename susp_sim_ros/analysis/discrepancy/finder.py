@@ -1217,7 +1217,7 @@ class DiscrepancyFinder:
         oil-empty front damper's factor and the front wheel rate took up in the bump crossing frees them
         to be told by the other drives), so each structure's own set would hold different values at what
         the held-out drive itself says: the structure that holds more of them is judged partly in sample
-        (a viscoelastic bushing's learned force lost to the calibration alone held out, 0.0 % gain, while
+        (a viscoelastic bushing's learned force lost to the calibration alone held out, -0.5 % gain, while
         it halved the front-empty bump crossing's residual in the joint fit; with one set 31 %)."""
         R = len(ev.cases)
         if R < 2 or new.jac is None:
