@@ -353,6 +353,17 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
                                                              "deflection")
 
 
+def _maxwell_force(deflection: np.ndarray, h: float, k: float, c: float) -> np.ndarray:
+    """A Maxwell element's force [N] (rate ``k`` [N/m] in series with a dashpot ``c`` [N s/m]) on a deflection
+    series [m] at step ``h`` [s], by its exact step recursion F+ = F e + c (dd / h) (1 - e), e = exp(-h k / c)."""
+    e = np.exp(-h * k / c)
+    F = np.zeros(deflection.size)
+    dd = np.diff(deflection)
+    for n in range(deflection.size - 1):
+        F[n + 1] = F[n] * e + c * dd[n] / h * (1.0 - e)
+    return F
+
+
 @pytest.mark.parametrize("name", UNLISTED)
 def test_unlisted_forms_show_clearly_above_the_gyro_noise(name):
     """Noise-free roll or pitch rate, with against without the effect: RMS difference at least 3x the
@@ -483,12 +494,7 @@ def test_hidden_force_of_the_unlisted_forms():
         h = form.step_s
         assert np.allclose(np.diff(r.t), h)
         for i, (k, c) in enumerate(((5000.0, 400.0),) * 2 + ((4000.0, 320.0),) * 2):
-            e = np.exp(-h * k / c)
-            F = np.zeros(r.t.size)
-            dd = np.diff(r.deflection[:, i])
-            for n in range(r.t.size - 1):
-                F[n + 1] = F[n] * e + c * dd[n] / h * (1.0 - e)
-            np.testing.assert_allclose(r.hidden[:, i], F, atol=1e-9)
+            np.testing.assert_allclose(r.hidden[:, i], _maxwell_force(r.deflection[:, i], h, k, c), atol=1e-9)
         assert np.abs(r.hidden).max() > 20.0
     # two branches side by side at the front corners only: the sum of both recursions, the rear untouched
     form = family.FORMS["unlisted/bushing_two_branch_front"]
@@ -496,25 +502,15 @@ def test_hidden_force_of_the_unlisted_forms():
     h = form.step_s
     assert np.all(r.hidden[:, 2:] == 0.0)
     for i in (0, 1):
-        F = np.zeros((r.t.size, 2))
-        dd = np.diff(r.deflection[:, i])
-        for b, (k, c) in enumerate(((2500.0, 37.5), (3000.0, 750.0))):
-            e = np.exp(-h * k / c)
-            for n in range(r.t.size - 1):
-                F[n + 1, b] = F[n, b] * e + c * dd[n] / h * (1.0 - e)
-        np.testing.assert_allclose(r.hidden[:, i], F.sum(axis=1), atol=1e-9)
+        F = sum(_maxwell_force(r.deflection[:, i], h, k, c) for k, c in ((2500.0, 37.5), (3000.0, 750.0)))
+        np.testing.assert_allclose(r.hidden[:, i], F, atol=1e-9)
     # one branch at the rear corners only (another rubber): its recursion, the front untouched
     form = family.FORMS["unlisted/bushing_rear"]
     r = family.case_truth(form, 1, "bump_rear_empty")
     h = form.step_s
     assert np.all(r.hidden[:, :2] == 0.0)
-    e = np.exp(-h * 7000.0 / 700.0)
     for i in (2, 3):
-        F = np.zeros(r.t.size)
-        dd = np.diff(r.deflection[:, i])
-        for n in range(r.t.size - 1):
-            F[n + 1] = F[n] * e + 700.0 * dd[n] / h * (1.0 - e)
-        np.testing.assert_allclose(r.hidden[:, i], F, atol=1e-9)
+        np.testing.assert_allclose(r.hidden[:, i], _maxwell_force(r.deflection[:, i], h, 7000.0, 700.0), atol=1e-9)
     assert np.abs(r.hidden[:, 2:]).max() > 20.0
     # progressive rear coils: k2 d^2 in bump, nothing in rebound, the front untouched
     r = family.case_truth(family.FORMS["unlisted/progressive_spring_rear"], 1, "bump_intact")

@@ -497,8 +497,8 @@ def _air_spring(d, k, h, n):
 
 @njit(cache=True)
 def _gas_column(d, h):
-    """The gas column's length over its static length at deflection ``d`` [m] (positive in bump) of a column
-    ``h`` [m] per metre of deflection, 1 - d / h, held at 5 % (beyond the bump stops' travel)."""
+    """The gas column's length over its static length ``h`` [m] at deflection ``d`` [m] (positive in bump),
+    1 - d / h, held at 5 % (beyond the bump stops' travel)."""
     q = 1.0 - d / h
     return q if q > 0.05 else 0.05
 
