@@ -189,12 +189,15 @@ def _truth_values(car: TruthCar, fr: TruthFriction) -> dict[tuple[str, str], flo
 
 
 def _family_spec(form: GeneratorForm, seed: int) -> dict:
-    """A case spec of the family form (verdicts: nothing hidden -> no discrepancy; physics only optional ->
+    """A case spec of the family form (verdicts: nothing hidden -> no discrepancy; a road recorded wrong ->
+    ``unmeasured_input``; physics only optional ->
     any but ``unmeasured_input``: the term named, or not named and the remainder judged against the
     structure level, "nothing missing" within it, "unexplained" above it; whether a "nothing missing" is
     honest is scored apart, ``nothing_missing_above_structure_level``)."""
     if form.expect:
         verdicts = ["missing_physics"]
+    elif form.effect == "road_input":   # a road recorded wrong: an input the recording lacks, no physics
+        verdicts = ["unmeasured_input"]
     elif form.optional:
         verdicts = ["missing_physics", "no_significant_discrepancy", "unexplained_residual"]
     else:

@@ -280,7 +280,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/load_friction_front", "unlisted/position_friction", "unlisted/viscoelastic_bushing",
                    "unlisted/bushing_two_branch_front", "unlisted/progressive_spring_rear",
                    "unlisted/air_assist_front", "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear",
-                   "unlisted/seal_gas_friction", "unlisted/bushing_rear"}
+                   "unlisted/seal_gas_friction", "unlisted/bushing_rear", "road/bump_recorded_low"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -313,7 +313,8 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-12:] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert doc["held_out"][-1] == "road/bump_recorded_low"   # appended after them (a road form)
+    assert doc["held_out"][-13:-1] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -566,3 +567,28 @@ def test_a_learned_force_counts_as_right_on_a_gas_form_only_as_a_spring():
     assert optional_right(opt, form.leading, ["sign_velocity", "deflection"]) == {"damper_gas_preload"}
     assert optional_right(opt, form.leading, []) == {"damper_gas_preload"}
     assert optional_right({"damper_gas_preload"}, form.leading, ["sign_velocity"]) == {"damper_gas_preload"}
+
+
+def test_the_road_form_records_its_bump_low_and_hides_nothing():
+    """``road/bump_recorded_low`` (issue 26, item 5, held out): the bump crossings carry their road at 0.8 times
+    the heights driven, the sine steers their flat road; nothing hidden (the hidden force is zero); its cases
+    expect the verdict ``unmeasured_input`` and no physics."""
+    import importlib.util
+    form = family.FORMS["road/bump_recorded_low"]
+    assert form.split == "held_out" and form.effect == "road_input" and not form.expect and not form.optional
+    driven = dict(family.make_case(family.FORMS["structure/nominal"], seed=1))
+    low = dict(family.make_case(form, seed=1))
+    for label in ("bump_intact", "sine_rear_empty"):
+        a, b = driven[label].road, low[label].road
+        np.testing.assert_array_equal(a.s, b.s)
+        np.testing.assert_allclose(b.zl, 0.8 * a.zl, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(b.zr, 0.8 * a.zr, rtol=0, atol=1e-15)
+        np.testing.assert_array_equal(low[label].imu.gyro, driven[label].imu.gyro)   # the same drive, recorded
+        assert json.loads(low[label].metadata["truth"])["recorded_road_scale"] == 0.8
+    assert np.max(np.abs(driven["bump_intact"].road.zl)) > 0.01   # a bump of centimetres, recorded 20 % low
+    assert not np.any(family.case_truth(form, 1, "bump_intact").hidden)
+    spec = importlib.util.spec_from_file_location("bench_discrepancy", ROOT / "benchmarks" / "bench_discrepancy.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    case = bench._family_spec(form, 1)
+    assert case["verdicts"] == ["unmeasured_input"] and case["expect"] == [] and case["optional"] == []

@@ -968,8 +968,10 @@ def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = Non
                hidden: TruthHidden | None = None, maneuver: TruthManeuver | None = None,
                sensor: TruthSensor | None = None, oil=(1.0, 1.0, 1.0, 1.0), seed: int = 0,
                record_road: bool = True, step_s: float = 2e-4, t0_ns: int = 0,
-               return_truth: bool = False, integrator: str = "rk4"):
-    """A truth test drive (``TestDrive``; with ``return_truth`` also the :class:`TruthResult`)."""
+               return_truth: bool = False, integrator: str = "rk4", recorded_road_scale: float = 1.0):
+    """A truth test drive (``TestDrive``; with ``return_truth`` also the :class:`TruthResult`). The road is
+    recorded as driven, or with its heights times ``recorded_road_scale`` (a road recorded wrong: a
+    profilometer's gain error, the profile of another wheel track)."""
     car = car or TruthCar()
     friction = friction or TruthFriction()
     hidden = hidden or TruthHidden()
@@ -1013,13 +1015,14 @@ def make_drive(car: TruthCar | None = None, friction: TruthFriction | None = Non
             road = RoadProfile(np.array([0.0, maneuver.speed_mps * T + car.wheelbase + 10.0]),
                                np.zeros(2), np.zeros(2))
         else:
-            road = RoadProfile(*rd)
+            road = RoadProfile(rd[0], recorded_road_scale * np.asarray(rd[1]), recorded_road_scale * np.asarray(rd[2]))
     truth_meta = {
         "generator": SOURCE, "seed": seed, "step_s": step_s, "integrator": integrator, "oil": list(oil),
         "car": asdict(car), "friction": asdict(friction), "hidden": asdict(hidden),
         "sensor": asdict(sensor), "maneuver": maneuver.to_dict(),
         "damper_measured_points": {k: v.tolist() for k, v in load_measured_dampers().items()},
         "road_class": maneuver.road_class, "road_recorded": bool(record_road),
+        "recorded_road_scale": recorded_road_scale,
         "noise_rms_realised": {"gyro_rad_s": np.sqrt(np.mean(noise[:, :3] ** 2, axis=0)).tolist(),
                                "accel_m_s2": np.sqrt(np.mean(noise[:, 3:] ** 2, axis=0)).tolist()},
         "gyro_noise_rad_s": [math.radians(x) for x in sensor.gyro_noise_deg_s],
