@@ -637,3 +637,54 @@ def test_the_stable_set_is_in_the_same_order_whatever_the_interpreters_string_ha
     out = {subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True, check=True,
                           env={**os.environ, "PYTHONHASHSEED": str(h)}).stdout for h in (1, 2, 3)}
     assert len(out) == 1, out
+
+
+def _road_excited_law(seed, road_silent_on=(3, 4, 5)):
+    """A front spring law that no feature has (the truth, a column outside the design), matched in part by a
+    state feature (``deflection_cubed`` front, the law plus unrelated motion) and excited by the road: where
+    the drives carry a road (0-2, bump crossings) the road height under the front wheels follows the law
+    exactly, where they do not (``road_silent_on``: sine steers on a flat road) its column is zero while the
+    law acts on (the roll moves the deflections)."""
+    d = _design(seed=seed)
+    keys = [c.key for c in d.columns]
+    rng = np.random.default_rng(200 + seed)
+    t = np.arange(int(np.sum(d.groups == 0))) * 0.005
+    law = np.concatenate([np.sin(2 * np.pi * rng.uniform(0.5, 4) * t + rng.uniform(0, 6))
+                          for _ in np.unique(d.groups)])
+    X = d.X.copy()
+    X[:, keys.index(("road_height", "front"))] = np.where(np.isin(d.groups, road_silent_on), 0.0, law)
+    X[:, keys.index(("deflection_cubed", "front"))] = law + 0.4 * X[:, keys.index(("deflection", "rear"))]
+    return fs.Design(X, d.y + 3.0 * law, d.groups, d.columns)
+
+
+def _finder_reading(design):
+    """The finder's state reading (``DiscrepancyFinder._state_reading``) of ``design`` led by the front road
+    height, on a finder holding only what the reading uses."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.finder import DiscrepancyFinder
+    road = fs.Column("road_height", "front")
+    led = fs.Selection({road.key: 0.9}, [road], np.array([3.0]), np.array([1.0]), 24)
+    assert led.input_led
+    stub = SimpleNamespace(shape_design_=design, force_shape_=[{}],
+                           cases_=[SimpleNamespace(name=f"drive{g}") for g in range(6)])
+    return DiscrepancyFinder._state_reading(stub, led), stub.force_shape_[-1]
+
+
+def test_a_road_led_force_is_read_by_the_states_on_the_drives_the_road_does_not_reach():
+    """Issue 26, item 5, "follows the road and no state": the force that the road height leads where the drives
+    carry a road is read again by the states alone (:func:`fs.without_inputs`), and the drives the road does not
+    reach (its column zero on the axle it leads) are named: there a law of the states must show, an input cannot.
+    Where the input acts on every drive (the wheel's rotation; a road under every drive) nothing tells a state
+    from it: no reading."""
+    for seed in range(3):
+        d = _road_excited_law(seed)
+        states = fs.without_inputs(d)
+        assert not any(c.feature in fs.INPUT_FEATURES for c in states.columns)
+        assert states.X.shape == (len(d.y), len(states.columns)) and np.array_equal(states.y, d.y)
+        (state, silent), record = _finder_reading(d)
+        assert silent == [3, 4, 5], seed
+        assert state is not None and ("deflection_cubed", "front") in {c.key for c in state.stable}, seed
+        assert record["state_reading"]["input_silent_drives"] == ["drive3", "drive4", "drive5"]
+        assert record["state_reading"]["input_feature"] == "road_height"
+        (state, silent), record = _finder_reading(_road_excited_law(seed, road_silent_on=()))
+        assert state is None and silent == [] and "state_reading" not in record, seed

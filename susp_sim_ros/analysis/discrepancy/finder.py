@@ -257,6 +257,7 @@ class DiscrepancyFinder:
             in_base.append(force_shape.TERM)   # a variant the finder wrote: its learned force is the base model's
         self.learnable_ = force_shape.TERM in self.candidates and force_shape.TERM not in in_base
         self.input_led_ = False  # set when the shape regression finds the residual led by an input feature
+        self.input_weighed_: list[dict] = []  # input-led steps whose states' reading explained the silent drives
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
         self.base_fit_ = fit_structure(ev, Structure([]))
         return ev
@@ -285,14 +286,23 @@ class DiscrepancyFinder:
                 opts = [o for o in opts if all(a in remaining for a in o.add)]
             excess = max(cur.rss - n, 1e-12)
             sel = self._shape_selection(ev, cur, step) if learnable else None
+            input_sel: force_shape.Selection | None = None
+            silent: list[int] = []
             if sel is not None and sel.input_led:
-                # the missing force follows an input and no state: no physics is named for it (issue 26, 5)
-                self._input_finding(ev, sel, step)
-                break
+                # the missing force follows an input: no state reading, or none where the input is silent,
+                # and it is an input the recording lacks, no physics named for it (issue 26, 5)
+                input_sel, (sel, silent) = sel, self._state_reading(sel)
+                if sel is None:
+                    self._input_finding(ev, input_sel, step)
+                    break
             learned = self._learned_trial(ev, cur, sel) if sel is not None else None
             if not opts and learned is None:
+                if input_sel is not None:
+                    self._input_finding(ev, input_sel, step)
                 break
             best, best_fit, ok, checks = self._first_passing(ev, cur, opts, recalibrations, step, learned)
+            if input_sel is not None:
+                ok = self._states_explain_silent(ev, cur, best_fit, silent, ok, checks)
             gain = cur.rss - best_fit.rss
             per_before = self._per_drive_rmse(ev, cur)
             per_after = self._per_drive_rmse(ev, best_fit)
@@ -301,6 +311,8 @@ class DiscrepancyFinder:
                          "explained_fraction_of_excess": gain / excess,
                          "rms_x_noise": math.sqrt(best_fit.rss / n), "accepted": bool(ok), **checks})
             if not ok:
+                if input_sel is not None:
+                    self._input_finding(ev, input_sel, step)
                 break
             for name in best.add:
                 sel = self.learned_selection_ if name == force_shape.TERM else None
@@ -788,10 +800,13 @@ class DiscrepancyFinder:
         # fitted with its far shifts undone (item 4); the joint fit then weighs calibration and learned force
         st = cur.structure
         against = "file_values"
-        sel = force_shape.select(force_shape.design_for(self, st, st.at_neutral(cur.x, CALIBRATION), cur.idx))
+        design = force_shape.design_for(self, st, st.at_neutral(cur.x, CALIBRATION), cur.idx)
+        sel = force_shape.select(design)
         if sel is not None and not sel.stable and CALIBRATION in st.names:
             against = "calibration_within_priors"
-            sel = force_shape.select(force_shape.design_for(self, st, self._without_far_shifts(cur), cur.idx))
+            design = force_shape.design_for(self, st, self._without_far_shifts(cur), cur.idx)
+            sel = force_shape.select(design)
+        self.shape_design_ = design   # the regression the selection read: the input check's state reading
         if sel is None:
             return None
         phys = sel.physics()
@@ -817,6 +832,53 @@ class DiscrepancyFinder:
         for j, p, _ in self._far_shifts(fit):
             x[j] = p.prior
         return x
+
+    def _state_reading(self, sel: force_shape.Selection) -> tuple[force_shape.Selection | None, list[int]]:
+        """The states' reading of a missing force led by an input feature (``sel``), and the drives on which
+        that input is silent (its column zero on the axles it leads: a sine steer on a flat road for the road
+        height), as indices of the finder's drives. The reading is the stability selection of the same
+        regression without the input features (:func:`.force_shape.without_inputs`): a law of the states
+        that the road excites (a spring of a law no feature has) lets the road height lead on the drives
+        that carry a road, while the same law acts wherever the states move. ``(None, silent)`` when no
+        drive is silent to the input (the wheel's rotation acts on every drive: nothing tells a state
+        from it) or nothing of the states is stable."""
+        design = self.shape_design_
+        lead = force_shape.group_of(sel.leading or "")
+        axles = {c.axle for c in sel.stable if force_shape.group_of(c.feature) == lead}
+        cols = [j for j, c in enumerate(design.columns) if force_shape.group_of(c.feature) == lead and c.axle in axles]
+        silent = [int(g) for g in np.unique(design.groups) if not np.any(design.X[design.groups == g][:, cols])]
+        if not silent:
+            return None, []
+        state = force_shape.select(force_shape.without_inputs(design))
+        if state is None or not state.stable:
+            return None, silent
+        if self.force_shape_:
+            self.force_shape_[-1]["state_reading"] = {
+                "input_feature": sel.leading, "dependences": state.dependences,
+                "stable": [f"{c.feature}:{c.axle}" for c in state.stable],
+                "description": state.description(), "input_silent_drives": [self.cases_[g].name for g in silent]}
+        return state, silent
+
+    def _states_explain_silent(self, ev: Evaluator, cur: FitResult, new: FitResult, silent: list[int], ok: bool,
+                               checks: dict) -> bool:
+        """Whether the trial ``cur`` -> ``new`` of an input-led step stands as physics: it passed every test
+        (``ok``) and it predicts the drives the input does not reach (``silent``) held out, each refitted
+        without it as in :meth:`_heldout_check`, by :data:`MIN_HELDOUT_GAIN` of their excess over noise. A
+        road the recording has wrong, or lacks, acts on the drives over that road only, and a law of the
+        states fitted to it predicts a force where the road is flat that those drives do not show; a law of
+        the states acts wherever they move. The figures join ``checks`` and the step's shape record."""
+        folds = [self._fold_pair(ev, cur, new, list(new.idx).index(g)) for g in silent if g in new.idx]
+        sq_old = sum(f[0] for f in folds)
+        n_held = sum(f[4] for f in folds)
+        gain = (sq_old - sum(f[2] for f in folds)) / max(sq_old - n_held, 1e-12)
+        explains = bool(ok and folds and gain >= MIN_HELDOUT_GAIN)
+        weighed = {"input_silent_heldout_gain": float(gain), "states_explain_input_silent_drives": explains}
+        checks.update(weighed)
+        if self.force_shape_:
+            self.force_shape_[-1].setdefault("state_reading", {}).update(weighed)
+        if explains:
+            self.input_weighed_.append(self.force_shape_[-1] if self.force_shape_ else weighed)
+        return explains
 
     def _input_finding(self, ev: Evaluator, sel: force_shape.Selection, step: int) -> None:
         """An ``unmeasured_input`` finding per drive from a selection led by an input feature: the missing
@@ -1223,20 +1285,15 @@ class DiscrepancyFinder:
         if R < 2 or new.jac is None:
             return {"passed": True, "heldout": "single drive: in-sample criterion only"}
         k_new = len(new.x) - len(cur.x)
-        edges = np.cumsum([0] + [ev.n_res[q] for q in new.idx])
         sq_old = sq_new = 0.0
         n_held = 0
         n_sel = 0
         for h in range(R):
-            held = np.zeros(len(new.residual), bool)
-            held[edges[h]:edges[h + 1]] = True
-            fix_old, fix_new = _held_in_both(cur, new, held)
-            old_h, old_t = _fold_refit(cur, held, fix_old)
-            new_h, new_t = _fold_refit(new, held, fix_new)
+            old_h, old_t, new_h, new_t, n_h = self._fold_pair(ev, cur, new, h)
             sq_old += old_h
             sq_new += new_h
-            n_held += int(held.sum())
-            ne_t = max(new.n_eff * (~held).sum() / len(held), 1.0)
+            n_held += n_h
+            ne_t = max(new.n_eff * (len(new.residual) - n_h) / len(new.residual), 1.0)
             d_bic = ne_t * math.log(max(old_t, 1e-300) / max(new_t, 1e-300)) - k_new * math.log(ne_t)
             n_sel += int(d_bic >= MIN_DELTA_BIC)
         excess = max(sq_old - n_held, 1e-12)
@@ -1244,6 +1301,19 @@ class DiscrepancyFinder:
         stable = n_sel / R
         return {"passed": bool(gain >= MIN_HELDOUT_GAIN and stable >= MIN_STABLE),
                 "heldout_gain_fraction_of_excess": float(gain), "selected_in_fraction_of_refits": float(stable)}
+
+    @staticmethod
+    def _fold_pair(ev: Evaluator, cur: FitResult, new: FitResult, h: int) -> tuple[float, float, float, float, int]:
+        """Drive ``h`` (position in ``new.idx``) held out of both structures, each refitted on the others with
+        the same values held (:func:`_held_in_both`): ``(old held, old training, new held, new training,
+        held rows)``, squared whitened residuals."""
+        edges = np.cumsum([0] + [ev.n_res[q] for q in new.idx])
+        held = np.zeros(len(new.residual), bool)
+        held[edges[h]:edges[h + 1]] = True
+        fix_old, fix_new = _held_in_both(cur, new, held)
+        old_h, old_t = _fold_refit(cur, held, fix_old)
+        new_h, new_t = _fold_refit(new, held, fix_new)
+        return old_h, old_t, new_h, new_t, int(held.sum())
 
     def _per_drive_rmse(self, ev: Evaluator, f: FitResult) -> dict:
         """Per drive, the RMSE of its primary gyro signal(s) [deg/s] at ``f``."""

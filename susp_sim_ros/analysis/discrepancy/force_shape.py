@@ -217,6 +217,12 @@ class Design:
     columns: list[Column]
 
 
+def without_inputs(design: Design) -> Design:
+    """``design`` without its input features' columns: the regression of the states alone."""
+    keep = [j for j, c in enumerate(design.columns) if c.feature not in INPUT_FEATURES]
+    return Design(design.X[:, keep], design.y, design.groups, [design.columns[j] for j in keep])
+
+
 def columns_of(entries: list[tuple[str, float | None]]) -> list[Column]:
     return [Column(f, a, s) for f, s in entries for a in AXLES]
 
