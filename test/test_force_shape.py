@@ -657,16 +657,17 @@ def _road_excited_law(seed, road_silent_on=(3, 4, 5)):
     return fs.Design(X, d.y + 3.0 * law, d.groups, d.columns)
 
 
-def _finder_reading(design):
+def _finder_reading(design, roadless=()):
     """The finder's state reading (``DiscrepancyFinder._state_reading``) of ``design`` led by the front road
-    height, on a finder holding only what the reading uses."""
+    height, on a finder holding only what the reading uses; the drives ``roadless`` lack their road."""
     from types import SimpleNamespace
     from susp_sim_ros.analysis.discrepancy.finder import DiscrepancyFinder
     road = fs.Column("road_height", "front")
     led = fs.Selection({road.key: 0.9}, [road], np.array([3.0]), np.array([1.0]), 24)
     assert led.input_led
     stub = SimpleNamespace(shape_design_=design, force_shape_=[{}],
-                           cases_=[SimpleNamespace(name=f"drive{g}") for g in range(6)])
+                           cases_=[SimpleNamespace(name=f"drive{g}", road=None if g in roadless else _flat_road(),
+                                                   U=np.zeros((2, 40))) for g in range(6)])
     return DiscrepancyFinder._state_reading(stub, led), stub.force_shape_[-1]
 
 
@@ -688,3 +689,12 @@ def test_a_road_led_force_is_read_by_the_states_on_the_drives_the_road_does_not_
         assert record["state_reading"]["input_feature"] == "road_height"
         (state, silent), record = _finder_reading(_road_excited_law(seed, road_silent_on=()))
         assert state is None and silent == [] and "state_reading" not in record, seed
+    # a drive that lacks its road is not one the road does not reach: its road is unknown, not flat
+    (state, silent), _ = _finder_reading(_road_excited_law(0), roadless=(5,))
+    assert silent == [3, 4] and state is not None
+
+
+def _flat_road():
+    """A recorded flat road (what a sine steer's recording carries)."""
+    from susp_sim_ros.model.road import RoadProfile
+    return RoadProfile(np.array([0.0, 100.0]), np.zeros(2), np.zeros(2))

@@ -836,17 +836,20 @@ class DiscrepancyFinder:
     def _state_reading(self, sel: force_shape.Selection) -> tuple[force_shape.Selection | None, list[int]]:
         """The states' reading of a missing force led by an input feature (``sel``), and the drives on which
         that input is silent (its column zero on the axles it leads: a sine steer on a flat road for the road
-        height), as indices of the finder's drives. The reading is the stability selection of the same
-        regression without the input features (:func:`.force_shape.without_inputs`): a law of the states
-        that the road excites (a spring of a law no feature has) lets the road height lead on the drives
-        that carry a road, while the same law acts wherever the states move. ``(None, silent)`` when no
-        drive is silent to the input (the wheel's rotation acts on every drive: nothing tells a state
-        from it) or nothing of the states is stable."""
+        height; a drive that lacks its road is not one of them), as indices of the finder's drives. The
+        reading is the stability selection of the same regression without the input features
+        (:func:`.force_shape.without_inputs`): a law of the states that the road excites (a spring of a law no
+        feature has) lets the road height lead on the drives that carry a road, while the same law acts
+        wherever the states move. ``(None, silent)`` when no drive is silent to the input (the wheel's
+        rotation acts on every drive: nothing tells a state from it) or nothing of the states is stable."""
         design = self.shape_design_
         lead = force_shape.group_of(sel.leading or "")
         axles = {c.axle for c in sel.stable if force_shape.group_of(c.feature) == lead}
         cols = [j for j, c in enumerate(design.columns) if force_shape.group_of(c.feature) == lead and c.axle in axles]
-        silent = [int(g) for g in np.unique(design.groups) if not np.any(design.X[design.groups == g][:, cols])]
+        # a drive that lacks its road is not one the road does not reach: its road is unknown, not flat
+        known = (lambda g: has_road_input(self.cases_[g])) if sel.input_kind == "road" else (lambda g: True)
+        silent = [int(g) for g in np.unique(design.groups)
+                  if known(int(g)) and not np.any(design.X[design.groups == g][:, cols])]
         if not silent:
             return None, []
         state = force_shape.select(force_shape.without_inputs(design))
