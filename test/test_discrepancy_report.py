@@ -139,3 +139,16 @@ def test_held_out_table_says_which_values_were_calibrated_on_the_left_out_drive(
     assert "| bump_front_empty | 0.1675 | 0.0608 | 0.0633 | damper_measured_empty_front |" in text
     assert "| bump_intact | 0.0628 | 0.0581 | 0.0581 | - |" in text
     assert "| **pooled** | **0.1300** | **0.0596** | 0.0611 | |" in text
+
+
+def test_the_reason_says_why_a_road_led_force_was_named_as_physics():
+    """The verdict's words for an input-led step whose states' reading stood (issue 26, item 5): what the road
+    led (without the input's "(an input, not a state)"), the law of the states, the drives the road does not
+    reach and the held-out gain there."""
+    from susp_sim_ros.analysis.discrepancy.report import input_weighed_words
+    words = input_weighed_words({"input_feature": "road_height", "dependences": ["bump_contact"],
+                                 "input_silent_drives": ["sine_intact", "sine_rear_empty"],
+                                 "input_silent_heldout_gain": 0.624, "added": ["unlisted_force"]})
+    assert words.startswith("the force the model lacks follows the road height under the wheel where the drives")
+    assert "(bump_contact)" in words and "(sine_intact, sine_rear_empty)" in words and "62 %" in words
+    assert "an input, not a state" not in words and words.endswith("physics, not an input")

@@ -257,7 +257,7 @@ class DiscrepancyFinder:
             in_base.append(force_shape.TERM)   # a variant the finder wrote: its learned force is the base model's
         self.learnable_ = force_shape.TERM in self.candidates and force_shape.TERM not in in_base
         self.input_led_ = False  # set when the shape regression finds the residual led by an input feature
-        self.input_weighed_: list[dict] = []  # input-led steps whose states' reading explained the silent drives
+        self.input_weighed_: list[dict] = []  # state readings of input-led steps that stood as physics
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
         self.base_fit_ = fit_structure(ev, Structure([]))
         return ev
@@ -855,21 +855,23 @@ class DiscrepancyFinder:
         state = force_shape.select(force_shape.without_inputs(design))
         if state is None or not state.stable:
             return None, silent
-        if self.force_shape_:
-            self.force_shape_[-1]["state_reading"] = {
-                "input_feature": sel.leading, "dependences": state.dependences,
-                "stable": [f"{c.feature}:{c.axle}" for c in state.stable],
-                "description": state.description(), "input_silent_drives": [self.cases_[g].name for g in silent]}
+        self.force_shape_[-1]["state_reading"] = {   # this step's record (_shape_selection)
+            "input_feature": sel.leading, "dependences": state.dependences,
+            "stable": [f"{c.feature}:{c.axle}" for c in state.stable],
+            "description": state.description(), "input_silent_drives": [self.cases_[g].name for g in silent]}
         return state, silent
 
     def _states_explain_silent(self, ev: Evaluator, cur: FitResult, new: FitResult, silent: list[int], ok: bool,
                                checks: dict) -> bool:
         """Whether the trial ``cur`` -> ``new`` of an input-led step stands as physics: it passed every test
         (``ok``) and it predicts the drives the input does not reach (``silent``) held out, each refitted
-        without it as in :meth:`_heldout_check`, by :data:`MIN_HELDOUT_GAIN` of their excess over noise. A
-        road the recording has wrong, or lacks, acts on the drives over that road only, and a law of the
-        states fitted to it predicts a force where the road is flat that those drives do not show; a law of
-        the states acts wherever they move. The figures join ``checks`` and the step's shape record."""
+        without it as in :meth:`_heldout_check`, by :data:`MIN_HELDOUT_GAIN` of their excess over noise: a
+        law of the states acts wherever they move, a road only where it is. On a road recorded wrong
+        (the family's ``road/bump_recorded_low``) the held-out test of every trial refused the states'
+        reading, while the drives the road does not reach did not tell (the calibration, compromised by
+        the road error, leaves a residual there that a refit takes up): this is a condition beside the
+        tests, not instead of them. The figures join ``checks`` and the step's ``state_reading``, with the
+        terms the trial ``added``."""
         folds = [self._fold_pair(ev, cur, new, list(new.idx).index(g)) for g in silent if g in new.idx]
         sq_old = sum(f[0] for f in folds)
         n_held = sum(f[4] for f in folds)
@@ -877,10 +879,10 @@ class DiscrepancyFinder:
         explains = bool(ok and folds and gain >= MIN_HELDOUT_GAIN)
         weighed = {"input_silent_heldout_gain": float(gain), "states_explain_input_silent_drives": explains}
         checks.update(weighed)
-        if self.force_shape_:
-            self.force_shape_[-1].setdefault("state_reading", {}).update(weighed)
+        record = self.force_shape_[-1]["state_reading"]   # this step's (_state_reading)
+        record.update(weighed, added=[n for n in new.structure.names if n not in cur.structure.names])
         if explains:
-            self.input_weighed_.append(self.force_shape_[-1] if self.force_shape_ else weighed)
+            self.input_weighed_.append(record)
         return explains
 
     def _input_finding(self, ev: Evaluator, sel: force_shape.Selection, step: int) -> None:

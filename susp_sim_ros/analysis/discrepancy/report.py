@@ -214,22 +214,22 @@ def verdict(f) -> tuple[str, str]:
     if rival:
         why += f"; not decided: {undecided}"
     for w in getattr(f, "input_weighed_", []):
-        why += "; " + input_weighed_words(w)
+        if set(w["added"]) & set(phys):   # still named after backward elimination and the effect judgement
+            why += "; " + input_weighed_words(w)
     if unmeasured:  # physics named first, then a remainder that follows an input (issue 26, item 5)
         why += "; besides: " + "; ".join(u["statement"] for u in unmeasured)
     return "missing_physics", why
 
 
-def input_weighed_words(record: dict) -> str:
-    """The reason's words for an input-led step whose states' reading stood (the finder's
-    ``input_weighed_``: a shape record with its ``state_reading``): what the input reading said, and why
-    the states' reading is named instead."""
-    sr = record.get("state_reading", {})
-    feature = sr.get("input_feature") or "road_height"
-    return (f"the force the model lacks {force_shape.WORDS[feature]} where the drives carry it, but a law of the "
-            f"states ({', '.join(sr.get('dependences', []))}) also predicts the drives it does not reach "
-            f"({', '.join(sr.get('input_silent_drives', []))}) held out, "
-            f"{100 * float(sr.get('input_silent_heldout_gain', 0.0)):.0f} % of their excess: physics, not an input")
+def input_weighed_words(reading: dict) -> str:
+    """The reason's words for an input-led step whose states' reading stood as physics (an entry of the
+    finder's ``input_weighed_``, the step's ``state_reading``): what the input led, and why the states'
+    reading is named instead."""
+    led = force_shape.WORDS[reading["input_feature"]].split(" (")[0]   # without "(an input, not a state)"
+    return (f"the force the model lacks {led} where the drives carry it, but a law of the states "
+            f"({', '.join(reading['dependences'])}) passed every test and also predicts the drives the input "
+            f"does not reach ({', '.join(reading['input_silent_drives'])}) held out, "
+            f"{100 * float(reading['input_silent_heldout_gain']):.0f} % of their excess: physics, not an input")
 
 
 def _is_physics(name: str) -> bool:
