@@ -181,8 +181,9 @@ def verdict(f) -> tuple[str, str]:
         level += (f"; the force the model lacks {force_shape.WORDS[at_level[0]['feature']]}, but what remains is "
                   f"within that level: not an input finding")
     rival = [c for c in getattr(f, "competing_", []) if _is_physics(c["name"])]
-    undecided = "; ".join(f"{c['name']} and {', '.join(c['competes_with'])} explain the same residual "
-                          f"(reveal with {c['reveal_with']})" for c in rival)
+    undecided = "; ".join((f"{c['name']} and {', '.join(c['competes_with'])} explain the same residual "
+                           if c["competes_with"] else f"{c['name']}'s values are told by one drive alone ")
+                          + f"(reveal with {c['reveal_with']})" for c in rival)
     if rival and not phys:
         # a calibration value far from its prior on one vehicle state's evidence is a hypothesis as much
         # as the term: "nothing missing" would take the hypothesis for a fact (issue 24, item 4)
