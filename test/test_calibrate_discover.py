@@ -396,6 +396,28 @@ def test_a_value_the_held_drive_carries_most_of_is_its_own_even_when_the_others_
     assert _informed_only_by(fit(0.5), held, pw=1.0) == []  # the others carry 4/5 of it: refitted
 
 
+def test_a_term_level_the_held_drive_alone_tells_is_owned_by_it():
+    """The rear level of an amplitude friction that shows mainly with the rear dampers oil-empty: the one
+    rear-empty bump crossing carries most of what the drives tell of it (``finder._owned_by``, the rule
+    ``HELD_SHARE`` of the calibration values, for a physics term's levels without a prior). A level the
+    other drives tell as well, or that trades with another value only in the held rows, is not owned."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.finder import _owned_by
+    from susp_sim_ros.analysis.discrepancy.fit import FitResult
+    rng = np.random.default_rng(7)
+    st = SimpleNamespace(prior=lambda: (np.zeros(0, np.int64), np.zeros(0), np.zeros(0)), prior_gain=1.0,
+                         data_weight=1.0)
+    held = np.r_[np.ones(100, bool), np.zeros(400, bool)]
+    rear = np.r_[3.0 * rng.normal(size=100), 0.5 * rng.normal(size=400)]   # held rows ~900 of ~1000
+    front = np.r_[0.5 * rng.normal(size=100), rng.normal(size=400)]        # others ~400 of ~425
+    J = np.column_stack([rear, front])
+    fit = FitResult(structure=st, x=np.zeros(2), rss=500.0, n=500, k_bic=2, bic=0.0, success=True, message="",
+                    nfev=1, residual=np.zeros(500), jac=J, n_eff=500.0)
+    assert _owned_by(fit, held, [0, 1]) == [0]
+    assert _owned_by(fit, ~held, [0, 1]) == [1]   # the other way round: the 400 rows own the front level
+    assert _owned_by(fit, held, []) == []
+
+
 def test_the_measurement_chain_is_decided_again_on_the_model_with_its_physics(monkeypatch):
     """A sensor bias the calibration stage dropped (the missing physics still dominated its criterion) is
     added on the final model when it pays there (BIC lower by at least 10), recorded in the selection

@@ -506,7 +506,6 @@ class DiscrepancyFinder:
                 continue
             seen.add(name)
             labels = st.labels()
-            drives = [ev.cases[f.idx[h]].name for h in owners]
             a = int(st.offsets[st.names.index(CALIBRATION)]) if CALIBRATION in st.names else -1
             own_values: list[str] = []
             for h in owners:
@@ -518,8 +517,8 @@ class DiscrepancyFinder:
                              for h, js in owners.items())
             out.append(self._competing_entry(
                 cand, list(dict.fromkeys(own_values)),
-                [f"another drive in the vehicle state of {d} (another bump height or speed), to hold out"
-                 for d in drives],
+                [f"another {c.maneuver.replace('_', ' ')} in the vehicle state {c.state} (another height or speed "
+                 f"than {c.name}), to hold out" for c in (ev.cases[f.idx[h]] for h in owners)],
                 f"lowers the criterion by {before.bic - f.bic:.0f}, explains "
                 f"{100 * (before.rss - f.rss) / max(before.rss - before.n, 1e-12):.0f} % of the residual above "
                 f"noise, beats its decoys and predicts the other drives held out ({100 * others_gain:.0f} % of "
