@@ -462,7 +462,9 @@ def summarise_family(results: list[dict]) -> dict:
     held-out / noise floor)."""
     base = summarise(results)
     structure = [r for r in results if r["effect"] == "none"]
-    physics = [r for r in results if r["effect"] != "none" and r["expected_physics"]]
+    # physics was missing wherever a term is right to name (expected or optional: a progressive gas spring has
+    # no expected term, only terms right if named), not where the recording lacks an input (a road recorded wrong)
+    physics = [r for r in results if r["effect"] != "none" and (r["expected_physics"] or r["optional_physics"])]
     lvl = [r["heldout_after_over_noise"] for r in structure if r["heldout_after_over_noise"] is not None]
     level = float(np.median(lvl)) if lvl else None
     ratios = {r["case"]: r["heldout_after_over_noise"] / level for r in physics

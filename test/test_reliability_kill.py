@@ -60,7 +60,8 @@ def test_node_killed_at_20_random_moments_leaves_readable_recordings(tmp_path):
     probe = bench.Probe(100.0, realtime=False)
     probe.start_publishing()
     figures = []
-    def check(i: int, path: Path, delay: float, t_kill: int) -> None:
+    def check(k: int, path: Path, delay: float, t_kill: int) -> None:
+        i = f"kill {k} at {delay:.3f} s, SUSP_KILL_SEED={seed}"  # every message says how to run it again
         ours = read_recording(path)
         assert not ours.corrupt and not ours.finalised, (i, ours.error)
         assert ours.metadata["test_drive"]["source"] == "simulated:full"
