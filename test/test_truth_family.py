@@ -280,7 +280,8 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/load_friction_front", "unlisted/position_friction", "unlisted/viscoelastic_bushing",
                    "unlisted/bushing_two_branch_front", "unlisted/progressive_spring_rear",
                    "unlisted/air_assist_front", "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear",
-                   "unlisted/seal_gas_friction", "unlisted/bushing_rear", "road/bump_recorded_low"}
+                   "unlisted/seal_gas_friction", "unlisted/bushing_rear", "road/bump_recorded_low",
+                   "gas/polytropic_charge_rear"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -313,8 +314,8 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-1] == "road/bump_recorded_low"   # appended after them (a road form)
-    assert doc["held_out"][-13:-1] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert doc["held_out"][-2:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear"]   # appended after
+    assert doc["held_out"][-14:-2] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -592,3 +593,23 @@ def test_the_road_form_records_its_bump_low_and_hides_nothing():
     spec.loader.exec_module(bench)
     case = bench._family_spec(form, 1)
     assert case["verdicts"] == ["unmeasured_input"] and case["expect"] == [] and case["optional"] == []
+
+
+def test_the_polytropic_charge_form_is_a_gas_law_on_the_rear_dampers():
+    """``gas/polytropic_charge_rear`` (held out): the rear dampers' gas charge, a preload and a gas law's
+    nonlinear part (its static rate left to the vehicle file): zero at static, progressive in bump, a smaller
+    push in rebound (the figures its description states), no gas force at the front; a gas form, so only the
+    gas preload or a learned spring count as right."""
+    form = family.FORMS["gas/polytropic_charge_rear"]
+    h = form.hidden
+    assert form.split == "held_out" and form.effect == "gas_spring" and not form.expect
+    assert set(form.optional) == {"damper_gas_preload", "unlisted_force"}
+    assert h.gas_preload_N == (0.0, 0.0, 200.0, 200.0) and h.air_spring_rate_N_m[0] == 0.0
+    k = h.air_spring_rate_N_m[1]
+    assert k == pytest.approx(1.1 * 200.0 / 0.07)
+    law = [ind._air_spring(d, k, h.air_spring_height_m, h.air_spring_exponent) for d in (0.0, 0.04, -0.04)]
+    assert law[0] == pytest.approx(0.0, abs=1e-9)
+    assert law[1] == pytest.approx(182.0, abs=1.0) and law[2] == pytest.approx(47.0, abs=1.0)
+    case = dict(family.make_case(form, seed=1))
+    assert json.loads(case["bump_intact"].metadata["truth"])["hidden"]["air_spring_height_m"] == 0.07
+    assert all(np.all(np.isfinite(d.imu.gyro)) for d in case.values())
