@@ -489,13 +489,10 @@ class DiscrepancyFinder:
             if not cand.physical(st.part(f.x, name)):
                 continue
             levels = [int(st.offsets[k]) + j for j in cand.gain_indices]
-            edges = np.cumsum([0] + [ev.n_res[q] for q in f.idx])
             owners: dict[int, list[int]] = {}
             sq_old = sq_new = n_held = 0.0
             for h in range(R):
-                held = np.zeros(len(f.residual), bool)
-                held[edges[h]:edges[h + 1]] = True
-                owned = _owned_by(f, held, levels)
+                owned = _owned_by(f, _drive_rows(ev, f, h), levels)
                 if owned:
                     owners[h] = owned
                     continue
@@ -509,10 +506,9 @@ class DiscrepancyFinder:
             a = int(st.offsets[st.names.index(CALIBRATION)]) if CALIBRATION in st.names else -1
             own_values: list[str] = []
             for h in owners:
-                held = np.zeros(len(f.residual), bool)
-                held[edges[h]:edges[h + 1]] = True
                 own_values += [f"{self.informed_[j - a].field}:{self.informed_[j - a].where}"
-                               for j in _informed_only_by(f, held) if a >= 0 and labels[j][0] == CALIBRATION]
+                               for j in _informed_only_by(f, _drive_rows(ev, f, h))
+                               if a >= 0 and labels[j][0] == CALIBRATION]
             told = "; ".join(f"{ev.cases[f.idx[h]].name} alone tells its {', '.join(labels[j][1] for j in js)}"
                              for h, js in owners.items())
             out.append(self._competing_entry(
@@ -1287,13 +1283,11 @@ class DiscrepancyFinder:
         the held-out drive informs keep their joint value in its fold (:func:`_informed_only_by`)."""
         J, r = fit.jac, fit.residual
         assert J is not None  # a calibration with free parameters: fit_structure returns the Jacobian
-        edges = np.cumsum([0] + [self.evaluator_.n_res[q] for q in fit.idx])
         scores = {}
         for w in DATA_WEIGHTS:
             sq = 0.0
             for h in range(len(fit.idx)):
-                held = np.zeros(len(r), bool)
-                held[edges[h]:edges[h + 1]] = True
+                held = _drive_rows(self.evaluator_, fit, h)
                 ne_t = max(fit.n_eff * (~held).sum() / len(r), 1.0)
                 d = _fold_step(fit, held, math.sqrt((~held).sum() / ne_t / w))
                 e = r[held] + J[held] @ d
@@ -1379,9 +1373,7 @@ class DiscrepancyFinder:
         """Drive ``h`` (position in ``new.idx``) held out of both structures, each refitted on the others with
         the same values held (:func:`_held_in_both`): ``(old held, old training, new held, new training,
         held rows)``, squared whitened residuals."""
-        edges = np.cumsum([0] + [ev.n_res[q] for q in new.idx])
-        held = np.zeros(len(new.residual), bool)
-        held[edges[h]:edges[h + 1]] = True
+        held = _drive_rows(ev, new, h)
         fix_old, fix_new = _held_in_both(cur, new, held)
         old_h, old_t = _fold_refit(cur, held, fix_old)
         new_h, new_t = _fold_refit(new, held, fix_new)
@@ -1410,7 +1402,6 @@ class DiscrepancyFinder:
         if R == 1:
             return self._heldout_halves(ev, final)
         folds = []
-        edges = np.cumsum([0] + [ev.n_res[q] for q in final.idx])
         labels = final.structure.labels()
         before_sig: dict[str, list] = {}
         after_sig: dict[str, list] = {}
@@ -1418,9 +1409,7 @@ class DiscrepancyFinder:
         for h in range(R):
             train = tuple(r for r in range(R) if r != h)
             if final.structure.n_params and train:
-                held = np.zeros(len(final.residual), bool)
-                held[edges[h]:edges[h + 1]] = True
-                own = _informed_only_by(final, held)
+                own = _informed_only_by(final, _drive_rows(ev, final, h))
                 x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV, fixed=own).x
             else:
                 x, own = final.x, []
@@ -1688,6 +1677,14 @@ def _fold_refit(fit: FitResult, held: np.ndarray, fixed: Sequence[int] | None = 
         return float(r[held] @ r[held]), float(r[tr] @ r[tr])
     e = r + fit.jac @ _fold_step(fit, held, fixed=fixed)
     return float(e[held] @ e[held]), float(e[tr] @ e[tr])
+
+
+def _drive_rows(ev: Evaluator, fit: FitResult, h: int) -> np.ndarray:
+    """The rows of ``fit.residual`` that belong to its drive at position ``h`` of ``fit.idx`` (a mask)."""
+    edges = np.cumsum([0] + [ev.n_res[q] for q in fit.idx])
+    rows = np.zeros(len(fit.residual), bool)
+    rows[edges[h]:edges[h + 1]] = True
+    return rows
 
 
 def _finite_or_lowest(v: float) -> float:

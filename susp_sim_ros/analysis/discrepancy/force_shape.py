@@ -63,7 +63,7 @@ import numpy as np
 
 from ...model.input_force import INPUT_FEATURES, INPUT_FORCE, INPUT_KIND
 from ...model.learned_force import DAMPER_OIL, FEATURES, FRICTION_LIKE, LAW_SHAPE_FEATURES, LEARNED_FORCE, \
-    LEVEL_GROWTH, PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING
+    LEVEL_GROWTH, PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING, shape_defaults
 from ...model.params import AXLE_CORNERS, load_settings
 from .candidates import PHYSICS, CandParam, Candidate, axle_map
 from .fit import debias, fd_jacobian
@@ -128,6 +128,12 @@ LAW_OF = {**{f: "spring" for f in ("deflection", "deflection_cubed", "bump_conta
           **{f: "damping" for f in ("deflection_velocity", "velocity_squared", "velocity_beyond_knee")},
           **{f: "friction" for f in FRICTION_LIKE},
           **{f: "roll" for f in ("roll_deflection", "roll_free_play")}}
+
+#: springs met beyond a gap of bump or rebound, and a spring law's smooth progressive part (:func:`spring_law`)
+CONTACTS = ("bump_contact", "rebound_contact")
+PROGRESSIVE = "deflection_cubed"
+#: the bump deflection [m] at which the words give a progressive part's force: a bump crossing's (30-60 mm)
+WORDS_DEFLECTION_M = 0.04
 
 
 def group_of(feature: str) -> str:
@@ -313,10 +319,26 @@ class Selection:
             more, less = SENSE[feature]
             where = ", ".join(f"{self.stable[k].axle} {more if coef[k] > 0 else less} "
                               f"{100 * self.share[k]:.0f} %" for k in ks)
+            if feature in CONTACTS:
+                w += _progressive_words(self, shapes)
             parts.append(f"{w} ({where})")
         axles = self.axles
         return f"A force the model lacks: {'; '.join(parts)}; " \
                f"{f'{axles[0]} axle only' if len(axles) == 1 else 'both axles'}."
+
+
+def _progressive_words(sel: Selection, values: dict) -> str:
+    """Words on a contact spring's fitted progressive part (:func:`spring_law`; ``values`` the fitted
+    coefficients by name, each its force at the learned term's deflection_ref): its force at
+    :data:`WORDS_DEFLECTION_M` of bump; none when not fitted."""
+    cube = (WORDS_DEFLECTION_M / float(shape_defaults()["deflection_ref"])) ** 3
+    out = []
+    for c in spring_law(sel):
+        v = values.get(c.coefficient)
+        if isinstance(v, (int, float)) and v != 0.0:
+            out.append(f"{c.axle} {'+' if v > 0 else '-'}{abs(float(v)) * cube:.0f} N at "
+                       f"{1e3 * WORDS_DEFLECTION_M:.0f} mm")
+    return f", with a smooth progressive part (the cube of the deflection: {', '.join(out)})" if out else ""
 
 
 @dataclass(frozen=True)
@@ -496,7 +518,8 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     per axle with a plain friction level (``sign_velocity``), a level at rest above the sliding one that
     falls over a Stribeck velocity and the level's growth with the compression (coefficients neutral 0,
     after the stable ones). A stable force of the
-    damper's oil (an orifice, a valve) brings its rebound ratio (:func:`damper_law`)."""
+    damper's oil (an orifice, a valve) brings its rebound ratio (:func:`damper_law`), a stable contact spring
+    its smooth progressive part (:func:`spring_law`, a coefficient neutral 0 after those of the friction law)."""
     cfg = settings() if cfg is None else cfg
     bound = float(cfg["fit.coefficient_bound_N"])
     params = []
@@ -515,6 +538,13 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
                                 f"coefficient of {c.feature}, {c.axle} axle: the friction's level "
                                 + ("at rest above its sliding level" if weak else "at d_ref of bump over static")))
         axle_of.append(c.axle)
+    progressive = spring_law(sel)
+    for c in progressive:
+        params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound, float(cfg["fit.progressive_step_N"]),
+                                f"coefficient of {c.feature}, {c.axle} axle: the contact spring's smooth "
+                                f"progressive part, its force at d_ref"))
+        axle_of.append(c.axle)
+    law = law + progressive
     shapes: dict[str, float] = {}
     for c in sel.stable:
         if c.shape is not None:
@@ -583,6 +613,22 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
     stable = {(c.feature, c.axle) for c in sel.stable}
     growth = [Column(LEVEL_GROWTH, a) for a in plain if (LEVEL_GROWTH, a) not in stable]
     return [Column(WEAKENING, a) for a in plain] + growth, shapes
+
+
+def spring_law(sel: Selection) -> list[Column]:
+    """The smooth progressive part of a learned contact spring's law, fitted beside it: on each axle where a
+    spring met beyond a gap (:data:`CONTACTS`) is stable and the cube of the deflection is not, a
+    ``deflection_cubed`` coefficient (neutral 0). A contact is a spring law to first order: piecewise linear,
+    with one corner at its gap. The elements that make such laws stiffen smoothly with travel (an elastomer
+    bumper as it is squeezed, the gas of a damper's charge or an air spring compressed, closely wound coils
+    coming to block: Reimpell, Stoll and Betzler, The Automotive Chassis, 2nd ed., 2001, ch. 5), and a gas
+    acts on both sides of static, so the corner alone reads one side of a law that bends on both. The
+    resamples split their votes between the members of the spring family (:data:`LAW_OF`) and the stable set
+    keeps one member per axle; the fit then decides how much of the cube the drives want, under every test
+    of the trial."""
+    stable = {c.key for c in sel.stable}
+    axles = sorted({c.axle for c in sel.stable if c.feature in CONTACTS}, key=AXLES.index)
+    return [Column(PROGRESSIVE, a) for a in axles if (PROGRESSIVE, a) not in stable]
 
 
 def damper_law(sel: Selection, cfg: dict) -> dict[str, tuple[float, float, list[str]]]:
