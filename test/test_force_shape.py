@@ -698,3 +698,45 @@ def _flat_road():
     """A recorded flat road (what a sine steer's recording carries)."""
     from susp_sim_ros.model.road import RoadProfile
     return RoadProfile(np.array([0.0, 100.0]), np.zeros(2), np.zeros(2))
+
+
+def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fit():
+    """A stable spring met beyond a gap (bump or rebound contact) brings the cube of the deflection on its axle
+    into the learned trial (force_shape.spring_law): a coefficient neutral 0 after the stable ones, stepped by
+    config/force_shape.yaml, written into the term like the others, and named in the words with its force at
+    40 mm (d_ref 10 mm: 64 times its coefficient) once fitted. Not where the cube is stable itself, nor beside
+    a friction or an axle without a contact."""
+    cfg = fs.settings()
+
+    def selection(*cols):
+        n = len(cols)
+        return fs.Selection({c.key: 1.0 for c in cols}, list(cols), np.full(n, 50.0), np.full(n, 1.0 / n), 24)
+
+    contact = selection(fs.Column("rebound_contact", "rear", 0.02), fs.Column("sign_velocity", "front"))
+    assert fs.spring_law(contact) == [fs.Column("deflection_cubed", "rear")]
+    assert fs.spring_law(selection(fs.Column("bump_contact", "rear", 0.0), fs.Column("deflection_cubed", "rear"))) == []
+    assert fs.spring_law(selection(fs.Column("sign_velocity", "rear"), fs.Column("deflection", "front"))) == []
+    both = selection(fs.Column("bump_contact", "front", 0.0), fs.Column("rebound_contact", "rear", 0.02))
+    assert fs.spring_law(both) == [fs.Column("deflection_cubed", "front"), fs.Column("deflection_cubed", "rear")]
+
+    cand = fs.learned_candidate(contact, cfg)
+    names = [p.name for p in cand.params]
+    k = names.index("deflection_cubed_rear")
+    assert names[:2] == ["rebound_contact_rear", "sign_velocity_front"]
+    assert k > names.index("velocity_weakening_front") and names[-1] in ("presliding", "stribeck_velocity")
+    cubic = cand.params[k]
+    assert cubic.neutral == 0.0 and not cubic.shape and cubic.step == cfg["fit.progressive_step_N"]
+    assert cand.axle_of[k] == "rear" and k in cand.gain_indices
+    full = load_variant("full")
+    model = Model("passat_b8_like", dataclasses.replace(full, terms=full.terms + (_learned(),)))
+    P = np.stack([model.params((1, 1, 1, 1))])
+    x = np.array([p.neutral for p in cand.params])
+    x[k] = 3.0
+    cand.apply(P, P.copy(), x, model)
+    np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "c_deflection_cubed")], [0, 0, 3, 3])
+    assert cand.term_params(x, None)["c_deflection_cubed"] == {"front": 0.0, "rear": 3.0}
+
+    words = contact.description(np.array([80.0, 30.0]), {"deflection_cubed_rear": 3.0, "contact_gap": 0.026})
+    assert "beyond 26 mm of rebound" in words
+    assert "progressive part (the cube of the deflection: rear +192 N at 40 mm)" in words
+    assert "progressive" not in contact.description(np.array([80.0, 30.0]), {"deflection_cubed_rear": 0.0})
