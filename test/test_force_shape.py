@@ -740,3 +740,41 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     assert "beyond 26 mm of rebound" in words
     assert "progressive part (the cube of the deflection: rear +192 N at 40 mm)" in words
     assert "progressive" not in contact.description(np.array([80.0, 30.0]), {"deflection_cubed_rear": 0.0})
+
+
+def test_a_recorded_road_that_leads_on_one_axle_only_is_no_input_finding():
+    """Front and rear wheels roll over the same recorded track, so a road recorded off changes both axles'
+    input alike: a missing force the recorded road leads on one axle only is a law of the states there that
+    the road excites, not an input (``DiscrepancyFinder._road_on_one_axle``); where it leads on both, where the
+    drives it acts on lack their road, or where it is the wheel's rotation, the input finding stands. The
+    reason's words say which axle."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.finder import DiscrepancyFinder
+    from susp_sim_ros.analysis.discrepancy.report import road_one_axle_words
+    design = _road_excited_law(0)
+    keys = [c.key for c in design.columns]
+    X = design.X.copy()
+    X[:, keys.index(("road_height", "rear"))] = X[:, keys.index(("road_height", "front"))]   # the same track
+    design = fs.Design(X, design.y, design.groups, design.columns)
+
+    def stub(roadless=()):
+        return SimpleNamespace(shape_design_=design, cases_=[
+            SimpleNamespace(name=f"drive{g}", road=None if g in roadless else _flat_road(), U=np.zeros((2, 40)))
+            for g in range(6)])
+
+    def led(*cols):
+        return fs.Selection({c.key: 0.9 for c in cols}, list(cols), np.full(len(cols), 3.0),
+                            np.full(len(cols), 1.0 / len(cols)), 24)
+
+    rear = led(fs.Column("road_height", "rear"))
+    one = DiscrepancyFinder._road_on_one_axle(stub(), rear, ["rear"])
+    assert one == {"input_feature": "road_height", "axle": "rear", "drives": ["drive0", "drive1", "drive2"]}
+    assert DiscrepancyFinder._road_on_one_axle(stub(), led(fs.Column("road_height", "front"),
+                                                           fs.Column("road_height", "rear")), ["front", "rear"]) is None
+    assert DiscrepancyFinder._road_on_one_axle(stub(roadless=(1,)), rear, ["rear"]) is None   # its road unknown
+    rotation = led(fs.Column("rotation_sin1", "rear"), fs.Column("rotation_cos1", "rear"))
+    assert rotation.input_kind == "wheel_rotation"
+    assert DiscrepancyFinder._road_on_one_axle(stub(), rotation, ["rear"]) is None
+    words = road_one_axle_words(SimpleNamespace(road_one_axle_=[one, one]))
+    assert words.count("rear axle only") == 1 and "same recorded track" in words
+    assert road_one_axle_words(SimpleNamespace()) == ""

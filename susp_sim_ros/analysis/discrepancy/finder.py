@@ -258,6 +258,7 @@ class DiscrepancyFinder:
             in_base.append(force_shape.TERM)   # a variant the finder wrote: its learned force is the base model's
         self.learnable_ = force_shape.TERM in self.candidates and force_shape.TERM not in in_base
         self.input_led_ = False  # set when the shape regression finds the residual led by an input feature
+        self.road_one_axle_: list[dict] = []  # road-led readings on one axle only: no input finding (_input_finding)
         self.input_weighed_: list[dict] = []  # state readings of input-led steps that stood as physics
         self.testable_, self.skipped_, self.in_base_ = testable, skipped, in_base
         self.base_fit_ = fit_structure(ev, Structure([]))
@@ -294,8 +295,9 @@ class DiscrepancyFinder:
                 # and it is an input the recording lacks, no physics named for it (issue 26, 5)
                 input_sel, (sel, silent) = sel, self._state_reading(sel)
                 if sel is None:
-                    self._input_finding(ev, input_sel, step)
-                    break
+                    if self._input_finding(ev, input_sel, step):
+                        break
+                    input_sel = None   # no input: the step goes on with the listed candidates
             learned = self._learned_trial(ev, cur, sel) if sel is not None else None
             if not opts and learned is None:
                 if input_sel is not None:
@@ -948,17 +950,27 @@ class DiscrepancyFinder:
             self.input_weighed_.append(record)
         return explains
 
-    def _input_finding(self, ev: Evaluator, sel: force_shape.Selection, step: int) -> None:
+    def _input_finding(self, ev: Evaluator, sel: force_shape.Selection, step: int) -> bool:
         """An ``unmeasured_input`` finding per drive from a selection led by an input feature: the missing
         force follows the road under the wheel or the wheel's rotation, which the recording lacks. A drive
         that carries its road and whose force follows that road says what else it can be: the road as
         recorded may be off, or a law of the states that the road excites and no feature describes is
         missing (a spring of another law over a bump); the same road at another speed tells them apart
-        (``road_recorded``, said once in the verdict's reason: :data:`.report.ROAD_RECORDED`)."""
+        (``road_recorded``, said once in the verdict's reason: :data:`.report.ROAD_RECORDED`).
+
+        Except where the recorded road leads on one axle only (:meth:`_road_on_one_axle`): both axles roll
+        over the same recorded track, so a road recorded off would show at both; what follows it on one
+        axle is a law of the states there that the road excites (recorded in ``road_one_axle_`` and the
+        step's ``road_one_axle``; the verdict's reason says so). Returns whether a finding was made."""
         lead = sel.leading
         assert lead is not None
         ks = [k for k, c in enumerate(sel.stable) if force_shape.group_of(c.feature) == force_shape.group_of(lead)]
         axles = sorted({sel.stable[k].axle for k in ks}, key=force_shape.AXLES.index)
+        one = self._road_on_one_axle(sel, axles)
+        if one is not None:
+            self.force_shape_[-1]["road_one_axle"] = one   # this step's record (_shape_selection)
+            self.road_one_axle_.append(one)
+            return False
         freq = max(sel.frequency[force_shape.group_key(sel.stable[k].key)] for k in ks)
         words = force_shape.WORDS[lead]
         self.input_led_ = True
@@ -971,6 +983,23 @@ class DiscrepancyFinder:
                               f"resamples): an input the recording lacks, not physics of the model's states; "
                               f"no physics term is named for it"),
                 "road_recorded": sel.input_kind == "road" and has_road_input(c)})
+        return True
+
+    def _road_on_one_axle(self, sel: force_shape.Selection, axles: list[str]) -> dict | None:
+        """Whether a road-led selection (``sel``, its lead stable on ``axles``) follows the recorded road on one
+        axle only, every drive its road column acts on carrying its road: then ``{input_feature, axle,
+        drives}``, else None. Front and rear wheels of a side roll over the same recorded track (the rear
+        a wheelbase later), so a road recorded off (a profilometer's gain, another wheel track) changes the
+        input of both axles alike, and a recording that lacks its road lacks it under both."""
+        if sel.input_kind != "road" or len(axles) != 1:
+            return None
+        design = self.shape_design_
+        lead = force_shape.group_of(sel.leading or "")
+        cols = [j for j, c in enumerate(design.columns) if force_shape.group_of(c.feature) == lead]
+        acting = [int(g) for g in np.unique(design.groups) if np.any(design.X[design.groups == g][:, cols])]
+        if not acting or not all(has_road_input(self.cases_[g]) for g in acting):
+            return None
+        return {"input_feature": sel.leading, "axle": axles[0], "drives": [self.cases_[g].name for g in acting]}
 
     def _learned_trial(self, ev: Evaluator, cur: FitResult,
                        sel: force_shape.Selection) -> tuple[Option, FitResult] | None:

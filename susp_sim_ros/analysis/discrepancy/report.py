@@ -194,6 +194,7 @@ def verdict(f) -> tuple[str, str]:
     # a term that passed every other test but whose effect may be nothing: said, not named, whatever the level
     tried = [d for d in getattr(f, "effect_dropped_", []) if d["name"] not in {c["name"] for c in rival}]
     tried_words = ("; tried and not named: " + "; ".join(f"{d['name']} ({d['why']})" for d in tried)) if tried else ""
+    tried_words += road_one_axle_words(f)
     if not phys and after <= line:
         if not significant:
             return "no_significant_discrepancy", "the residual stays within the sensor noise everywhere"
@@ -219,7 +220,19 @@ def verdict(f) -> tuple[str, str]:
             why += "; " + input_weighed_words(w)
     if unmeasured:  # physics named first, then a remainder that follows an input (issue 26, item 5)
         why += "; besides: " + "; ".join(u["statement"] for u in unmeasured)
-    return "missing_physics", why
+    return "missing_physics", why + road_one_axle_words(f)
+
+
+def road_one_axle_words(f) -> str:
+    """The reason's words (with a leading "; ") for the finder's road-led readings on one axle only
+    (``road_one_axle_``, no input finding made of them), each axle once; empty when there are none."""
+    seen: dict[str, dict] = {}
+    for r in getattr(f, "road_one_axle_", []):
+        seen.setdefault(r["axle"], r)
+    return "".join(f"; the force the model lacks {force_shape.WORDS[r['input_feature']].split(' (')[0]} on the "
+                   f"{axle} axle only, while both axles roll over the same recorded track (a road recorded off "
+                   f"would show at both): not an input but a law of the states there that the road excites, "
+                   f"which no feature describes as stable" for axle, r in seen.items())
 
 
 def input_weighed_words(reading: dict) -> str:
