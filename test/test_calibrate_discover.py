@@ -215,8 +215,10 @@ def test_a_road_led_finding_on_drives_that_carry_their_road_says_what_else_it_ca
     carried = SimpleNamespace(name="bump_intact", signals=["pitch_rate"], road=np.zeros((5, 2)),
                               U=np.zeros((10, N_U)))
     bare = SimpleNamespace(name="sine_intact", signals=["roll_rate"], road=None, U=np.zeros((10, N_U)))
-    sel = fs.Selection({("road_height", "front"): 0.7}, [fs.Column("road_height", "front")], np.ones(1),
-                       np.ones(1), 24)
+    # led on both axles (on one axle only it is no input finding: test_force_shape)
+    sel = fs.Selection({("road_height", "front"): 0.7, ("road_height", "rear"): 0.7},
+                       [fs.Column("road_height", "front"), fs.Column("road_height", "rear")], np.ones(2),
+                       np.full(2, 0.5), 24)
     f = DiscrepancyFinder()
     f.unmeasured_ = []
     f._input_finding(SimpleNamespace(cases=[carried, bare]), sel, 1)
