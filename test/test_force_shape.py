@@ -735,6 +735,8 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     cand.apply(P, P.copy(), x, model)
     np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "c_deflection_cubed")], [0, 0, 3, 3])
     assert cand.term_params(x, None)["c_deflection_cubed"] == {"front": 0.0, "rear": 3.0}
+    plain = fs.learned_candidate(contact, cfg, progressive=False)   # the finder's first stage: the contact alone
+    assert [p.name for p in plain.params] == [n for n in names if n != "deflection_cubed_rear"]
 
     words = contact.description(np.array([80.0, 30.0]), {"deflection_cubed_rear": 3.0, "contact_gap": 0.026})
     assert "beyond 26 mm of rebound" in words

@@ -509,7 +509,7 @@ def _law_representatives(freq: dict, law_freq: dict, stable_keys: list, min_freq
     return reps
 
 
-def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
+def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool = True) -> Candidate:
     """The learned term as a finder candidate: one coefficient [N] per stable (feature, axle), neutral 0,
     and the knee / free play it selected as a free shape value (neutral: the selected value; range: the
     config's, the plausible range of the physics, not a band around the library value the regression picked,
@@ -519,7 +519,8 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
     falls over a Stribeck velocity and the level's growth with the compression (coefficients neutral 0,
     after the stable ones). A stable force of the
     damper's oil (an orifice, a valve) brings its rebound ratio (:func:`damper_law`), a stable contact spring
-    its smooth progressive part (:func:`spring_law`, a coefficient neutral 0 after those of the friction law)."""
+    its smooth progressive part (:func:`spring_law`, a coefficient neutral 0 after those of the friction law;
+    left out with ``progressive`` False: the finder fits the plain contact first)."""
     cfg = settings() if cfg is None else cfg
     bound = float(cfg["fit.coefficient_bound_N"])
     params = []
@@ -538,13 +539,13 @@ def learned_candidate(sel: Selection, cfg: dict | None = None) -> Candidate:
                                 f"coefficient of {c.feature}, {c.axle} axle: the friction's level "
                                 + ("at rest above its sliding level" if weak else "at d_ref of bump over static")))
         axle_of.append(c.axle)
-    progressive = spring_law(sel)
-    for c in progressive:
+    bending = spring_law(sel) if progressive else []
+    for c in bending:
         params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound, float(cfg["fit.progressive_step_N"]),
                                 f"coefficient of {c.feature}, {c.axle} axle: the contact spring's smooth "
                                 f"progressive part, its force at d_ref"))
         axle_of.append(c.axle)
-    law = law + progressive
+    law = law + bending
     shapes: dict[str, float] = {}
     for c in sel.stable:
         if c.shape is not None:
