@@ -1031,7 +1031,10 @@ class DiscrepancyFinder:
         basin (a rebound spring beyond 15 mm: 1.12-1.15 -> 1.17-1.22x the noise held out, 2026-11-30)."""
         cand = force_shape.learned_candidate(sel)
         st = plain.structure.without(cand.name).with_(cand)
-        x1 = st.embed(plain.structure, plain.x)
+        x1 = st.neutral()
+        for k, name in enumerate(st.names):   # every other term's values as fitted (embed: one term's length)
+            if name != cand.name:
+                x1[st.offsets[k]:st.offsets[k + 1]] = plain.structure.part(plain.x, name)
         a = int(st.offsets[st.names.index(cand.name)])
         k = plain.structure.names.index(cand.name)
         fitted = dict(zip((q.name for q in plain.structure.cands[k].params), plain.structure.part(plain.x, cand.name)))
