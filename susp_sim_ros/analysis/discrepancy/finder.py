@@ -913,8 +913,8 @@ class DiscrepancyFinder:
         cols = [j for j, c in enumerate(design.columns) if force_shape.group_of(c.feature) == lead and c.axle in axles]
         # a drive that lacks its road is not one the road does not reach: its road is unknown, not flat
         known = (lambda g: has_road_input(self.cases_[g])) if sel.input_kind == "road" else (lambda g: True)
-        silent = [int(g) for g in np.unique(design.groups)
-                  if known(int(g)) and not np.any(design.X[design.groups == g][:, cols])]
+        reached = _drives_reached(design, cols)
+        silent = [int(g) for g in np.unique(design.groups) if known(int(g)) and int(g) not in reached]
         if not silent:
             return None, []
         state = force_shape.select(force_shape.without_inputs(design))
@@ -995,8 +995,8 @@ class DiscrepancyFinder:
             return None
         design = self.shape_design_
         lead = force_shape.group_of(sel.leading or "")
-        cols = [j for j, c in enumerate(design.columns) if force_shape.group_of(c.feature) == lead]
-        acting = [int(g) for g in np.unique(design.groups) if np.any(design.X[design.groups == g][:, cols])]
+        acting = _drives_reached(design, [j for j, c in enumerate(design.columns)
+                                          if force_shape.group_of(c.feature) == lead])
         if not acting or not all(has_road_input(self.cases_[g]) for g in acting):
             return None
         return {"input_feature": sel.leading, "axle": axles[0], "drives": [self.cases_[g].name for g in acting]}
@@ -1031,15 +1031,8 @@ class DiscrepancyFinder:
         basin (a rebound spring beyond 15 mm: 1.12-1.15 -> 1.17-1.22x the noise held out, 2026-11-30)."""
         cand = force_shape.learned_candidate(sel)
         st = plain.structure.without(cand.name).with_(cand)
-        x1 = st.neutral()
-        for k, name in enumerate(st.names):   # every other term's values as fitted (embed: one term's length)
-            if name != cand.name:
-                x1[st.offsets[k]:st.offsets[k + 1]] = plain.structure.part(plain.x, name)
-        a = int(st.offsets[st.names.index(cand.name)])
-        k = plain.structure.names.index(cand.name)
-        fitted = dict(zip((q.name for q in plain.structure.cands[k].params), plain.structure.part(plain.x, cand.name)))
-        for j, q in enumerate(cand.params):
-            x1[a + j] = fitted.get(q.name, q.neutral)
+        fitted = dict(zip(plain.structure.labels(), plain.x))   # every value as fitted, the cube at neutral
+        x1 = np.array([fitted.get(label, v) for label, v in zip(st.labels(), st.neutral())])
         freed = fit_structure(ev, st, x1, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
         return freed if freed.bic < plain.bic else plain
 
@@ -1728,6 +1721,11 @@ def _fold_refit(fit: FitResult, held: np.ndarray, fixed: Sequence[int] | None = 
         return float(r[held] @ r[held]), float(r[tr] @ r[tr])
     e = r + fit.jac @ _fold_step(fit, held, fixed=fixed)
     return float(e[held] @ e[held]), float(e[tr] @ e[tr])
+
+
+def _drives_reached(design: force_shape.Design, cols: Sequence[int]) -> list[int]:
+    """The drives (groups of ``design``) on which any of the columns ``cols`` is not zero, in order."""
+    return [int(g) for g in np.unique(design.groups) if np.any(design.X[design.groups == g][:, cols])]
 
 
 def _drive_rows(ev: Evaluator, fit: FitResult, h: int) -> np.ndarray:

@@ -320,20 +320,20 @@ class Selection:
             where = ", ".join(f"{self.stable[k].axle} {more if coef[k] > 0 else less} "
                               f"{100 * self.share[k]:.0f} %" for k in ks)
             if feature in CONTACTS:
-                w += _progressive_words(self, shapes)
+                w += _progressive_words(self, shapes, {self.stable[k].axle for k in ks})
             parts.append(f"{w} ({where})")
         axles = self.axles
         return f"A force the model lacks: {'; '.join(parts)}; " \
                f"{f'{axles[0]} axle only' if len(axles) == 1 else 'both axles'}."
 
 
-def _progressive_words(sel: Selection, values: dict) -> str:
-    """Words on a contact spring's fitted progressive part (:func:`spring_law`; ``values`` the fitted
-    coefficients by name, each its force at the learned term's deflection_ref): its force at
+def _progressive_words(sel: Selection, values: dict, axles: set[str]) -> str:
+    """Words on a contact spring's fitted progressive part on ``axles`` (:func:`spring_law`; ``values`` the
+    fitted coefficients by name, each its force at the learned term's deflection_ref): its force at
     :data:`WORDS_DEFLECTION_M` of bump; none when not fitted."""
     cube = (WORDS_DEFLECTION_M / float(shape_defaults()["deflection_ref"])) ** 3
     out = []
-    for c in spring_law(sel):
+    for c in (c for c in spring_law(sel) if c.axle in axles):
         v = values.get(c.coefficient)
         if isinstance(v, (int, float)) and v != 0.0:
             out.append(f"{c.axle} {'+' if v > 0 else '-'}{abs(float(v)) * cube:.0f} N at "

@@ -229,17 +229,22 @@ def road_one_axle_words(f) -> str:
     seen: dict[str, dict] = {}
     for r in getattr(f, "road_one_axle_", []):
         seen.setdefault(r["axle"], r)
-    return "".join(f"; the force the model lacks {force_shape.WORDS[r['input_feature']].split(' (')[0]} on the "
+    return "".join(f"; the force the model lacks {_input_words(r['input_feature'])} on the "
                    f"{axle} axle only, while both axles roll over the same recorded track (a road recorded off "
                    f"would show at both): not an input but a law of the states there that the road excites, "
                    f"which no feature describes as stable" for axle, r in seen.items())
+
+
+def _input_words(feature: str) -> str:
+    """What an input feature follows, in words, without "(an input, not a state)"."""
+    return force_shape.WORDS[feature].split(" (")[0]
 
 
 def input_weighed_words(reading: dict) -> str:
     """The reason's words for an input-led step whose states' reading stood as physics (an entry of the
     finder's ``input_weighed_``, the step's ``state_reading``): what the input led, and why the states'
     reading is named instead."""
-    led = force_shape.WORDS[reading["input_feature"]].split(" (")[0]   # without "(an input, not a state)"
+    led = _input_words(reading["input_feature"])
     return (f"the force the model lacks {led} where the drives carry it, but a law of the states "
             f"({', '.join(reading['dependences'])}) passed every test and also predicts the drives the input "
             f"does not reach ({', '.join(reading['input_silent_drives'])}) held out, "
