@@ -281,7 +281,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/bushing_two_branch_front", "unlisted/progressive_spring_rear",
                    "unlisted/air_assist_front", "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear",
                    "unlisted/seal_gas_friction", "unlisted/bushing_rear", "road/bump_recorded_low",
-                   "gas/polytropic_charge_rear"}
+                   "gas/polytropic_charge_rear", "unlisted/bump_stop_exponential_front"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -314,8 +314,9 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-2:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear"]   # appended after
-    assert doc["held_out"][-14:-2] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert doc["held_out"][-3:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+                                    "unlisted/bump_stop_exponential_front"]
+    assert doc["held_out"][-15:-3] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -613,3 +614,22 @@ def test_the_polytropic_charge_form_is_a_gas_law_on_the_rear_dampers():
     case = dict(family.make_case(form, seed=1))
     assert json.loads(case["bump_intact"].metadata["truth"])["hidden"]["air_spring_height_m"] == 0.07
     assert all(np.all(np.isfinite(d.imu.gyro)) for d in case.values())
+
+
+def test_the_exponential_bump_stop_form_stiffens_beyond_its_gap_at_the_front():
+    """``unlisted/bump_stop_exponential_front`` (held out): a bump stop of an exponential law at the front
+    corners, met beyond 20 mm of bump; the figures its description states, nothing below the gap or in
+    rebound, nothing at the rear; the hidden force the generator exposes is that law on the bump crossing."""
+    form = family.FORMS["unlisted/bump_stop_exponential_front"]
+    assert form.split == "held_out" and form.effect == "unlisted_force" and form.expect == ("unlisted_force",)
+    assert form.leading[0] == "bump_contact"
+    row = np.zeros(ind.NW)
+    row[ind.WBSF], row[ind.WBSL], row[ind.WBSG] = 30.0, 0.01, 0.02
+    assert ind._hidden_springs(0.03, row) == pytest.approx(30.0 * (math.e - 1.0)) == pytest.approx(52.0, abs=0.5)
+    assert ind._hidden_springs(0.045, row) == pytest.approx(335.0, abs=1.0)
+    assert ind._hidden_springs(0.02, row) == 0.0 and ind._hidden_springs(-0.04, row) == 0.0
+    tr = family.case_truth(form, 1, "bump_intact")
+    front, rear = tr.hidden[:, :2], tr.hidden[:, 2:]
+    assert not np.any(rear) and front.max() > 100.0 and front.min() >= 0.0
+    beyond = tr.deflection[:, :2] > 0.02
+    assert np.all(front[~beyond] == 0.0) and np.all(front[beyond] > 0.0)

@@ -333,6 +333,16 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(gas_preload_N=(0.0, 0.0, 200.0, 200.0),
                                          air_spring_rate_N_m=(0.0, 1.1 * 200.0 / 0.07), air_spring_height_m=0.07,
                                          air_spring_exponent=1.1), **gas),
+        # added 2026-11-30 (issue 26), held out from the start, before any run of the finder on it, as a second blind
+        # test of that day's progressive part beside a learned contact spring (the first, the polytropic form, was
+        # read as an input and never reached it): a stiffening law of another kind (exponential, not a power of the
+        # deflection), beyond a gap, in bump, on the front axle
+        GeneratorForm("unlisted/bump_stop_exponential_front", description="cellular elastomer bump stops at the "
+                      "front corners, met beyond 20 mm of bump from static: F0 (exp(e / s) - 1), e = max(d - 0.02, "
+                      "0), F0 30 N, s 10 mm (+52 N at 10 mm beyond, +335 N at 25 mm beyond; nothing in rebound); "
+                      "rear corners without",
+                      hidden=TruthHidden(bump_stop_force_N=(30.0, 0.0), bump_stop_length_m=0.01, bump_stop_gap_m=0.02),
+                      leading=("bump_contact", "deflection_cubed", "deflection"), **unl),
     ]
     return {f.name: f for f in fs}
 

@@ -216,6 +216,9 @@ class TruthHidden:
     seal_gas_exponent: float = 1.4                # a monotube damper's charge over its static value (h its gas
     #                                               column per metre of deflection, n polytropic) presses the
     #                                               seal: friction growing, not linearly, with the compression
+    bump_stop_force_N: tuple = (0.0, 0.0)         # a bump stop of another law (front, rear), met beyond gap g of
+    bump_stop_length_m: float = 0.01              # bump from static: F0 (exp(e / s) - 1), e = max(d - g, 0) [N]
+    bump_stop_gap_m: float = 0.02                 # (a cellular elastomer stop whose rate grows exponentially)
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -354,7 +357,8 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
  VISLAW, VISN, VISREF, SVSHAPE, OILLAW, RCMODE, INTEG, BOFAC, STRVS, STREPS, VISRATIO, NP) = range(47)
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
- WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, WSEAL, WSEALH, WSEALN, NW) = range(48)
+ WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, WSEAL, WSEALH, WSEALN, WBSF, WBSL, WBSG,
+ NW) = range(51)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -420,6 +424,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
             hid.jounce_bumper_gap_m
         W[i, WSEAL], W[i, WSEALH], W[i, WSEALN] = hid.seal_friction_N[k], hid.seal_gas_height_m, \
             hid.seal_gas_exponent
+        W[i, WBSF], W[i, WBSL], W[i, WBSG] = hid.bump_stop_force_N[k], hid.bump_stop_length_m, hid.bump_stop_gap_m
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -508,7 +513,7 @@ def _hidden_springs(d, w):
     """The force [N, in Fs's sense] of the hidden spring laws of one corner (its row ``w`` of W) at
     deflection ``d`` [m] (positive in bump): a progressive coil's + k2 max(d, 0)^2, an air-assist spring
     (:func:`_air_spring`), a rebound spring's - k_r max(-d - g, 0), a jounce bumper's k_j e + k_j3 e^3 with
-    e = max(d - g, 0)."""
+    e = max(d - g, 0), an exponential bump stop's F0 (exp(e / s) - 1) with e = max(d - g, 0)."""
     F = 0.0
     if w[WPRG] > 0.0 and d > 0.0:          # progressive coil: the rate grows in bump
         F += w[WPRG] * d * d
@@ -519,6 +524,8 @@ def _hidden_springs(d, w):
     if w[WJBK] + w[WJBK3] > 0.0 and d > w[WJBG]:   # jounce bumper: met beyond its gap of bump
         e = d - w[WJBG]
         F += w[WJBK] * e + w[WJBK3] * e * e * e
+    if w[WBSF] > 0.0 and d > w[WBSG]:       # exponential bump stop: met beyond its gap of bump
+        F += w[WBSF] * math.expm1((d - w[WBSG]) / w[WBSL])
     return F
 
 
@@ -831,7 +838,7 @@ class TruthResult:
     anti-roll-bar free play: the bar's force with the gap minus without it (``-k clip(delta, -g, g)``);
     Stribeck friction; load-dependent strut friction ``mu max(F_z0 + F_t, 0) tanh(v/v_eps)``; strut friction
     growing with the compression; the viscoelastic bushings' force; the progressive, air-assist and rebound springs'
-    and the jounce bumpers' forces. Friction and bushing forces are those
+    and the jounce bumpers' and exponential bump stops' forces. Friction and bushing forces are those
     held over the step that starts at ``t`` (as ``friction``)."""
 
     t: np.ndarray
