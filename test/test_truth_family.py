@@ -281,7 +281,8 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/bushing_two_branch_front", "unlisted/progressive_spring_rear",
                    "unlisted/air_assist_front", "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear",
                    "unlisted/seal_gas_friction", "unlisted/bushing_rear", "road/bump_recorded_low",
-                   "gas/polytropic_charge_rear", "unlisted/bump_stop_exponential_front"}
+                   "gas/polytropic_charge_rear", "unlisted/bump_stop_exponential_front",
+                   "unlisted/hydraulic_compression_stop_rear"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -314,9 +315,10 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-3:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
-                                    "unlisted/bump_stop_exponential_front"]
-    assert doc["held_out"][-15:-3] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert doc["held_out"][-4:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+                                    "unlisted/bump_stop_exponential_front",
+                                    "unlisted/hydraulic_compression_stop_rear"]
+    assert doc["held_out"][-16:-4] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -633,3 +635,21 @@ def test_the_exponential_bump_stop_form_stiffens_beyond_its_gap_at_the_front():
     assert not np.any(rear) and front.max() > 100.0 and front.min() >= 0.0
     beyond = tr.deflection[:, :2] > 0.02
     assert np.all(front[~beyond] == 0.0) and np.all(front[beyond] > 0.0)
+
+
+def test_the_hydraulic_stop_form_damps_beyond_its_gap_with_oil_at_the_rear():
+    """``unlisted/hydraulic_compression_stop_rear`` (held out): a damping that acts beyond 20 mm of bump at
+    the rear corners, in proportion to the deflection velocity there, and not at all in an oil-empty damper;
+    nothing at the front, nothing below the gap."""
+    form = family.FORMS["unlisted/hydraulic_compression_stop_rear"]
+    assert form.split == "held_out" and form.expect == ("unlisted_force",)
+    assert form.leading[0] == "deflection_velocity"
+    intact = family.case_truth(form, 1, "bump_intact")
+    front, rear = intact.hidden[:, :2], intact.hidden[:, 2:]
+    assert not np.any(front) and np.abs(rear).max() > 500.0
+    d, v = intact.deflection[:, 2:], np.gradient(intact.deflection[:, 2:], intact.t, axis=0)
+    inside = d > 0.03   # the law from its description where the sleeve is half closed or more
+    expected = 3000.0 * np.minimum((d - 0.02) / 0.02, 1.0) * v
+    assert np.all(rear[d <= 0.02] == 0.0)
+    assert np.corrcoef(rear[inside], expected[inside])[0, 1] > 0.99
+    assert not np.any(family.case_truth(form, 1, "bump_rear_empty").hidden)   # no oil, no hydraulic stop

@@ -343,6 +343,17 @@ def _forms() -> dict[str, GeneratorForm]:
                       "rear corners without",
                       hidden=TruthHidden(bump_stop_force_N=(30.0, 0.0), bump_stop_length_m=0.01, bump_stop_gap_m=0.02),
                       leading=("bump_contact", "deflection_cubed", "deflection"), **unl),
+        # added 2026-11-30 (issue 26), held out from the start, before any run of the finder on it: physics of a kind
+        # no form and no feature of the vocabulary has (a damping that grows with the position in the stroke), as a
+        # blind test of the learned term's generality; right if read as a damping (the damping family leads)
+        GeneratorForm("unlisted/hydraulic_compression_stop_rear", description="hydraulic compression stops in "
+                      "the rear dampers: beyond 20 mm of bump from static a sleeve throttles the flow, a damping "
+                      "c_h min(e / 0.02, 1) v with e = max(d - 0.02, 0), c_h 3000 N s/m (full at 40 mm bump), in "
+                      "both directions of motion, times the damper's oil weight (an oil-empty damper has none); "
+                      "front dampers without",
+                      hidden=TruthHidden(hydraulic_stop_damping_N_s_m=(0.0, 3000.0), hydraulic_stop_gap_m=0.02,
+                                         hydraulic_stop_length_m=0.02),
+                      leading=("deflection_velocity", "velocity_squared", "velocity_beyond_knee"), **unl),
     ]
     return {f.name: f for f in fs}
 

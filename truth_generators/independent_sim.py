@@ -219,6 +219,10 @@ class TruthHidden:
     bump_stop_force_N: tuple = (0.0, 0.0)         # a bump stop of another law (front, rear), met beyond gap g of
     bump_stop_length_m: float = 0.01              # bump from static: F0 (exp(e / s) - 1), e = max(d - g, 0) [N]
     bump_stop_gap_m: float = 0.02                 # (a cellular elastomer stop whose rate grows exponentially)
+    hydraulic_stop_damping_N_s_m: tuple = (0.0, 0.0)  # a hydraulic compression stop in the damper (front, rear):
+    hydraulic_stop_gap_m: float = 0.02            # beyond gap g of bump a sleeve throttles the flow, damping
+    hydraulic_stop_length_m: float = 0.02         # c_h min(e / s, 1) v with e = max(d - g, 0), both directions,
+    #                                               times the damper's oil weight (an empty damper has none)
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -358,7 +362,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
  WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, WSEAL, WSEALH, WSEALN, WBSF, WBSL, WBSG,
- NW) = range(51)
+ WHSC, WHSG, WHSL, NW) = range(54)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -425,6 +429,8 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WSEAL], W[i, WSEALH], W[i, WSEALN] = hid.seal_friction_N[k], hid.seal_gas_height_m, \
             hid.seal_gas_exponent
         W[i, WBSF], W[i, WBSL], W[i, WBSG] = hid.bump_stop_force_N[k], hid.bump_stop_length_m, hid.bump_stop_gap_m
+        W[i, WHSC], W[i, WHSG], W[i, WHSL] = hid.hydraulic_stop_damping_N_s_m[k], hid.hydraulic_stop_gap_m, \
+            hid.hydraulic_stop_length_m
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -608,6 +614,10 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
         Fgas = W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fs += P[DSCALE] * Fh + Ff[i] + Fv + W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fhid += Fv + Fgas
+        if W[i, WHSC] > 0.0 and d[i] > W[i, WHSG]:   # hydraulic compression stop: damping beyond its gap
+            Fhs = w_oil * W[i, WHSC] * min((d[i] - W[i, WHSG]) / W[i, WHSL], 1.0) * dd[i]
+            Fs += Fhs
+            Fhid += Fhs
         Ft = _tyre_force(P[KT] * (ZR[i, j] - y[8 + i]) + P[CT] * (ZRD[i, j] - y[12 + i]), W[i, WFZ0])
         Fsf = _strut_friction(W[i], P, d[i], dd[i], Ft)
         Fs += Fsf
@@ -838,7 +848,7 @@ class TruthResult:
     anti-roll-bar free play: the bar's force with the gap minus without it (``-k clip(delta, -g, g)``);
     Stribeck friction; load-dependent strut friction ``mu max(F_z0 + F_t, 0) tanh(v/v_eps)``; strut friction
     growing with the compression; the viscoelastic bushings' force; the progressive, air-assist and rebound springs'
-    and the jounce bumpers' and exponential bump stops' forces. Friction and bushing forces are those
+    and the jounce bumpers' and exponential bump stops' forces; a hydraulic compression stop's damping. Friction and bushing forces are those
     held over the step that starts at ``t`` (as ``friction``)."""
 
     t: np.ndarray
