@@ -848,8 +848,8 @@ class TruthResult:
     anti-roll-bar free play: the bar's force with the gap minus without it (``-k clip(delta, -g, g)``);
     Stribeck friction; load-dependent strut friction ``mu max(F_z0 + F_t, 0) tanh(v/v_eps)``; strut friction
     growing with the compression; the viscoelastic bushings' force; the progressive, air-assist and rebound springs'
-    and the jounce bumpers' and exponential bump stops' forces; a hydraulic compression stop's damping. Friction and bushing forces are those
-    held over the step that starts at ``t`` (as ``friction``)."""
+    and the jounce bumpers' and exponential bump stops' forces; a hydraulic compression stop's damping. Friction
+    and bushing forces are those held over the step that starts at ``t`` (as ``friction``)."""
 
     t: np.ndarray
     gyro: np.ndarray
