@@ -177,7 +177,21 @@ def test_nothing_missing_only_within_the_measured_structure_level():
     v, why = _verdict_of(["calibration"], 6.0, line * 0.98)
     assert v == "no_significant_discrepancy" and f"{line:.2f} x" in why
     v, why = _verdict_of(["calibration", "friction_amplitude"], 6.0, line * 1.1)
-    assert v == "missing_physics" and "more is missing" in why
+    assert v == "missing_physics" and "more is missing than the candidate library names" in why
+
+
+def test_a_remainder_beside_a_learned_force_is_not_blamed_on_the_candidate_library():
+    """After a force learned from the recording (``unlisted_force``) is named, what remains is more than
+    the named terms describe, not "more than the candidate library names" (the learned force is none of
+    the library's); within the structure level nothing is said of a remainder."""
+    from susp_sim_ros.analysis.discrepancy.report import structure_level
+    line = structure_level()
+    v, why = _verdict_of(["calibration", "unlisted_force"], 6.0, line * 1.1)
+    assert v == "missing_physics" and "unlisted_force" in why
+    assert "more is missing than the named terms describe, the force learned from the recording included" in why
+    assert "candidate library" not in why
+    v, why = _verdict_of(["calibration", "unlisted_force"], 6.0, line * 0.9)
+    assert v == "missing_physics" and "more is missing" not in why
 
 
 def test_an_input_read_off_the_force_shape_is_a_finding_only_above_the_structure_level():

@@ -211,8 +211,11 @@ def verdict(f) -> tuple[str, str]:
     why = (f"{', '.join(phys)} explain{'s' if len(phys) == 1 else ''} {100 * explained:.0f} % of the held-out "
            "residual above noise")
     if after > line:
-        why += (f"; {after:.2f} x the noise floor remains held-out, above {level}: more is missing than "
-                f"the candidate library names")
+        # a learned force is not from the candidate library: what remains is more than the named terms
+        # describe, the force read off the recording included
+        beyond = ("the named terms describe, the force learned from the recording included"
+                  if force_shape.TERM in phys else "the candidate library names")
+        why += f"; {after:.2f} x the noise floor remains held-out, above {level}: more is missing than {beyond}"
     if rival:
         why += f"; not decided: {undecided}"
     for w in getattr(f, "input_weighed_", []):
