@@ -1,0 +1,115 @@
+"""The family benchmark's summary and its ``--merge`` of runs made apart (``benchmarks/bench_discrepancy.py``):
+the counts issues 24 and 26 are judged on, from the cases alone, and a clear error for a file that is no
+family run."""
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _bench():
+    spec = importlib.util.spec_from_file_location("bench_discrepancy", ROOT / "benchmarks" / "bench_discrepancy.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    return bench
+
+
+BENCH = _bench()
+
+
+def _case(name: str, effect: str, heldout: float, named=(), expected=(), seed=1, verdict_right=True,
+          leading_right=None) -> dict:
+    """A scored family case with the keys the summary reads (values as ``_score`` writes them)."""
+    tp = [t for t in named if t in expected]
+    return {"case": f"{name}#{seed}", "family_form": name, "split": "held_out", "seed": seed, "noise_deg_s": 0.05,
+            "effect": effect, "verdict": "missing_physics" if named else "no_significant_discrepancy",
+            "verdict_right": verdict_right, "named_physics": list(named), "expected_physics": list(expected),
+            "optional_physics": [], "true_positives": tp, "handled_not_identifiable": [],
+            "false_positives": [t for t in named if t not in expected],
+            "false_negatives": [t for t in expected if t not in named], "coverage_hits": 1, "coverage_n": 1,
+            "heldout_after_over_noise": heldout, "heldout_after_joint_values_over_noise": heldout,
+            "zero_interval_measurement_terms": [], "zero_interval_terms": [], "zero_effect_terms": [],
+            "elapsed_s": 1.0, "leading_dependence_right": leading_right,
+            "unlisted_dependences": ["sign_velocity"] if leading_right is not None else []}
+
+
+def _run(cases: list[dict]) -> dict:
+    return {"family": "held_out", "cases": cases, "elapsed_s": 2.0}
+
+
+def test_the_summary_counts_the_cases_within_each_issues_line():
+    """The held-out structure runs' median is issue 24's level (1.05x); issue 26's learned terms are held to
+    1.1x of the verdict's measured line; both are counted, not only their worst case."""
+    line = BENCH.structure_line()
+    cases = [_case("structure/a", "none", 1.0), _case("structure/b", "none", 1.2, seed=2),
+             _case("structure/c", "none", 1.1, seed=3),                     # level: median 1.1
+             _case("viscous/x", "viscous", 1.1 * 1.04, named=["extra_viscous_damping"],
+                   expected=["extra_viscous_damping"]),
+             _case("unlisted/y", "unlisted_force", line * 1.09, named=["unlisted_force"], expected=["unlisted_force"],
+                   leading_right=True),
+             _case("unlisted/y", "unlisted_force", line * 1.2, named=["unlisted_force"], expected=["unlisted_force"],
+                   seed=2, leading_right=False)]
+    s = BENCH.summarise_family(cases)
+    assert s["structure_level_heldout_over_noise"] == pytest.approx(1.1)
+    assert s["physics_cases_scored"] == 3
+    assert s["physics_cases_within_structure_level"] == 1     # only the viscous case within 1.05 x 1.1
+    assert s["structure_line_heldout_over_noise"] == pytest.approx(line)
+    assert s["unlisted_within_structure_line"] == 1 and s["unlisted_forms"] == 2
+    assert s["unlisted_named_with_right_leading_dependence"] == 1
+    assert s["unlisted_heldout_over_structure_line"]["unlisted/y#2"] == pytest.approx(1.2)
+    assert s["targets_met"]["max_unlisted_heldout_over_structure_line"] is False
+    assert s["targets_met"]["max_heldout_over_structure_level"] is False
+
+
+def test_merge_takes_the_later_run_of_a_case_and_re_summarises():
+    """Parts of one run made apart are one run; a case re-run after them replaces its earlier result."""
+    first = _run([_case("structure/a", "none", 1.1), _case("viscous/x", "viscous", 2.0, verdict_right=False)])
+    second = _run([_case("viscous/x", "viscous", 1.1, named=["extra_viscous_damping"],
+                         expected=["extra_viscous_damping"])])
+    out = BENCH.merge_family([("a.json", first), ("b.json", second)])
+    assert out["merged_from"] == ["a.json", "b.json"]
+    assert len(out["cases"]) == 2
+    s = out["by_split"]["held_out"]
+    assert s["verdicts_right"] == 2 and s["true_positives"] == 1
+    assert s["max_heldout_over_structure_level"] == pytest.approx(1.0)
+    # the other order keeps the failed run
+    s = BENCH.merge_family([("b.json", second), ("a.json", first)])["by_split"]["held_out"]
+    assert s["verdicts_right"] == 1
+
+
+def test_merge_names_the_file_that_is_no_family_run():
+    with pytest.raises(ValueError, match="report.json: not the JSON of bench_discrepancy.py --family"):
+        BENCH.merge_family([("a.json", _run([])), ("report.json", {"verdict": "missing_physics"})])
+    with pytest.raises(ValueError, match="l.json: not the JSON"):
+        BENCH.merge_family([("l.json", {"family": ["held_out"], "cases": []})])
+    with pytest.raises(ValueError, match="b.json: a case without 'family_form', 'split'"):
+        BENCH.merge_family([("b.json", {"family": "all", "cases": [{"case": "x"}]})])
+    # the scored case keys are all that the summaries read: a case with them alone is summarised
+    case = {k: v for k, v in _case("structure/a", "none", 1.1).items() if k in BENCH.CASE_KEYS}
+    assert BENCH.merge_family([("c.json", _run([case]))])["by_split"]["held_out"]["structure_runs"] == 1
+
+
+_keys = st.sampled_from(("family", "cases", "case", "split", "noise_deg_s", "x")) | st.text(max_size=5)
+_json = st.recursive(st.none() | st.booleans() | st.floats(allow_nan=False) | st.text(max_size=5),
+                     lambda inner: st.lists(inner, max_size=3) | st.dictionaries(_keys, inner, max_size=3),
+                     max_leaves=10)
+
+
+@settings(max_examples=200, deadline=None)
+@given(obj=_json)
+def test_merge_of_any_json_is_a_family_output_or_a_clear_error(obj):
+    """Whatever a file holds, --merge either summarises it or says which file is no family run."""
+    try:
+        out = BENCH.merge_family([("x.json", obj)])
+    except ValueError as e:
+        assert str(e).startswith("x.json: ")
+    else:
+        assert out["cases"] == [] and out["by_split"] == {}
+        json.dumps(out)
