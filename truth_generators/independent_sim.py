@@ -223,6 +223,9 @@ class TruthHidden:
     hydraulic_stop_gap_m: float = 0.02            # beyond gap g of bump a sleeve throttles the flow, damping
     hydraulic_stop_length_m: float = 0.02         # c_h min(e / s, 1) v with e = max(d - g, 0), both directions,
     #                                               times the damper's oil weight (an empty damper has none)
+    creep_friction_N: tuple = (0.0, 0.0)          # a strut friction that builds with the sliding velocity by an
+    creep_friction_velocity_m_s: float = 0.004    # algebraic law (front, rear): F_c v / sqrt(v^2 + v_c^2) [N], a
+    #                                               seal that creeps at low velocity rather than sticking
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -362,7 +365,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
  WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, WSEAL, WSEALH, WSEALN, WBSF, WBSL, WBSG,
- WHSC, WHSG, WHSL, NW) = range(54)
+ WHSC, WHSG, WHSL, WCRF, WCRV, NW) = range(56)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -431,6 +434,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WBSF], W[i, WBSL], W[i, WBSG] = hid.bump_stop_force_N[k], hid.bump_stop_length_m, hid.bump_stop_gap_m
         W[i, WHSC], W[i, WHSG], W[i, WHSL] = hid.hydraulic_stop_damping_N_s_m[k], hid.hydraulic_stop_gap_m, \
             hid.hydraulic_stop_length_m
+        W[i, WCRF], W[i, WCRV] = hid.creep_friction_N[k], hid.creep_friction_velocity_m_s
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -539,7 +543,8 @@ def _hidden_springs(d, w):
 def _strut_friction(w, P, d, dd, Ft):
     """The hidden strut friction laws of one corner (``w`` its row of W) [N, in Fs's sense]: a Stribeck
     (velocity-weakening) friction, one growing with the vertical tyre load ``Fz0 + Ft``, one growing with
-    the compression ``d`` and a rod seal's pressed by the damper's gas charge; 0 when none is set."""
+    the compression ``d``, a rod seal's pressed by the damper's gas charge and one that creeps (its own algebraic
+    law of sliding); 0 when none is set."""
     F = 0.0
     slide = math.tanh(dd / P[STREPS])   # each law's sign of sliding, smoothed over v_eps
     if w[WSTRS] != 0.0 or w[WSTRC] != 0.0:
@@ -553,6 +558,8 @@ def _strut_friction(w, P, d, dd, Ft):
         F += (Fpn if Fpn > 0.0 else 0.0) * slide
     if w[WSEAL] != 0.0:
         F += w[WSEAL] * _gas_column(d, w[WSEALH]) ** -w[WSEALN] * slide
+    if w[WCRF] != 0.0:   # its own algebraic law of sliding, not the tanh above
+        F += w[WCRF] * dd / math.sqrt(dd * dd + w[WCRV] * w[WCRV])
     return F
 
 
