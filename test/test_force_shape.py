@@ -85,6 +85,9 @@ def test_features_are_what_their_names_say():
     for t in range(len(D) - 1):
         m[t + 1] = m[t] * e + (D[t + 1] - D[t]) / DT * tau * (1.0 - e)
     np.testing.assert_allclose(get["relaxing_deflection"], m / sh["deflection_ref"], rtol=1e-9, atol=1e-12)
+    # a creep: viscous below the creep velocity, its peak 1 at it, fading above; no friction element in it
+    vc = sh["creep_velocity"]
+    np.testing.assert_allclose(get["creep_damping"], V / vc * np.exp(1.0 - np.abs(V) / vc))
 
 
 def test_a_relaxing_spring_is_a_dashpot_when_slow_and_a_spring_when_fast():
@@ -780,3 +783,96 @@ def test_a_recorded_road_that_leads_on_one_axle_only_is_no_input_finding():
     words = road_one_axle_words(SimpleNamespace(road_one_axle_=[one, one]))
     assert words.count("rear axle only") == 1 and "same recorded track" in words
     assert road_one_axle_words(SimpleNamespace()) == ""
+
+
+def test_a_creeping_friction_builds_with_the_sliding_velocity_and_holds_nothing_at_rest():
+    """The kernel's learned friction with a creep (``creep_damping``) and a weakening that takes its level at
+    rest to none, against the law: z (60 - 60 exp(-|v| / v_s)) + 30 (v / v_c) exp(1 - |v| / v_c) [N] at the
+    rear corners (v_s 5 mm/s, v_c 2 mm/s): nothing at rest, viscous at 30 e / v_c N s/m just above it, the
+    sliding level when fast; the front corners, without coefficients, none. A creep coefficient of 0 leaves
+    the force bit for bit as without the creep (the settings' switch off: every fit as before)."""
+    from susp_sim_ros.model.layout import C_INDEX, N_CTX
+    from susp_sim_ros.model.learned_force import learned_force_force
+    names = [p.name for p in LEARNED_FORCE.params]
+    vals = {p.name: [p.default] * 4 for p in LEARNED_FORCE.params}
+    vals["c_sign_velocity"] = [0.0, 0.0, 60.0, 60.0]
+    vals["c_velocity_weakening"] = [0.0, 0.0, -60.0, -60.0]
+    vals["stribeck_velocity"] = [0.005] * 4
+    vals["creep_velocity"] = [0.002] * 4
+
+    def force(v, creep):
+        vals["c_creep_damping"] = [0.0, 0.0, creep, creep]
+        p = np.array([x for n in names for x in vals[n]])
+        s = np.zeros(4 * 4)
+        s[0:4] = np.sign(v)   # the unit Dahl element slid fully in the sense of motion
+        c = np.zeros((4, N_CTX))
+        c[:, C_INDEX["DD"]] = v
+        return np.array([learned_force_force(p, 0, s, 0, i, c) for i in range(4)])
+
+    np.testing.assert_array_equal(force(0.0, 30.0), 0.0)
+    slow = 1e-5
+    np.testing.assert_allclose(force(slow, 30.0)[2:], 60.0 * (1.0 - np.exp(-slow / 0.005))
+                               + 30.0 * slow / 0.002 * np.exp(1.0 - slow / 0.002), rtol=1e-12)
+    assert force(slow, 30.0)[2] == pytest.approx(slow * (60.0 / 0.005 + 30.0 * np.e / 0.002), rel=0.01)
+    np.testing.assert_allclose(force(0.002, 30.0)[2:], 60.0 * (1.0 - np.exp(-0.4)) + 30.0, rtol=1e-12)
+    np.testing.assert_allclose(force(-0.002, 30.0)[2:], -(60.0 * (1.0 - np.exp(-0.4)) + 30.0), rtol=1e-12)
+    assert force(0.5, 30.0)[2] == pytest.approx(60.0, rel=1e-9)
+    np.testing.assert_array_equal(force(0.01, 30.0)[:2], 0.0)
+    # without the creep, the weakened friction alone: bit for bit z (60 - 60 exp(-|v| / v_s))
+    for v in (1e-4, 0.003, -0.2):
+        assert force(v, 0.0)[2] == np.sign(v) * 60.0 + np.sign(v) * -60.0 * np.exp(-abs(v) / 0.005)
+
+
+def test_a_learned_friction_brings_its_creep_only_where_the_settings_say():
+    """``fit.creep_in_friction_law``: off (the shipped setting until the family is measured with it), a learned
+    friction's law is as before; on, every friction axle gets a creep coefficient (neutral 0, after the other law
+    coefficients) and the creep velocity as a shape (the term's declared 1 mm/s to start, bounded by the settings),
+    written into the term like the others; the regression is never offered the creep (a law's shape)."""
+    cfg = fs.settings()
+    assert cfg["fit.creep_in_friction_law"] is False
+    sel = fs.select(_design(truth={("sign_velocity", "rear"): 3.0, ("lateral_force", "rear"): 2.0}))
+    off = [p.name for p in fs.learned_candidate(sel, cfg).params]
+    assert not {"creep_damping_rear", "creep_velocity"} & set(off)
+    on_cfg = dict(cfg) | {"fit.creep_in_friction_law": True}
+    cand = fs.learned_candidate(sel, on_cfg)
+    names = [p.name for p in cand.params]
+    assert names[len(sel.stable):] == ["velocity_weakening_rear", "compression_rear", "creep_damping_rear",
+                                       "presliding", "stribeck_velocity", "creep_velocity"]
+    creep, vc = cand.params[len(sel.stable) + 2], cand.params[-1]
+    assert creep.neutral == 0.0 and not creep.shape and creep.step == cfg["fit.creep_step_N"]
+    assert vc.shape and vc.neutral == shape_defaults()["creep_velocity"] == 0.001
+    assert (vc.lower, vc.upper) == tuple(cfg["fit.creep_velocity_range_m_s"])
+    assert cand.axle_of[len(sel.stable) + 2] == "rear"
+    full = load_variant("full")
+    model = Model("passat_b8_like", dataclasses.replace(full, terms=full.terms + (_learned(),)))
+    P = np.stack([model.params((1, 1, 1, 1))])
+    x = np.array([60.0] * len(sel.stable) + [45.0, 12.0, 25.0, 2e-5, 0.015, 0.003])
+    cand.apply(P, P.copy(), x, model)
+    np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "c_creep_damping")], [0, 0, 25, 25])
+    np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "creep_velocity")], [0.003] * 4)
+    written = cand.term_params(x, None)
+    assert written["c_creep_damping"] == {"front": 0.0, "rear": 25.0}
+    assert written["creep_velocity"] == {"front": 0.003, "rear": 0.003}
+    assert "creep_damping" not in {f for f, _ in fs.library(on_cfg)}
+    no_friction = fs.learned_candidate(fs.select(_design(truth={("roll_free_play", "front"): 5.0})), on_cfg)
+    assert not {"creep_velocity", "creep_damping_front"} & {p.name for p in no_friction.params}
+
+
+def test_a_learned_creep_in_the_kernel_is_its_feature_on_the_run():
+    """The kernel's ``creep_damping`` force along a bump crossing is its coefficient times the feature on the
+    run's own deflection velocities (no friction element in it), and it changes the motion."""
+    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
+                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
+    coef, vc = 40.0, 0.005
+    man = build_maneuver("bump_crossing", vp.wheelbase)
+    outs = [f"{o}_{w}" for o in ("DEFL_VEL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
+    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
+        _learned(c_creep_damping=(0.0, 0.0, coef, coef), creep_velocity=vc),)))
+    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs).values
+    V, F = res[:, :4], res[:, 4:8]
+    want = coef * V / vc * np.exp(1.0 - np.abs(V) / vc)
+    want[:, :2] = 0.0
+    assert np.abs(F[:, 2:]).max() > 0.9 * coef and np.any(np.abs(V[:, 2:]) > 10 * vc)
+    np.testing.assert_allclose(F[1:], want[:-1], rtol=0, atol=1e-9 * coef)
+    plain = _run([], variant="dahl_only", vehicle=vp)
+    assert np.max(np.abs(res[:, 8] - plain["PITCH_RATE"])) > 1e-3 * np.max(np.abs(plain["PITCH_RATE"]))

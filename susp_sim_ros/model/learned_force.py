@@ -55,6 +55,15 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             follows the deflection where the spring's side load or a damper's gas
                             pressure presses them: Reimpell, Stoll and Betzler, The Automotive Chassis,
                             2nd ed., 2001, on the McPherson strut's friction from the spring's side load)
+``creep_damping``           (v / v_c) exp(1 - |v| / v_c): a friction that creeps at low sliding velocity, viscous
+                            below the creep velocity ``v_c`` (its peak, the coefficient, at v_c) and fading above;
+                            beside ``sign_velocity`` and a velocity weakening of its level the law of a contact
+                            that does not stick but creeps, its force building with the sliding velocity (a
+                            lubricated or elastomer seal's rate-dependent friction at low speed; the viscous
+                            regime below the Stribeck curve's boundary friction: Armstrong-Helouvry, Dupont and
+                            Canudas de Wit, Automatica 30(7), 1994; a law's shape like the weakening, fitted only
+                            beside a stable friction and only where ``config/force_shape.yaml``
+                            ``fit.creep_in_friction_law`` says so)
 ==========================  =======================================================================
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
@@ -84,23 +93,25 @@ from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
             "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection", "bump_contact",
-            "rebound_contact", "compression")
+            "rebound_contact", "compression", "creep_damping")
 N_FEATURES = len(FEATURES)
 #: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
 FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force", "compression")
 #: a friction law's velocity weakening: a shape of a learned friction, not a dependence of its own
 WEAKENING = "velocity_weakening"
+#: a friction law's creep: a shape of a learned friction (viscous below a creep velocity), not a dependence
+CREEP = "creep_damping"
 #: features that shape a law rather than stand for a dependence (not offered to the regression)
-LAW_SHAPE_FEATURES = (WEAKENING,)
+LAW_SHAPE_FEATURES = (WEAKENING, CREEP)
 #: a friction level's growth with the compression: offered to the regression and, beside a stable plain
 #: friction level, fitted as a shape of its law too (analysis/discrepancy/force_shape.friction_law)
 LEVEL_GROWTH = "compression"
 #: the shape parameters after the coefficients, in this order
 SHAPES = ("deflection_ref", "velocity_ref", "force_ref", "knee_velocity", "free_play", "presliding", "memory",
-          "stribeck_velocity", "relaxation_time", "contact_gap", "rebound_ratio")
+          "stribeck_velocity", "relaxation_time", "contact_gap", "rebound_ratio", "creep_velocity")
 _O_SHAPE = 4 * N_FEATURES
-_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS, _TAU, _CGAP, _RR = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
-PRESLIDING, STRIBECK_VELOCITY, REBOUND_RATIO = SHAPES[5], SHAPES[7], SHAPES[10]
+_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS, _TAU, _CGAP, _RR, _VC = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
+PRESLIDING, STRIBECK_VELOCITY, REBOUND_RATIO, CREEP_VELOCITY = SHAPES[5], SHAPES[7], SHAPES[10], SHAPES[11]
 #: the damper's own forces of the oil, whose law in rebound the rebound ratio scales
 DAMPER_OIL = ("velocity_squared", "velocity_beyond_knee")
 _Z, _DEF, _AMP, _REL = 0, 4, 8, 12
@@ -109,7 +120,7 @@ _C_OIL = C_INDEX["OIL"]
 
 
 @njit(cache=True, inline="always")
-def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref, knee, gap, vs, cgap, rr):
+def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref, knee, gap, vs, cgap, rr, vc):
     """Feature ``k`` of :data:`FEATURES` at one corner (module docstring)."""
     x = d / dref
     u = v / vref
@@ -140,11 +151,19 @@ def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref,
         return roll / dref
     if k == 11:
         return min(max(roll, -gap), gap) / dref
-    if k == 12:
-        return z * math.exp(-abs(v) / vs)
+    if k == 12 or k == 17:
+        return _law_shape_feature(k, v, z, vs, vc)
     if k == 16:
         return z * x
     return _spring_state_feature(k, d, rel, dref, cgap)
+
+
+@njit(cache=True, inline="always")
+def _law_shape_feature(k, v, z, vs, vc):
+    """Features 12 and 17 of :data:`FEATURES` (a friction law's velocity weakening and creep)."""
+    if k == 12:
+        return z * math.exp(-abs(v) / vs)
+    return v / vc * math.exp(1.0 - abs(v) / vc)
 
 
 @njit(cache=True, inline="always")
@@ -177,6 +196,7 @@ def learned_force_force(p, po, s, so, i, c):
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
                    + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i])
                    + p[q + 64] * x)
+            + p[q + 68] * (v / p[po + _VC + i]) * math.exp(1.0 - abs(v) / p[po + _VC + i])
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
             + p[q + 52] * s[so + _REL + i] / dref
             + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + cgap, 0.0)) / dref)
@@ -207,7 +227,8 @@ def learned_force_update(p, po, s, so, i, c, dx):
 
 
 @njit(cache=True)
-def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, tau, cgap, rr, out):
+def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, tau, cgap, rr, vc,
+            out):
     n = D.shape[0]
     z = np.zeros(4)
     amp = np.zeros(4)
@@ -216,7 +237,7 @@ def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, m
         for i in range(4):
             o = i + 1 if i % 2 == 0 else i - 1
             out[t, i] = corner_feature(k, D[t, i], D[t, o], V[t, i], FX[t, i], FY[t, i], OIL[i], z[i], amp[i],
-                                       rel[i], dref, vref, fref, knee, gap, vs, cgap, rr)
+                                       rel[i], dref, vref, fref, knee, gap, vs, cgap, rr, vc)
         if t + 1 < n:
             for i in range(4):
                 z[i], _, amp[i], rel[i] = advance_states(z[i], D[t, i], amp[i], rel[i], D[t + 1, i] - D[t, i],
@@ -238,7 +259,7 @@ def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: 
     _series(D, V, FX, FY, OIL, float(dt), FEATURES.index(name), float(sh["deflection_ref"]), float(sh["velocity_ref"]),
             float(sh["force_ref"]), float(sh["knee_velocity"]), float(sh["free_play"]), float(sh["presliding"]),
             float(sh["memory"]), float(sh["stribeck_velocity"]), float(sh["relaxation_time"]), float(sh["contact_gap"]),
-            float(sh["rebound_ratio"]), out)
+            float(sh["rebound_ratio"]), float(sh["creep_velocity"]), out)
     return out
 
 
@@ -255,7 +276,8 @@ _COEF_MEANING = {
     "relaxing_deflection": "spring force at a change of d_ref faster than the relaxation time",
     "bump_contact": "spring force d_ref of bump beyond the contact gap",
     "rebound_contact": "spring force d_ref of rebound beyond the contact gap",
-    "compression": "friction level at d = d_ref of bump over its level at static (less in rebound)"}
+    "compression": "friction level at d = d_ref of bump over its level at static (less in rebound)",
+    "creep_damping": "creep force at the creep velocity (viscous below it, fading above)"}
 
 LEARNED_FORCE = register_term(PhysicsTerm(
     name="unlisted_force", component="axle",
@@ -278,7 +300,9 @@ LEARNED_FORCE = register_term(PhysicsTerm(
         TermParam("contact_gap", "m", "deflection from static beyond which bump_contact (in bump) and rebound_contact "
                   "(in rebound) act", 0.02, 0.0, 0.2),
         TermParam("rebound_ratio", "1", "force of velocity_squared and velocity_beyond_knee in rebound over the force "
-                  "at the same speed in compression (1: a symmetric law)", 1.0, 0.0, 10.0)),
+                  "at the same speed in compression (1: a symmetric law)", 1.0, 0.0, 10.0),
+        TermParam("creep_velocity", "m/s", "sliding velocity of creep_damping's peak (viscous below it, fading above)",
+                  0.001, 1e-5, 1.0)),
     n_states=4, force=learned_force_force, update=learned_force_update,
     gains=tuple(f"c_{f}" for f in FEATURES)))
 

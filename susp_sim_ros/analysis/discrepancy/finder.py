@@ -1040,19 +1040,29 @@ class DiscrepancyFinder:
                                sel: force_shape.Selection) -> FitResult:
         """The learned trial's fit (term at offset ``a`` of ``st``). With a friction law's velocity weakening
         (:func:`force_shape.friction_law`) in two stages, since a sticking friction's residual is rough in
-        its levels: the plain levels (and their growth with the compression) first with the weakening held
-        at none, then from the fitted level
+        its levels: the plain levels (and their growth with the compression) first with the weakening (and a
+        creep, where the settings bring one) held at none, then from the fitted level
         split between sliding and rest (``fit.weakening_start_share`` of it at rest); the better fit is kept
         (refitted with every value free when it is the first)."""
         allidx = tuple(range(len(ev.cases)))
         cfg = force_shape.settings()
-        law = [c for c in force_shape.friction_law(sel, cfg)[0] if c.feature == force_shape.WEAKENING]
-        if not law:
-            return fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV)
+        cols = force_shape.friction_law(sel, cfg)[0]
+        law = [c for c in cols if c.feature == force_shape.WEAKENING]
         labels = st.labels()
         term = force_shape.TERM
+        # a creep (where the settings bring one) is held at none with its velocity in the first stage, as the
+        # weakening: the plain levels first
+        creep = [labels.index((term, c.coefficient)) for c in cols if c.feature == force_shape.CREEP]
+        if creep:
+            creep.append(labels.index((term, force_shape.CREEP_VELOCITY)))
+        if not law:
+            if not creep:
+                return fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV)
+            plain = fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV, fixed=creep)
+            free = fit_structure(ev, st, plain.x, allidx, max_nfev=TRIAL_NFEV)
+            return free if free.rss <= plain.rss else plain
         weak = [labels.index((term, c.coefficient)) for c in law]
-        held = weak + [labels.index((term, force_shape.STRIBECK_VELOCITY))]
+        held = weak + [labels.index((term, force_shape.STRIBECK_VELOCITY))] + creep
         plain = fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV, fixed=held)
         share = float(cfg["fit.weakening_start_share"])
         x1 = plain.x.copy()

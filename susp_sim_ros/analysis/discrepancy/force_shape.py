@@ -63,7 +63,7 @@ import numpy as np
 
 from ...model.input_force import INPUT_FEATURES, INPUT_FORCE, INPUT_KIND
 from ...model.learned_force import DAMPER_OIL, FEATURES, FRICTION_LIKE, LAW_SHAPE_FEATURES, LEARNED_FORCE, \
-    LEVEL_GROWTH, PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING, shape_defaults
+    LEVEL_GROWTH, PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING, CREEP, CREEP_VELOCITY, shape_defaults
 from ...model.params import AXLE_CORNERS, load_settings
 from .candidates import PHYSICS, CandParam, Candidate, axle_map
 from .fit import debias, fd_jacobian
@@ -97,6 +97,7 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
          "rebound_contact": "a spring met beyond {gap_mm:.0f} mm of rebound (a rebound or top-out spring)",
          "compression": "friction-like, growing with the compression and falling in rebound (a strut's guide or "
                         "seal pressed harder as the spring or the damper's gas is compressed)",
+         "creep_damping": "creeps at low sliding velocity (viscous below a creep velocity, fading above)",
          "road_height": "follows the road height under the wheel (an input, not a state)",
          "road_rate": "follows the rate of the road height under the wheel (an input, not a state)",
          **{f"rotation_{t}{k}": f"follows the wheel's rotation, harmonic {k}, {part} part (an input, not a state)"
@@ -532,12 +533,13 @@ def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool
         axle_of.append(c.axle)
     law, law_shapes = friction_law(sel, cfg)
     law_shapes.update(damper_law(sel, cfg))
+    law_words = {WEAKENING: ("fit.weakening_step_N", "the friction's level at rest above its sliding level"),
+                 LEVEL_GROWTH: ("fit.level_growth_step_N", "the friction's level at d_ref of bump over static"),
+                 CREEP: ("fit.creep_step_N", "the friction's creep force at the creep velocity")}
     for c in law:
-        weak = c.feature == WEAKENING
-        params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound,
-                                float(cfg["fit.weakening_step_N" if weak else "fit.level_growth_step_N"]),
-                                f"coefficient of {c.feature}, {c.axle} axle: the friction's level "
-                                + ("at rest above its sliding level" if weak else "at d_ref of bump over static")))
+        step_key, words = law_words[c.feature]
+        params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound, float(cfg[step_key]),
+                                f"coefficient of {c.feature}, {c.axle} axle: {words}"))
         axle_of.append(c.axle)
     bending = spring_law(sel) if progressive else []
     for c in bending:
@@ -600,8 +602,12 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
     coefficient unless that is stable there itself (a Coulomb friction is proportional to its contact's
     normal force, and where the spring's side load or a damper's gas presses a strut's guide or seal that
     force follows the deflection: the level then grows in bump and falls in rebound; a growth the
-    resamples' votes split with the plain level, one law family, :data:`LAW_OF`). Returns those columns
-    (weakening first) and ``{shape: (lower, upper, axles)}`` (bounds from ``config/force_shape.yaml``)."""
+    resamples' votes split with the plain level, one law family, :data:`LAW_OF`). Where
+    ``fit.creep_in_friction_law`` is set, also a creep on every friction axle (``creep_damping``: viscous below
+    a creep velocity, one value for both axles; with a weakening that takes the level at rest to none, the law
+    of a contact that creeps rather than sticks: its force builds with the sliding velocity). Returns those
+    columns (weakening first, creep last) and ``{shape: (lower, upper, axles)}`` (bounds from
+    ``config/force_shape.yaml``)."""
     friction = [c for c in sel.stable if c.feature in FRICTION_LIKE]
     if not friction:
         return [], {}
@@ -613,7 +619,12 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
         shapes[STRIBECK_VELOCITY] = (vs_lo, vs_hi, plain)
     stable = {(c.feature, c.axle) for c in sel.stable}
     growth = [Column(LEVEL_GROWTH, a) for a in plain if (LEVEL_GROWTH, a) not in stable]
-    return [Column(WEAKENING, a) for a in plain] + growth, shapes
+    creep: list[Column] = []
+    if bool(cfg["fit.creep_in_friction_law"]):
+        vc_lo, vc_hi = (float(v) for v in cfg["fit.creep_velocity_range_m_s"])
+        shapes[CREEP_VELOCITY] = (vc_lo, vc_hi, shapes[PRESLIDING][2])
+        creep = [Column(CREEP, a) for a in shapes[PRESLIDING][2]]
+    return [Column(WEAKENING, a) for a in plain] + growth + creep, shapes
 
 
 def spring_law(sel: Selection) -> list[Column]:
