@@ -727,12 +727,13 @@ def _main_family(args) -> int:
     return 0
 
 
-#: the keys of a scored family case that the summaries read (``_score``, ``run_family_case``)
+#: the keys of a scored family case that the summaries and the per-case lines read (``_score``,
+#: ``run_family_case``)
 CASE_KEYS = ("case", "family_form", "split", "seed", "noise_deg_s", "effect", "verdict", "verdict_right",
              "named_physics", "expected_physics", "optional_physics", "true_positives", "handled_not_identifiable",
              "false_positives", "false_negatives", "coverage_hits", "coverage_n", "heldout_after_over_noise",
              "heldout_after_joint_values_over_noise", "zero_interval_measurement_terms", "zero_interval_terms",
-             "zero_effect_terms", "elapsed_s")
+             "zero_effect_terms", "elapsed_s", "noise_floor_over_true", "gyro_noise_floors_over_true")
 
 
 def merge_family(outputs: Sequence[tuple[str, dict]]) -> dict:

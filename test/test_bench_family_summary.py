@@ -36,7 +36,8 @@ def _case(name: str, effect: str, heldout: float, named=(), expected=(), seed=1,
             "false_negatives": [t for t in expected if t not in named], "coverage_hits": 1, "coverage_n": 1,
             "heldout_after_over_noise": heldout, "heldout_after_joint_values_over_noise": heldout,
             "zero_interval_measurement_terms": [], "zero_interval_terms": [], "zero_effect_terms": [],
-            "elapsed_s": 1.0, "leading_dependence_right": leading_right,
+            "elapsed_s": 1.0, "noise_floor_over_true": 1.0, "gyro_noise_floors_over_true": {"roll_rate": 1.0},
+            "leading_dependence_right": leading_right,
             "unlisted_dependences": ["sign_velocity"] if leading_right is not None else []}
 
 
@@ -94,6 +95,7 @@ def test_merge_names_the_file_that_is_no_family_run():
     # the scored case keys are all that the summaries read: a case with them alone is summarised
     case = {k: v for k, v in _case("structure/a", "none", 1.1).items() if k in BENCH.CASE_KEYS}
     assert BENCH.merge_family([("c.json", _run([case]))])["by_split"]["held_out"]["structure_runs"] == 1
+    assert "structure/a#1" in BENCH._line(case)   # and printed
 
 
 _keys = st.sampled_from(("family", "cases", "case", "split", "noise_deg_s", "x")) | st.text(max_size=5)
