@@ -94,6 +94,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder  # noqa: E402
+from susp_sim_ros.analysis.discrepancy.report import structure_level  # noqa: E402
 from truth_generators.family import FORMS as FORMS_BY_NAME  # noqa: E402
 from truth_generators.family import SPLIT_RECORDED, SPLITS, GeneratorForm, forms, make_case  # noqa: E402
 from truth_generators.independent_sim import (TruthCar, TruthFriction, TruthHidden,  # noqa: E402
@@ -465,13 +466,6 @@ FAMILY_TARGETS = {"precision": 0.9, "recall": 0.9, "verdicts_right_fraction": 1.
                   "max_unlisted_heldout_over_structure_line": 1.1}
 
 
-def structure_line() -> float:
-    """What the structure-only runs leave held-out [x noise floor], as the finder's verdict uses it (the
-    measured line of ``config/discrepancy.yaml``): issue 26's learned terms are held to 1.1x of it."""
-    from susp_sim_ros.analysis.discrepancy.report import structure_level
-    return structure_level()
-
-
 def summarise_family(results: list[dict]) -> dict:
     """Issue 24's figures over one split's cases: named physics precision / recall, verdicts, terms named on
     structure-only runs, measurement findings whose interval contains zero, and the held-out RMSE after
@@ -521,7 +515,7 @@ def summarise_family(results: list[dict]) -> dict:
     unlisted = [r for r in results if r["effect"] == "unlisted_force"]
     over_line: dict[str, float | None] = {}
     if unlisted:  # issue 26: physics no candidate lists, held to 1.1x of the verdict's structure line
-        line = structure_line()
+        line = structure_level()
         over_line = {r["case"]: (r["heldout_after_over_noise"] / line if r["heldout_after_over_noise"] is not None
                                  else None) for r in unlisted}
         s.update({"unlisted_forms": len(unlisted),

@@ -3,25 +3,14 @@ the counts issues 24 and 26 are judged on, from the cases alone, and a clear err
 family run."""
 from __future__ import annotations
 
-import importlib.util
 import json
-from pathlib import Path
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _bench():
-    spec = importlib.util.spec_from_file_location("bench_discrepancy", ROOT / "benchmarks" / "bench_discrepancy.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    return bench
-
-
-BENCH = _bench()
+from benchmarks import bench_discrepancy as BENCH
+from susp_sim_ros.analysis.discrepancy.report import structure_level
 
 
 def _case(name: str, effect: str, heldout: float, named=(), expected=(), seed=1, verdict_right=True,
@@ -48,7 +37,7 @@ def _run(cases: list[dict]) -> dict:
 def test_the_summary_counts_the_cases_within_each_issues_line():
     """The held-out structure runs' median is issue 24's level (1.05x); issue 26's learned terms are held to
     1.1x of the verdict's measured line; both are counted, not only their worst case."""
-    line = BENCH.structure_line()
+    line = structure_level()
     cases = [_case("structure/a", "none", 1.0), _case("structure/b", "none", 1.2, seed=2),
              _case("structure/c", "none", 1.1, seed=3),                     # level: median 1.1
              _case("viscous/x", "viscous", 1.1 * 1.04, named=["extra_viscous_damping"],

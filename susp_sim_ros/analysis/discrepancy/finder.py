@@ -1055,14 +1055,10 @@ class DiscrepancyFinder:
         creep = [labels.index((term, c.coefficient)) for c in cols if c.feature == force_shape.CREEP]
         if creep:
             creep.append(labels.index((term, force_shape.CREEP_VELOCITY)))
-        if not law:
-            if not creep:
-                return fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV)
-            plain = fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV, fixed=creep)
-            free = fit_structure(ev, st, plain.x, allidx, max_nfev=TRIAL_NFEV)
-            return free if free.rss <= plain.rss else plain
+        if not law and not creep:
+            return fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV)
         weak = [labels.index((term, c.coefficient)) for c in law]
-        held = weak + [labels.index((term, force_shape.STRIBECK_VELOCITY))] + creep
+        held = weak + ([labels.index((term, force_shape.STRIBECK_VELOCITY))] if law else []) + creep
         plain = fit_structure(ev, st, x0, allidx, max_nfev=TRIAL_NFEV, fixed=held)
         share = float(cfg["fit.weakening_start_share"])
         x1 = plain.x.copy()
@@ -1073,7 +1069,8 @@ class DiscrepancyFinder:
         split = fit_structure(ev, st, x1, allidx, max_nfev=TRIAL_NFEV)
         if split.rss <= plain.rss:
             return split
-        return fit_structure(ev, st, plain.x, allidx, max_nfev=TRIAL_NFEV)
+        # without a weakening the second stage started where the first ended: its fit is that refit
+        return fit_structure(ev, st, plain.x, allidx, max_nfev=TRIAL_NFEV) if law else plain
 
     def _backward(self, ev: Evaluator, cur: FitResult, path: list, accepted: list) -> FitResult:
         """Backward elimination after the forward steps: an accepted physics term that a later one made

@@ -612,8 +612,9 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
     if not friction:
         return [], {}
     plain = sorted({c.axle for c in sel.stable if c.feature == "sign_velocity"}, key=AXLES.index)
+    axles = sorted({c.axle for c in friction}, key=AXLES.index)
     xp_lo, xp_hi = (float(v) for v in cfg["fit.presliding_range_m"])
-    shapes = {PRESLIDING: (xp_lo, xp_hi, sorted({c.axle for c in friction}, key=AXLES.index))}
+    shapes = {PRESLIDING: (xp_lo, xp_hi, axles)}
     if plain:
         vs_lo, vs_hi = (float(v) for v in cfg["fit.stribeck_velocity_range_m_s"])
         shapes[STRIBECK_VELOCITY] = (vs_lo, vs_hi, plain)
@@ -622,8 +623,8 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
     creep: list[Column] = []
     if bool(cfg["fit.creep_in_friction_law"]):
         vc_lo, vc_hi = (float(v) for v in cfg["fit.creep_velocity_range_m_s"])
-        shapes[CREEP_VELOCITY] = (vc_lo, vc_hi, shapes[PRESLIDING][2])
-        creep = [Column(CREEP, a) for a in shapes[PRESLIDING][2]]
+        shapes[CREEP_VELOCITY] = (vc_lo, vc_hi, axles)
+        creep = [Column(CREEP, a) for a in axles]
     return [Column(WEAKENING, a) for a in plain] + growth + creep, shapes
 
 
