@@ -163,8 +163,7 @@ def _law_shape_feature(k, v, z, vs, vc):
     """Features 12 and 17 of :data:`FEATURES` (a friction law's velocity weakening and creep)."""
     if k == 12:
         return z * math.exp(-abs(v) / vs)
-    w = v / vc
-    return w * math.exp(1.0 - abs(w))
+    return v / vc * math.exp(1.0 - abs(v) / vc)
 
 
 @njit(cache=True, inline="always")
@@ -185,7 +184,6 @@ def learned_force_force(p, po, s, so, i, c):
     dref, vref, fref = p[po + _DREF + i], p[po + _VREF + i], p[po + _FREF + i]
     d, v = c[i, _C_D], c[i, _C_DD]
     x, u = d / dref, v / vref
-    w = v / p[po + _VC + i]   # the sliding velocity over the creep velocity
     z = s[so + _Z + i]
     sgn = (1.0 if v > 0.0 else 0.0) - (1.0 if v < 0.0 else 0.0)
     roll = d - s[so + _DEF + o]
@@ -198,7 +196,7 @@ def learned_force_force(p, po, s, so, i, c):
             + z * (p[q + 24] + p[q + 28] * s[so + _AMP + i] / dref + p[q + 32] * abs(c[i, _C_FY]) / fref
                    + p[q + 36] * abs(c[i, _C_FX]) / fref + p[q + 48] * math.exp(-abs(v) / p[po + _VS + i])
                    + p[q + 64] * x)
-            + p[q + 68] * w * math.exp(1.0 - abs(w))
+            + p[q + 68] * (v / p[po + _VC + i]) * math.exp(1.0 - abs(v) / p[po + _VC + i])
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
             + p[q + 52] * s[so + _REL + i] / dref
             + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + cgap, 0.0)) / dref)
