@@ -550,8 +550,8 @@ def test_a_learned_friction_brings_its_laws_shape_into_the_fit():
     friction has none, and the regression is never offered the weakening (it is a law's shape). It
     matters: at one friction level (60 N, rear), a contact that slides after 20 um instead of 100 um
     changes the bump's pitch rate by more than 1 % of its peak and more than three times the benchmark
-    drives' gyro noise (0.05 deg/s)."""
-    cfg = fs.settings()
+    drives' gyro noise (0.05 deg/s). The creep the law brings as well is the next test's."""
+    cfg = dict(fs.settings()) | {"fit.creep_in_friction_law": False}
     sel = fs.select(_design(truth={("sign_velocity", "rear"): 3.0, ("lateral_force", "rear"): 2.0}))
     cand = fs.learned_candidate(sel, cfg)
     names = [p.name for p in cand.params]
@@ -726,7 +726,8 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     names = [p.name for p in cand.params]
     k = names.index("deflection_cubed_rear")
     assert names[:2] == ["rebound_contact_rear", "sign_velocity_front"]
-    assert k > names.index("velocity_weakening_front") and names[-1] in ("presliding", "stribeck_velocity")
+    assert k > names.index("velocity_weakening_front")
+    assert names[-1] in ("presliding", "stribeck_velocity", "creep_velocity")   # the friction law's shapes last
     cubic = cand.params[k]
     assert cubic.neutral == 0.0 and not cubic.shape and cubic.step == cfg["fit.progressive_step_N"]
     assert cand.axle_of[k] == "rear" and k in cand.gain_indices
@@ -824,24 +825,25 @@ def test_a_creeping_friction_builds_with_the_sliding_velocity_and_holds_nothing_
 
 
 def test_a_learned_friction_brings_its_creep_only_where_the_settings_say():
-    """``fit.creep_in_friction_law``: off (the shipped setting until the family is measured with it), a learned
-    friction's law is as before; on, every friction axle gets a creep coefficient (neutral 0, after the other law
-    coefficients) and the creep velocity as a shape (the term's declared 1 mm/s to start, bounded by the settings),
-    written into the term like the others; the regression is never offered the creep (a law's shape)."""
-    cfg = fs.settings()
-    assert cfg["fit.creep_in_friction_law"] is False
+    """``fit.creep_in_friction_law``: off, a learned friction's law is as before the creep; on (the shipped
+    setting since the whole family was measured with it, benchmarks/RESULTS.md 2026-11-30), every friction axle
+    gets a creep coefficient (neutral 0, after the other law coefficients) and the creep velocity as a shape (the
+    term's declared 1 mm/s to start, bounded by the settings), written into the term like the others; the
+    regression is never offered the creep (a law's shape)."""
+    on_cfg = fs.settings()
+    assert on_cfg["fit.creep_in_friction_law"] is True
     sel = fs.select(_design(truth={("sign_velocity", "rear"): 3.0, ("lateral_force", "rear"): 2.0}))
-    off = [p.name for p in fs.learned_candidate(sel, cfg).params]
+    off_cfg = dict(on_cfg) | {"fit.creep_in_friction_law": False}
+    off = [p.name for p in fs.learned_candidate(sel, off_cfg).params]
     assert not {"creep_damping_rear", "creep_velocity"} & set(off)
-    on_cfg = dict(cfg) | {"fit.creep_in_friction_law": True}
     cand = fs.learned_candidate(sel, on_cfg)
     names = [p.name for p in cand.params]
     assert names[len(sel.stable):] == ["velocity_weakening_rear", "compression_rear", "creep_damping_rear",
                                        "presliding", "stribeck_velocity", "creep_velocity"]
     creep, vc = cand.params[len(sel.stable) + 2], cand.params[-1]
-    assert creep.neutral == 0.0 and not creep.shape and creep.step == cfg["fit.creep_step_N"]
+    assert creep.neutral == 0.0 and not creep.shape and creep.step == on_cfg["fit.creep_step_N"]
     assert vc.shape and vc.neutral == shape_defaults()["creep_velocity"] == 0.001
-    assert (vc.lower, vc.upper) == tuple(cfg["fit.creep_velocity_range_m_s"])
+    assert (vc.lower, vc.upper) == tuple(on_cfg["fit.creep_velocity_range_m_s"])
     assert cand.axle_of[len(sel.stable) + 2] == "rear"
     full = load_variant("full")
     model = Model("passat_b8_like", dataclasses.replace(full, terms=full.terms + (_learned(),)))
@@ -856,6 +858,28 @@ def test_a_learned_friction_brings_its_creep_only_where_the_settings_say():
     assert "creep_damping" not in {f for f, _ in fs.library(on_cfg)}
     no_friction = fs.learned_candidate(fs.select(_design(truth={("roll_free_play", "front"): 5.0})), on_cfg)
     assert not {"creep_velocity", "creep_damping_front"} & {p.name for p in no_friction.params}
+
+
+def test_a_learned_friction_is_described_with_its_fitted_law():
+    """The description of a learned friction gives its fitted law in numbers: per axle its sliding level and its
+    level at rest (sliding plus weakening), the Stribeck velocity, the creep's force at its creep velocity and the
+    presliding travel, so that a contact that creeps (a level at rest near none) reads apart from one that sticks;
+    without a fitted law (the regression's description) none of it."""
+    sel = fs.select(_design(truth={("sign_velocity", "front"): 3.0, ("sign_velocity", "rear"): 3.0}))
+    assert {c.feature for c in sel.stable} == {"sign_velocity"}
+    fitted = {"sign_velocity_front": 53.2, "sign_velocity_rear": 40.1, "velocity_weakening_front": -51.3,
+              "velocity_weakening_rear": -40.7, "creep_damping_front": 17.8, "creep_damping_rear": 13.1,
+              "presliding": 2.57e-5, "stribeck_velocity": 0.01255, "creep_velocity": 0.00684}
+    words = sel.description(np.array([fitted[c.coefficient] for c in sel.stable]), fitted)
+    assert ("the friction's law as fitted: front 53 N sliding and 2 N at rest, rear 40 N sliding and -1 N at rest "
+            "(Stribeck velocity 12.6 mm/s), creeping (viscous) below 6.8 mm/s (front 18 N, rear 13 N at it), "
+            "presliding travel 26 um") in words
+    sticking = {k: v for k, v in fitted.items() if "creep" not in k} | {"velocity_weakening_front": 20.0}
+    words = sel.description(np.array([fitted[c.coefficient] for c in sel.stable]), sticking)
+    assert "front 53 N sliding and 73 N at rest" in words and "creeping" not in words
+    assert "the friction's law" not in sel.description()
+    spring = fs.select(_design(truth={("deflection", "rear"): 3.0}))
+    assert "the friction's law" not in spring.description(None, fitted)
 
 
 def test_a_learned_creep_in_the_kernel_is_its_feature_on_the_run():

@@ -304,8 +304,8 @@ class Selection:
         """One sentence in words, strongest dependence first, each with its axles, sense (from ``coef``,
         the fitted coefficients in :attr:`stable` order, when given; else the regression's) and share; a
         knee or free play at its fitted value in ``shapes`` (``{"knee_velocity": m/s, "free_play": m}``)
-        when given, else at the value the regression selected; a damper force's rebound ratio when
-        ``shapes`` has it."""
+        when given, else at the value the regression selected; a damper force's rebound ratio and a friction's
+        fitted law (levels sliding and at rest, creep, presliding travel) when ``shapes`` has them."""
         coef = self.coef if coef is None else np.asarray(coef, float)
         shapes = shapes or {}
         parts = []
@@ -323,9 +323,45 @@ class Selection:
             if feature in CONTACTS:
                 w += _progressive_words(self, shapes, {self.stable[k].axle for k in ks})
             parts.append(f"{w} ({where})")
+        law = _friction_law_words(self, shapes)
+        if law:
+            parts.append(law)
         axles = self.axles
         return f"A force the model lacks: {'; '.join(parts)}; " \
                f"{f'{axles[0]} axle only' if len(axles) == 1 else 'both axles'}."
+
+
+def _friction_law_words(sel: Selection, values: dict) -> str:
+    """Words on a learned friction's fitted law (:func:`friction_law`; ``values`` the fitted coefficients
+    and shapes by name): per axle with a plain level its sliding level and its level at rest (the sliding
+    level plus the weakening) with the Stribeck velocity, the creep's force at its creep velocity, and the
+    presliding travel; none when the law is not fitted. The numbers say whether the contact sticks (a level
+    at rest at or above the sliding one) or creeps (a level at rest near none, the force built by the creep)."""
+    if not any(c.feature in FRICTION_LIKE for c in sel.stable):
+        return ""
+
+    def num(name: str) -> float | None:
+        v = values.get(name)
+        return float(v) if isinstance(v, (int, float)) else None
+
+    out = []
+    levels = []
+    for a in AXLES:
+        level, weak = num(Column("sign_velocity", a).coefficient), num(Column(WEAKENING, a).coefficient)
+        if level is not None and weak is not None:
+            levels.append(f"{a} {level:.0f} N sliding and {level + weak:.0f} N at rest")
+    vs = num(STRIBECK_VELOCITY)
+    if levels:
+        out.append(", ".join(levels) + (f" (Stribeck velocity {1e3 * vs:.1f} mm/s)" if vs is not None else ""))
+    creep = [(a, num(Column(CREEP, a).coefficient)) for a in AXLES]
+    vc = num(CREEP_VELOCITY)
+    if vc is not None and any(c is not None for _, c in creep):
+        at = ", ".join(f"{a} {c:.0f} N" for a, c in creep if c is not None)
+        out.append(f"creeping (viscous) below {1e3 * vc:.1f} mm/s ({at} at it)")
+    xp = num(PRESLIDING)
+    if xp is not None:
+        out.append(f"presliding travel {1e6 * xp:.0f} um")
+    return f"the friction's law as fitted: {', '.join(out)}" if out else ""
 
 
 def _progressive_words(sel: Selection, values: dict, axles: set[str]) -> str:
