@@ -88,6 +88,15 @@ def test_features_are_what_their_names_say():
     # a creep: viscous below the creep velocity, its peak 1 at it, fading above; no friction element in it
     vc = sh["creep_velocity"]
     np.testing.assert_allclose(get["creep_damping"], V / vc * np.exp(1.0 - np.abs(V) / vc))
+    # a damping met beyond the contact gap of bump, of rebound: the deflection velocity times the depth beyond it,
+    # none within it, a force of the damper's oil
+    for name, depth in (("bump_damping", np.maximum(D - g, 0.0)), ("rebound_damping", np.maximum(-D - g, 0.0))):
+        want = u * depth / sh["deflection_ref"]
+        got = feature_series(name, D, V, FX, FY, DT, shape={"contact_gap": g})
+        np.testing.assert_allclose(got, want)
+        assert np.any(got != 0.0) and np.all(got[np.abs(D) <= g] == 0.0)
+        np.testing.assert_allclose(feature_series(name, D, V, FX, FY, DT, shape={"contact_gap": g}, oil=oil),
+                                   want * oil)
 
 
 def test_a_relaxing_spring_is_a_dashpot_when_slow_and_a_spring_when_fast():
@@ -880,6 +889,50 @@ def test_a_learned_friction_is_described_with_its_fitted_law():
     assert "the friction's law" not in sel.description()
     spring = fs.select(_design(truth={("deflection", "rear"): 3.0}))
     assert "the friction's law" not in spring.description(None, fitted)
+
+
+@pytest.mark.parametrize("feature", ["bump_damping", "rebound_damping"])
+def test_a_learned_damping_beyond_a_gap_in_the_kernel_is_its_feature_on_the_run(feature):
+    """The kernel's ``bump_damping`` / ``rebound_damping`` force along a bump crossing is its coefficient times
+    the feature on the run's own deflections and deflection velocities at the contact gap (none within it), it
+    scales with the damper's oil (none at the oil-empty rear), and it changes the motion."""
+    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
+                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
+    coef, gap = 400.0, 0.01
+    man = build_maneuver("bump_crossing", vp.wheelbase)
+    outs = [f"{o}_{w}" for o in ("DEFL", "DEFL_VEL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
+    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
+        _learned(**{f"c_{feature}": coef}, contact_gap=gap),)))
+    oil = (1.0, 1.0, 0.0, 0.0)
+    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, oil=oil, outputs=outs).values
+    D, V, F = res[:, :4], res[:, 4:8], res[:, 8:12]
+    want = coef * feature_series(feature, D, V, V, V, DT, shape={"contact_gap": gap}, oil=np.array(oil))
+    assert np.abs(F[:, :2]).max() > 50.0 and np.abs(F[:, 2:]).max() < 1e-9   # (the friction output's 1e-12 N)
+    assert np.all(np.abs(F[1:][np.abs(D[:-1]) <= gap]) < 1e-9)
+    np.testing.assert_allclose(F[1:], want[:-1], rtol=0, atol=1e-9 * np.abs(F).max())
+    plain = _run([], variant="dahl_only", vehicle=vp)
+    assert np.max(np.abs(res[:, 12] - plain["PITCH_RATE"])) > 1e-3 * np.max(np.abs(plain["PITCH_RATE"]))
+
+
+def test_a_damping_beyond_a_gap_is_offered_to_the_regression_only_where_the_settings_say():
+    """``library.position_damping``: off (as shipped, until the family is measured with it) the regression's
+    library has no damping beyond a contact gap; on, each of bump and rebound at every offered contact gap, a
+    damping in the damping law family, described with its gap and sense."""
+    cfg = fs.settings()
+    assert cfg["library.position_damping"] is False
+    assert not {"bump_damping", "rebound_damping"} & {f for f, _ in fs.library(cfg)}
+    on = fs.library(dict(cfg) | {"library.position_damping": True})
+    gaps = [float(v) for v in cfg["library.contact_gaps_m"]]
+    for name in ("bump_damping", "rebound_damping"):
+        assert [s for f, s in on if f == name] == gaps
+        assert fs.law_key((name, "rear")) == ("damping", "rear")
+    assert len(on) == len(fs.library(cfg)) + 2 * len(gaps)
+    sel = fs.Selection({("rebound_damping", "front"): 1.0}, [fs.Column("rebound_damping", "front", 0.01)],
+                       np.array([80.0]), np.array([1.0]), 24)
+    words = sel.description(shapes={"contact_gap": 0.012})
+    assert "a damping met beyond 12 mm of rebound" in words and "front more damping" in words
+    assert "front axle only" in words
+    assert [p.name for p in fs.learned_candidate(sel, cfg).params] == ["rebound_damping_front", "contact_gap"]
 
 
 def test_a_learned_creep_in_the_kernel_is_its_feature_on_the_run():

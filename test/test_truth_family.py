@@ -282,7 +282,8 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/air_assist_front", "unlisted/rebound_spring_front", "unlisted/jounce_bumper_rear",
                    "unlisted/seal_gas_friction", "unlisted/bushing_rear", "road/bump_recorded_low",
                    "gas/polytropic_charge_rear", "unlisted/bump_stop_exponential_front",
-                   "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction"}
+                   "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
+                   "unlisted/hydraulic_rebound_stop_front"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -315,10 +316,11 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-5:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+    assert doc["held_out"][-6:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
                                     "unlisted/bump_stop_exponential_front",
-                                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction"]
-    assert doc["held_out"][-17:-5] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+                                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
+                                    "unlisted/hydraulic_rebound_stop_front"]
+    assert doc["held_out"][-18:-6] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -653,6 +655,36 @@ def test_the_hydraulic_stop_form_damps_beyond_its_gap_with_oil_at_the_rear():
     assert np.all(rear[d <= 0.02] == 0.0)
     assert np.corrcoef(rear[inside], expected[inside])[0, 1] > 0.99
     assert not np.any(family.case_truth(form, 1, "bump_rear_empty").hidden)   # no oil, no hydraulic stop
+
+
+def test_the_hydraulic_rebound_stop_form_damps_beyond_its_rebound_gap_with_oil_at_the_front():
+    """``unlisted/hydraulic_rebound_stop_front`` (held out): a damping that acts beyond 10 mm of rebound at the
+    front corners, growing with the square of the depth over 25 mm (full at 35 mm), in proportion to the
+    deflection velocity there; nothing in bump, nothing at the rear, and none in an oil-empty damper. The compression
+    stop's form stays as it was (its law is the exponent-1 bump case of the same code)."""
+    form = family.FORMS["unlisted/hydraulic_rebound_stop_front"]
+    assert form.split == "held_out" and form.expect == ("unlisted_force",)
+    assert form.leading[0] == "deflection_velocity" and "rebound_damping" in form.leading
+    intact = family.case_truth(form, 1, "bump_intact")
+    front, rear = intact.hidden[:, :2], intact.hidden[:, 2:]
+    assert not np.any(rear)
+    d, v = intact.deflection[:, :2], np.gradient(intact.deflection[:, :2], intact.t, axis=0)
+    assert d.min() < -0.02 and np.abs(front).max() > 50.0   # the drive reaches the stop
+    e = np.maximum(-d - 0.01, 0.0)
+    expected = 2500.0 * np.minimum((e / 0.025) ** 2, 1.0) * v
+    assert np.all(front[d >= -0.01] == 0.0)
+    inside = d < -0.015
+    assert np.corrcoef(front[inside], expected[inside])[0, 1] > 0.99
+    sine = family.case_truth(form, 1, "sine_intact")
+    assert sine.hidden[:, 2:].max() == 0.0 and sine.hidden[:, 2:].min() == 0.0
+    assert not np.any(family.case_truth(form, 1, "bump_front_empty").hidden)   # no oil, no hydraulic stop
+    # the compression stop's form as before the rebound side and the taper's exponent were added (pitch-rate RMS
+    # [rad/s] and the rear hidden force's RMS [N], seed 1, from the code before that change)
+    before = family.FORMS["unlisted/hydraulic_compression_stop_rear"]
+    for label, ref in (("bump_intact", (0.03338284007853726, 77.15654329909292)),
+                       ("bump_front_empty", (0.04826493159052924, 79.53012015266194))):
+        r = family.case_truth(before, 1, label)
+        assert (float(np.sqrt(np.mean(r.gyro[:, 1] ** 2))), float(np.sqrt(np.mean(r.hidden[:, 2] ** 2)))) == ref
 
 
 def test_the_creep_friction_form_builds_with_the_sliding_velocity_by_its_algebraic_law():

@@ -353,7 +353,8 @@ def _forms() -> dict[str, GeneratorForm]:
                       "front dampers without",
                       hidden=TruthHidden(hydraulic_stop_damping_N_s_m=(0.0, 3000.0), hydraulic_stop_gap_m=0.02,
                                          hydraulic_stop_length_m=0.02),
-                      leading=("deflection_velocity", "velocity_squared", "velocity_beyond_knee"), **unl),
+                      leading=("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
+                               "rebound_damping"), **unl),
         # added 2026-11-30 (issue 26), held out from the start, before any run of the finder on it and before the
         # learned friction's creep (a viscous part below a creep velocity, probed that day on the seen load-friction
         # forms) is run on it: a friction law of another shape at low velocity (algebraic, not tanh-smoothed),
@@ -364,6 +365,19 @@ def _forms() -> dict[str, GeneratorForm]:
                       "velocity rather than sticking)",
                       hidden=TruthHidden(creep_friction_N=(45.0, 35.0), creep_friction_velocity_m_s=0.004),
                       leading=("sign_velocity",), **unl),
+        # added 2026-11-30 (issue 26), held out from the start, before any run of the finder on it and before the
+        # learned term's damping beyond a contact gap (bump_damping, rebound_damping, written that day after
+        # unlisted/hydraulic_compression_stop_rear) is run on it: a position-dependent damping of another side
+        # (rebound), axle (front), gap, taper law (quadratic) and size; right if read as a damping
+        GeneratorForm("unlisted/hydraulic_rebound_stop_front", description="hydraulic rebound stops in the front "
+                      "dampers: beyond 10 mm of rebound from static a sleeve throttles the flow, a damping "
+                      "c_h min((e / 0.025)^2, 1) v with e = max(-d - 0.01, 0), c_h 2500 N s/m (full at 35 mm "
+                      "rebound), in both directions of motion, times the damper's oil weight; rear dampers without",
+                      hidden=TruthHidden(hydraulic_stop_damping_N_s_m=(2500.0, 0.0), hydraulic_stop_gap_m=0.01,
+                                         hydraulic_stop_length_m=0.025, hydraulic_stop_in_rebound=True,
+                                         hydraulic_stop_exponent=2.0),
+                      leading=("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
+                               "rebound_damping"), **unl),
     ]
     return {f.name: f for f in fs}
 

@@ -223,6 +223,8 @@ class TruthHidden:
     hydraulic_stop_gap_m: float = 0.02            # beyond gap g of bump a sleeve throttles the flow, damping
     hydraulic_stop_length_m: float = 0.02         # c_h min(e / s, 1) v with e = max(d - g, 0), both directions,
     #                                               times the damper's oil weight (an empty damper has none)
+    hydraulic_stop_in_rebound: bool = False       # the stop beyond gap g of rebound instead, e = max(-d - g, 0)
+    hydraulic_stop_exponent: float = 1.0          # the sleeve's law: c_h min((e / s)^n, 1) v (n 1: linear taper)
     creep_friction_N: tuple = (0.0, 0.0)          # a strut friction that builds with the sliding velocity by an
     creep_friction_velocity_m_s: float = 0.004    # algebraic law (front, rear): F_c v / sqrt(v^2 + v_c^2) [N], a
     #                                               seal that creeps at low velocity rather than sticking
@@ -365,7 +367,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
  WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, WSEAL, WSEALH, WSEALN, WBSF, WBSL, WBSG,
- WHSC, WHSG, WHSL, WCRF, WCRV, NW) = range(56)
+ WHSC, WHSG, WHSL, WCRF, WCRV, WHSR, WHSN, NW) = range(58)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -435,6 +437,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WHSC], W[i, WHSG], W[i, WHSL] = hid.hydraulic_stop_damping_N_s_m[k], hid.hydraulic_stop_gap_m, \
             hid.hydraulic_stop_length_m
         W[i, WCRF], W[i, WCRV] = hid.creep_friction_N[k], hid.creep_friction_velocity_m_s
+        W[i, WHSR], W[i, WHSN] = (-1.0 if hid.hydraulic_stop_in_rebound else 1.0), hid.hydraulic_stop_exponent
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -621,8 +624,11 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
         Fgas = W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fs += P[DSCALE] * Fh + Ff[i] + Fv + W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fhid += Fv + Fgas
-        if W[i, WHSC] > 0.0 and d[i] > W[i, WHSG]:   # hydraulic compression stop: damping beyond its gap
-            Fhs = w_oil * W[i, WHSC] * min((d[i] - W[i, WHSG]) / W[i, WHSL], 1.0) * dd[i]
+        if W[i, WHSC] > 0.0 and W[i, WHSR] * d[i] > W[i, WHSG]:   # hydraulic stop: damping beyond its gap
+            engaged = (W[i, WHSR] * d[i] - W[i, WHSG]) / W[i, WHSL]
+            if W[i, WHSN] != 1.0:
+                engaged = engaged ** W[i, WHSN]
+            Fhs = w_oil * W[i, WHSC] * min(engaged, 1.0) * dd[i]
             Fs += Fhs
             Fhid += Fhs
         Ft = _tyre_force(P[KT] * (ZR[i, j] - y[8 + i]) + P[CT] * (ZRD[i, j] - y[12 + i]), W[i, WFZ0])

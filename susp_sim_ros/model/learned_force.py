@@ -64,6 +64,15 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             Canudas de Wit, Automatica 30(7), 1994; a law's shape like the weakening, fitted only
                             beside a stable friction and only where ``config/force_shape.yaml``
                             ``fit.creep_in_friction_law`` says so)
+``bump_damping``            oil (v / v_ref) max(d - g, 0) / d_ref: a damping met beyond the contact gap ``g`` of
+                            bump, growing with the depth in the stroke (a hydraulic compression stop, whose
+                            sleeve throttles the damper's flow near the end of its travel; a position-sensitive
+                            damper's bypass closing: Dixon, The Shock Absorber Handbook, 2007, ch. 5 and 9); a
+                            force of the damper's oil, so scaled with its oil level like the valve; offered to
+                            the regression only where ``config/force_shape.yaml`` ``library.position_damping``
+                            says so
+``rebound_damping``         oil (v / v_ref) max(-d - g, 0) / d_ref: the same beyond the gap of rebound (a
+                            hydraulic rebound stop)
 ==========================  =======================================================================
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
@@ -93,7 +102,7 @@ from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
             "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection", "bump_contact",
-            "rebound_contact", "compression", "creep_damping")
+            "rebound_contact", "compression", "creep_damping", "bump_damping", "rebound_damping")
 N_FEATURES = len(FEATURES)
 #: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
 FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force", "compression")
@@ -155,7 +164,7 @@ def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref,
         return _law_shape_feature(k, v, z, vs, vc)
     if k == 16:
         return z * x
-    return _spring_state_feature(k, d, rel, dref, cgap)
+    return _spring_state_feature(k, d, u, oil, rel, dref, cgap)
 
 
 @njit(cache=True, inline="always")
@@ -167,13 +176,18 @@ def _law_shape_feature(k, v, z, vs, vc):
 
 
 @njit(cache=True, inline="always")
-def _spring_state_feature(k, d, rel, dref, cgap):
-    """Features 13-15 of :data:`FEATURES` (a relaxing spring, springs met beyond a contact gap)."""
+def _spring_state_feature(k, d, u, oil, rel, dref, cgap):
+    """Features 13-15, 18 and 19 of :data:`FEATURES` (a relaxing spring, springs and dampings met beyond a
+    contact gap)."""
     if k == 13:
         return rel / dref
     if k == 14:
         return max(d - cgap, 0.0) / dref
-    return min(d + cgap, 0.0) / dref
+    if k == 15:
+        return min(d + cgap, 0.0) / dref
+    if k == 18:
+        return oil * u * max(d - cgap, 0.0) / dref
+    return oil * u * max(-d - cgap, 0.0) / dref
 
 
 @njit(cache=True, inline="always")
@@ -199,7 +213,8 @@ def learned_force_force(p, po, s, so, i, c):
             + p[q + 68] * (v / p[po + _VC + i]) * math.exp(1.0 - abs(v) / p[po + _VC + i])
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
             + p[q + 52] * s[so + _REL + i] / dref
-            + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + cgap, 0.0)) / dref)
+            + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + cgap, 0.0)) / dref
+            + c[i, _C_OIL] * u * (p[q + 72] * max(d - cgap, 0.0) + p[q + 76] * max(-d - cgap, 0.0)) / dref)
 
 
 @njit(cache=True, inline="always")
@@ -277,7 +292,9 @@ _COEF_MEANING = {
     "bump_contact": "spring force d_ref of bump beyond the contact gap",
     "rebound_contact": "spring force d_ref of rebound beyond the contact gap",
     "compression": "friction level at d = d_ref of bump over its level at static (less in rebound)",
-    "creep_damping": "creep force at the creep velocity (viscous below it, fading above)"}
+    "creep_damping": "creep force at the creep velocity (viscous below it, fading above)",
+    "bump_damping": "damping force at v = v_ref, d_ref of bump beyond the contact gap, of an intact damper",
+    "rebound_damping": "damping force at v = v_ref, d_ref of rebound beyond the contact gap, of an intact damper"}
 
 LEARNED_FORCE = register_term(PhysicsTerm(
     name="unlisted_force", component="axle",
@@ -297,8 +314,8 @@ LEARNED_FORCE = register_term(PhysicsTerm(
                   "by 1/e (Stribeck velocity)", 0.01, 1e-4, 1.0),
         TermParam("relaxation_time", "s", "relaxation time of relaxing_deflection's spring (its Maxwell element's "
                   "damping over its rate)", 0.07, 1e-3, 10.0),
-        TermParam("contact_gap", "m", "deflection from static beyond which bump_contact (in bump) and rebound_contact "
-                  "(in rebound) act", 0.02, 0.0, 0.2),
+        TermParam("contact_gap", "m", "deflection from static beyond which bump_contact and bump_damping (in bump) "
+                  "and rebound_contact and rebound_damping (in rebound) act", 0.02, 0.0, 0.2),
         TermParam("rebound_ratio", "1", "force of velocity_squared and velocity_beyond_knee in rebound over the force "
                   "at the same speed in compression (1: a symmetric law)", 1.0, 0.0, 10.0),
         TermParam("creep_velocity", "m/s", "sliding velocity of creep_damping's peak (viscous below it, fading above)",

@@ -4,7 +4,8 @@ What the model still lacks is regressed on features of the model's own corner st
 (:data:`~susp_sim_ros.model.learned_force.FEATURES`: deflection and its cube, deflection velocity, its
 square and a knee in it, friction-like states, stroke amplitude, wheel forces, the left-right
 deflection difference and a free play of it, a spring that relaxes, springs met beyond a contact gap of bump
-or rebound, friction growing with the compression), one coefficient [N] per (feature, axle). The regression
+or rebound, friction growing with the compression, and where ``library.position_damping`` is set a damping
+met beyond such a gap), one coefficient [N] per (feature, axle). The regression
 runs through the model's own dynamics: each column is the effect of a feature's force, acting at the
 axle's two corners as a suspension force does, on every compared signal of every drive (the
 forward-difference Jacobian of the whitened residual, as the finder's criteria see it), and the target
@@ -98,6 +99,10 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
          "compression": "friction-like, growing with the compression and falling in rebound (a strut's guide or "
                         "seal pressed harder as the spring or the damper's gas is compressed)",
          "creep_damping": "creeps at low sliding velocity (viscous below a creep velocity, fading above)",
+         "bump_damping": "a damping met beyond {gap_mm:.0f} mm of bump, growing with the depth, as far as the damper "
+                         "holds oil (a hydraulic compression stop, a position-sensitive damper)",
+         "rebound_damping": "a damping met beyond {gap_mm:.0f} mm of rebound, growing with the depth, as far as the "
+                            "damper holds oil (a hydraulic rebound stop, a position-sensitive damper)",
          "road_height": "follows the road height under the wheel (an input, not a state)",
          "road_rate": "follows the rate of the road height under the wheel (an input, not a state)",
          **{f"rotation_{t}{k}": f"follows the wheel's rotation, harmonic {k}, {part} part (an input, not a state)"
@@ -109,7 +114,7 @@ SENSE = {"constant": ("pushes the body up", "pulls the body down"),
          **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play",
                                                 "relaxing_deflection", "bump_contact", "rebound_contact")},
          **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
-                                                           "velocity_beyond_knee")},
+                                                           "velocity_beyond_knee", "bump_damping", "rebound_damping")},
          **{f: ("more friction", "less friction") for f in FRICTION_LIKE},
          **{f: ("positive", "negative") for f in INPUT_FEATURES}}
 
@@ -126,7 +131,8 @@ GROUP_OF = {f"rotation_{t}{k}": f"rotation_{k}" for t in ("sin", "cos") for k in
 #: is a stable dependence of its kind although no single member is (:func:`select`). Features not listed are
 #: a family of their own (the relaxing spring, both spring and damper; the constant; the inputs).
 LAW_OF = {**{f: "spring" for f in ("deflection", "deflection_cubed", "bump_contact", "rebound_contact")},
-          **{f: "damping" for f in ("deflection_velocity", "velocity_squared", "velocity_beyond_knee")},
+          **{f: "damping" for f in ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
+                                    "rebound_damping")},
           **{f: "friction" for f in FRICTION_LIKE},
           **{f: "roll" for f in ("roll_deflection", "roll_free_play")}}
 
@@ -155,14 +161,18 @@ def law_key(key: tuple[str, str]) -> tuple[str, str]:
 
 #: the shape parameter of the features that have one
 _SHAPE_OF = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play",
-             "relaxing_deflection": "relaxation_time", "bump_contact": "contact_gap", "rebound_contact": "contact_gap"}
+             "relaxing_deflection": "relaxation_time", "bump_contact": "contact_gap", "rebound_contact": "contact_gap",
+             "bump_damping": "contact_gap", "rebound_damping": "contact_gap"}
 #: the config entry of each such shape parameter's range in the learned term's fit
 _SHAPE_RANGE = {"knee_velocity": "fit.knee_velocity_range_m_s", "free_play": "fit.free_play_range_m",
                 "relaxation_time": "fit.relaxation_time_range_s", "contact_gap": "fit.contact_gap_range_m"}
 #: the config entry of the values each such feature is offered at in the regression
 _SHAPE_VALUES = {"velocity_beyond_knee": "library.knee_velocities_m_s", "roll_free_play": "library.free_plays_m",
                  "relaxing_deflection": "library.relaxation_times_s", "bump_contact": "library.contact_gaps_m",
-                 "rebound_contact": "library.contact_gaps_m"}
+                 "rebound_contact": "library.contact_gaps_m", "bump_damping": "library.contact_gaps_m",
+                 "rebound_damping": "library.contact_gaps_m"}
+#: a damping met beyond a contact gap: offered to the regression only where ``library.position_damping`` is set
+POSITION_DAMPING = ("bump_damping", "rebound_damping")
 
 
 def learned_in(variant) -> bool:
@@ -195,12 +205,15 @@ class Column:
 
 def library(cfg: dict) -> list[tuple[str, float | None]]:
     """(feature, shape value) of every library entry: the features with a shape value (knee, free play,
-    relaxation time) once per offered value, the others once, then the input features offered
-    (``library.input_features``), once each."""
+    relaxation time, contact gap) once per offered value, the others once (a damping beyond a contact gap only
+    where ``library.position_damping`` is set), then the input features offered (``library.input_features``),
+    once each."""
     out: list[tuple[str, float | None]] = []
     for f in FEATURES:
         if f in LAW_SHAPE_FEATURES:
             continue   # a friction law's shape, fitted once a friction is stable (learned_candidate)
+        if f in POSITION_DAMPING and not bool(cfg["library.position_damping"]):
+            continue
         if f in _SHAPE_VALUES:
             out += [(f, float(v)) for v in cfg[_SHAPE_VALUES[f]]]
         else:
