@@ -345,7 +345,8 @@ def _forms() -> dict[str, GeneratorForm]:
                       leading=("bump_contact", "deflection_cubed", "deflection"), **unl),
         # added 2026-11-30 (issue 26), held out from the start, before any run of the finder on it: physics of a kind
         # no form and no feature of the vocabulary has (a damping that grows with the position in the stroke), as a
-        # blind test of the learned term's generality; right if read as a damping (the damping family leads)
+        # blind test of the learned term's generality; right if read as a damping (the damping family leads; its
+        # two members added to the vocabulary after this form, bump_damping and rebound_damping, count as such too)
         GeneratorForm("unlisted/hydraulic_compression_stop_rear", description="hydraulic compression stops in "
                       "the rear dampers: beyond 20 mm of bump from static a sleeve throttles the flow, a damping "
                       "c_h min(e / 0.02, 1) v with e = max(d - 0.02, 0), c_h 3000 N s/m (full at 40 mm bump), in "
