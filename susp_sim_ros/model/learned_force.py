@@ -164,7 +164,7 @@ def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref,
         return _law_shape_feature(k, v, z, vs, vc)
     if k == 16:
         return z * x
-    return _spring_state_feature(k, d, u, oil, rel, dref, cgap)
+    return _gap_or_relaxing_feature(k, d, u, oil, rel, dref, cgap)
 
 
 @njit(cache=True, inline="always")
@@ -176,7 +176,7 @@ def _law_shape_feature(k, v, z, vs, vc):
 
 
 @njit(cache=True, inline="always")
-def _spring_state_feature(k, d, u, oil, rel, dref, cgap):
+def _gap_or_relaxing_feature(k, d, u, oil, rel, dref, cgap):
     """Features 13-15, 18 and 19 of :data:`FEATURES` (a relaxing spring, springs and dampings met beyond a
     contact gap)."""
     if k == 13:
