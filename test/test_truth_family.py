@@ -283,7 +283,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/seal_gas_friction", "unlisted/bushing_rear", "road/bump_recorded_low",
                    "gas/polytropic_charge_rear", "unlisted/bump_stop_exponential_front",
                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
-                   "unlisted/hydraulic_rebound_stop_front"}
+                   "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -316,11 +316,11 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-6:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+    assert doc["held_out"][-7:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
                                     "unlisted/bump_stop_exponential_front",
                                     "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
-                                    "unlisted/hydraulic_rebound_stop_front"]
-    assert doc["held_out"][-18:-6] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+                                    "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper"]
+    assert doc["held_out"][-19:-7] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -685,6 +685,28 @@ def test_the_hydraulic_rebound_stop_form_damps_beyond_its_rebound_gap_with_oil_a
                        ("bump_front_empty", (0.04826493159052924, 79.53012015266194))):
         r = family.case_truth(before, 1, label)
         assert (float(np.sqrt(np.mean(r.gyro[:, 1] ** 2))), float(np.sqrt(np.mean(r.hidden[:, 2] ** 2)))) == ref
+
+
+def test_the_position_sensitive_damper_form_damps_beyond_its_soft_zone_on_both_sides_with_oil():
+    """``unlisted/position_sensitive_damper`` (held out): a damping at every corner that acts beyond +-12 mm of
+    static in bump and in rebound, growing with the depth to the power 1.5 over 20 mm (full at 32 mm), 1400 N s/m
+    front and 1100 N s/m rear, in proportion to the deflection velocity there; nothing inside the soft zone, none in
+    an oil-empty damper. The two one-sided stops stay as they were (pinned in the rebound stop's test)."""
+    form = family.FORMS["unlisted/position_sensitive_damper"]
+    assert form.split == "held_out" and form.expect == ("unlisted_force",)
+    assert form.leading[0] == "deflection_velocity" and {"bump_damping", "rebound_damping"} <= set(form.leading)
+    intact = family.case_truth(form, 1, "bump_intact")
+    d = intact.deflection
+    v = np.gradient(d, intact.t, axis=0)
+    e = np.maximum(np.abs(d) - 0.012, 0.0)
+    expected = np.array([1400.0, 1400.0, 1100.0, 1100.0]) * np.minimum((e / 0.02) ** 1.5, 1.0) * v
+    assert np.all(intact.hidden[np.abs(d) <= 0.012] == 0.0)
+    for i in range(4):
+        for side in (d[:, i] > 0.016, d[:, i] < -0.016):   # both sides are reached and damped
+            assert side.any() and np.abs(intact.hidden[side, i]).max() > 50.0, i
+            assert np.corrcoef(intact.hidden[side, i], expected[side, i])[0, 1] > 0.99, i
+    rear_empty = family.case_truth(form, 1, "bump_rear_empty")
+    assert not np.any(rear_empty.hidden[:, 2:]) and np.abs(rear_empty.hidden[:, :2]).max() > 50.0
 
 
 def test_the_creep_friction_form_builds_with_the_sliding_velocity_by_its_algebraic_law():

@@ -379,6 +379,20 @@ def _forms() -> dict[str, GeneratorForm]:
                                          hydraulic_stop_exponent=2.0),
                       leading=("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
                                "rebound_damping"), **unl),
+        # added 2026-11-30 (issue 26), held out from the start, before any run of the finder on it: a second blind
+        # test of the learned term's damping beyond a contact gap (the rebound stop above was missed by it): a
+        # position-dependent damping of another kind (a comfort zone around static, firmer on both sides of it),
+        # both axles at other values, another taper law (power 1.5); right if read as a damping
+        GeneratorForm("unlisted/position_sensitive_damper", description="position-sensitive dampers at all four "
+                      "corners (bypass grooves in the pressure tube open a soft zone of +-12 mm around static): "
+                      "beyond it a damping c_p min((e / 0.02)^1.5, 1) v with e = max(|d| - 0.012, 0), c_p 1400 N s/m "
+                      "front and 1100 N s/m rear (full at 32 mm of bump or rebound), in both directions of motion, "
+                      "times the damper's oil weight",
+                      hidden=TruthHidden(hydraulic_stop_damping_N_s_m=(1400.0, 1100.0), hydraulic_stop_gap_m=0.012,
+                                         hydraulic_stop_length_m=0.02, hydraulic_stop_both_ways=True,
+                                         hydraulic_stop_exponent=1.5),
+                      leading=("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
+                               "rebound_damping"), **unl),
     ]
     return {f.name: f for f in fs}
 

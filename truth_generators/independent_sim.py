@@ -225,6 +225,9 @@ class TruthHidden:
     #                                               times the damper's oil weight (an empty damper has none)
     hydraulic_stop_in_rebound: bool = False       # the stop beyond gap g of rebound instead, e = max(-d - g, 0)
     hydraulic_stop_exponent: float = 1.0          # the sleeve's law: c_h min((e / s)^n, 1) v (n 1: linear taper)
+    hydraulic_stop_both_ways: bool = False        # beyond gap g of bump and of rebound, e = max(|d| - g, 0): a
+    #                                               position-sensitive damper (bypass grooves open a soft zone
+    #                                               of +-g around static; firmer beyond it)
     creep_friction_N: tuple = (0.0, 0.0)          # a strut friction that builds with the sliding velocity by an
     creep_friction_velocity_m_s: float = 0.004    # algebraic law (front, rear): F_c v / sqrt(v^2 + v_c^2) [N], a
     #                                               seal that creeps at low velocity rather than sticking
@@ -437,7 +440,8 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WHSC], W[i, WHSG], W[i, WHSL] = hid.hydraulic_stop_damping_N_s_m[k], hid.hydraulic_stop_gap_m, \
             hid.hydraulic_stop_length_m
         W[i, WCRF], W[i, WCRV] = hid.creep_friction_N[k], hid.creep_friction_velocity_m_s
-        W[i, WHSR], W[i, WHSN] = (-1.0 if hid.hydraulic_stop_in_rebound else 1.0), hid.hydraulic_stop_exponent
+        W[i, WHSR] = 0.0 if hid.hydraulic_stop_both_ways else -1.0 if hid.hydraulic_stop_in_rebound else 1.0
+        W[i, WHSN] = hid.hydraulic_stop_exponent
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -624,8 +628,9 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
         Fgas = W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fs += P[DSCALE] * Fh + Ff[i] + Fv + W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fhid += Fv + Fgas
-        if W[i, WHSC] > 0.0 and W[i, WHSR] * d[i] > W[i, WHSG]:   # hydraulic stop: damping beyond its gap
-            engaged = (W[i, WHSR] * d[i] - W[i, WHSG]) / W[i, WHSL]
+        depth = W[i, WHSR] * d[i] if W[i, WHSR] != 0.0 else abs(d[i])   # WHSR 0: both ways
+        if W[i, WHSC] > 0.0 and depth > W[i, WHSG]:   # hydraulic stop: damping beyond its gap
+            engaged = (depth - W[i, WHSG]) / W[i, WHSL]
             if W[i, WHSN] != 1.0:
                 engaged = engaged ** W[i, WHSN]
             Fhs = w_oil * W[i, WHSC] * min(engaged, 1.0) * dd[i]
