@@ -371,6 +371,9 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         # rebound ratio, free play, contact gap, relaxation time), their 95 % intervals, its words
         "unlisted_force": next(({k: t.get(k) for k in ("params", "ci95", "description")} for t in rep["terms"]
                                 if t["name"] == "unlisted_force"), None),
+        # the forward steps at which a learned term was accepted (offered and extended alike), whether named in
+        # the end or not: a case with none is one a change of what follows a learned term cannot touch
+        "learned_steps": [p["step"] for p in f.path_ if "unlisted_force" in p.get("added", []) and p.get("accepted")],
         "diagnostics": _diagnostics(f),
         "generate_s": t_gen, "elapsed_s": time.perf_counter() - t0,
     }

@@ -953,3 +953,58 @@ def test_a_learned_creep_in_the_kernel_is_its_feature_on_the_run():
     np.testing.assert_allclose(F[1:], want[:-1], rtol=0, atol=1e-9 * coef)
     plain = _run([], variant="dahl_only", vehicle=vp)
     assert np.max(np.abs(res[:, 8] - plain["PITCH_RATE"])) > 1e-3 * np.max(np.abs(plain["PITCH_RATE"]))
+
+
+def test_a_learned_term_holds_one_value_of_each_shape_when_it_is_read_again():
+    """When a learned term is in the structure, the regression that reads the residual it leaves offers the
+    features of a shape the term holds (a contact gap, a knee) at its fitted value only, the term having one of
+    each; the others as always. A column's coefficient adds to the term's own, so a feature the term has is
+    read as a change of its fitted coefficient."""
+    from types import SimpleNamespace
+    cfg = dict(fs.settings()) | {"library.position_damping": True}
+    held = fs.library(cfg, {"contact_gap": 0.0149})
+    for f in ("bump_contact", "rebound_contact", "bump_damping", "rebound_damping"):
+        assert [s for g, s in held if g == f] == [0.0149]
+    assert [s for g, s in held if g == "velocity_beyond_knee"] == \
+        [s for g, s in fs.library(cfg) if g == "velocity_beyond_knee"]   # a shape the term lacks: every value
+    assert fs.HELD_SHAPES == {"knee_velocity", "free_play", "relaxation_time", "contact_gap"}
+    model = SimpleNamespace(term_param_slice=lambda term, name: slice(4, 8) if name == "c_bump_damping" else
+                            slice(0, 1))
+    col = fs._column_candidate(fs.Column("bump_damping", "rear", 0.0149), 20.0, 5000.0)
+    P = np.zeros((2, 8))
+    P[:, 6:8] = 60.0   # the term's fitted rear coefficient
+    col.apply(P, P.copy(), np.array([20.0]), model)
+    np.testing.assert_array_equal(P[:, 6:8], 80.0)
+    np.testing.assert_array_equal(P[:, 4:6], 0.0)
+    assert P[0, 0] == 0.0149
+
+
+def test_a_learned_term_is_extended_by_the_dependences_the_residual_it_leaves_adds():
+    """:func:`force_shape.extended`: the term's dependences as fitted, and the stable ones the regression of
+    the residual it leaves adds (a position-sensitive damper read first at the front in bump, then in rebound):
+    the old coefficients as fitted plus what the residual asks of them, the added ones fitted with them, shares
+    of the sum; nothing added, no extension."""
+    d = _design(seed=3, noise=0.5)
+    keys = [c.key for c in d.columns]
+    first = d.columns[keys.index(("sign_velocity", "rear"))]
+    added = d.columns[keys.index(("deflection_velocity", "front"))]
+    y = 0.4 * d.X[:, keys.index(first.key)] + 2.0 * d.X[:, keys.index(added.key)] + \
+        np.random.default_rng(5).normal(0.0, 0.5, len(d.y))
+    one = [c for c in d.columns if c.key not in {first.key, added.key} or c in (first, added)]
+    design = fs.Design(d.X[:, [d.columns.index(c) for c in one]], y, d.groups, one)
+    old = fs.Selection({first.key: 0.9}, [first], np.array([1.5]), np.array([1.0]), 24)
+    new = fs.Selection({first.key: 0.7, added.key: 0.8}, [first, added], np.array([0.4, 2.0]),
+                       np.array([0.1, 0.9]), 24)
+    ext = fs.extended(old, np.array([1.6]), new, design)
+    assert ext is not None
+    assert [c.key for c in ext.stable] == [first.key, added.key]
+    np.testing.assert_allclose(ext.coef, [1.6 + 0.4, 2.0], atol=0.05)
+    contrib = design.X[:, [one.index(first), one.index(added)]] * ext.coef
+    share = contrib.var(axis=0) / contrib.sum(axis=1).var()
+    np.testing.assert_allclose(ext.share, share / share.sum())
+    assert ext.frequency[first.key] == 0.9 and ext.frequency[added.key] == 0.8
+    assert set(ext.dependences) == {"deflection_velocity", "sign_velocity"} and ext.axles == ["front", "rear"]
+    assert fs.extended(old, np.array([1.6]), fs.Selection({first.key: 0.7}, [first], np.array([0.4]),
+                                                          np.array([1.0]), 24), design) is None
+    cfg = fs.settings()
+    assert cfg["fit.extend_learned"] is False   # off as shipped, until the family is measured with it

@@ -254,6 +254,7 @@ class DiscrepancyFinder:
         self.refused_: list[tuple] = []  # (fit before, option, its fit, checks) of terms refused after the criterion
         self.force_shape_: list[dict] = []  # what the shape regression saw at each forward step (force_shape)
         self.learned_selection_: force_shape.Selection | None = None  # of the last learned trial offered
+        self.extension_selection_: force_shape.Selection | None = None  # of the last extension of it offered
         if force_shape.TERM in self.candidates and force_shape.learned_in(self.base_variant_):
             in_base.append(force_shape.TERM)   # a variant the finder wrote: its learned force is the base model's
         self.learnable_ = force_shape.TERM in self.candidates and force_shape.TERM not in in_base
@@ -278,7 +279,8 @@ class DiscrepancyFinder:
                 break
             remaining = [c for c in testable if c not in cur.structure.names]
             learnable = self.learnable_ and force_shape.TERM not in cur.structure.names
-            if not remaining and not learnable:
+            extendable = self._extendable(cur)
+            if not remaining and not learnable and not extendable:
                 break
             opts = screen(ev, cur, remaining, pairs=True, heldout=ranking is None) if remaining else []
             if ranking is None and remaining:
@@ -299,6 +301,8 @@ class DiscrepancyFinder:
                         break
                     input_sel = None   # no input: the step goes on with the listed candidates
             learned = self._learned_trial(ev, cur, sel) if sel is not None else None
+            if extendable:
+                learned = self._extension_trial(ev, cur, step)
             if not opts and learned is None:
                 if input_sel is not None:
                     self._input_finding(ev, input_sel, step)
@@ -317,16 +321,16 @@ class DiscrepancyFinder:
                 if input_sel is not None:
                     self._input_finding(ev, input_sel, step)
                 break
-            for name in best.add:
-                sel = self.learned_selection_ if name == force_shape.TERM else None
-                learned_words = {"dependences": sel.dependences, "description": sel.description()} if sel else {}
-                accepted.append({"name": name, "step": step, **learned_words,
-                                 "delta_bic": cur.bic - best_fit.bic,
-                                 "explained_fraction_of_excess": gain / excess,
-                                 "explained_fraction_of_base_excess":
-                                     gain / max(base_fit.rss - n, 1e-12),
-                                 "per_drive_rmse_before": per_before,
-                                 "per_drive_rmse_after": per_after, "with": list(best.add), **checks})
+            if extendable and force_shape.TERM in best.add:   # the learned term extended: its entry amended
+                self._amend_learned(accepted, step, gain / excess, checks)
+            else:
+                accepted += [{"name": name, "step": step, **self._learned_words(name),
+                              "delta_bic": cur.bic - best_fit.bic,
+                              "explained_fraction_of_excess": gain / excess,
+                              "explained_fraction_of_base_excess": gain / max(base_fit.rss - n, 1e-12),
+                              "per_drive_rmse_before": per_before,
+                              "per_drive_rmse_after": per_after, "with": list(best.add), **checks}
+                             for name in best.add]
             cur = best_fit
         self.ranking_ = ranking or []
         return cur
@@ -857,19 +861,21 @@ class DiscrepancyFinder:
                 "members_earn_their_place": bool(min(own.values()) >= MIN_HELDOUT_GAIN)}
 
     # -- physics no candidate lists (issue 26, items 3-4) ---------------------------------------------
-    def _shape_selection(self, ev: Evaluator, cur: FitResult, step: int) -> force_shape.Selection | None:
+    def _shape_selection(self, ev: Evaluator, cur: FitResult, step: int,
+                         shapes: dict | None = None) -> force_shape.Selection | None:
         """What the missing force left by ``cur`` depends on (:mod:`.force_shape`: the model's corner states
         and, beside them, the input features). Records what the regression saw in ``force_shape_``; None
-        when fewer than two drives have rows."""
+        when fewer than two drives have rows. ``shapes``: shape values the library's features are offered at
+        only (:func:`.force_shape.design_for`)."""
         # proposed against the file's values, and when nothing is stable there against the calibration as
         # fitted with its far shifts undone (item 4); the joint fit then weighs calibration and learned force
         st = cur.structure
         against = "file_values"
-        design = force_shape.design_for(self, st, st.at_neutral(cur.x, CALIBRATION), cur.idx)
+        design = force_shape.design_for(self, st, st.at_neutral(cur.x, CALIBRATION), cur.idx, shapes=shapes)
         sel = force_shape.select(design)
         if sel is not None and not sel.stable and CALIBRATION in st.names:
             against = "calibration_within_priors"
-            design = force_shape.design_for(self, st, self._without_far_shifts(cur), cur.idx)
+            design = force_shape.design_for(self, st, self._without_far_shifts(cur), cur.idx, shapes=shapes)
             sel = force_shape.select(design)
         self.shape_design_ = design   # the regression the selection read: the input check's state reading
         if sel is None:
@@ -1022,6 +1028,66 @@ class DiscrepancyFinder:
             fit = self._with_progressive_part(ev, fit, sel)
         self.learned_selection_ = sel
         return Option((cand.name,), math.nan, math.nan, np.zeros(0)), fit
+
+    def _learned_words(self, name: str) -> dict:
+        """A learned term's dependences and description for its ``accepted`` entry (none for another term)."""
+        sel = self.learned_selection_ if name == force_shape.TERM else None
+        return {"dependences": sel.dependences, "description": sel.description()} if sel else {}
+
+    def _extendable(self, cur: FitResult) -> bool:
+        """Whether the learned term this finder wrote into ``cur`` may be extended at this step
+        (:meth:`_extension_trial`): ``fit.extend_learned`` set in ``config/force_shape.yaml``."""
+        return bool(self.learnable_ and force_shape.TERM in cur.structure.names
+                    and self.learned_selection_ is not None and force_shape.settings()["fit.extend_learned"])
+
+    def _extension_trial(self, ev: Evaluator, cur: FitResult, step: int) -> tuple[Option, FitResult] | None:
+        """The learned term of ``cur`` extended by what the missing force it leaves depends on: the same
+        regression (:meth:`_shape_selection`) against ``cur`` with the learned term in, its shapes (a contact gap,
+        a knee) held at their fitted values since the term has one of each, and the stable dependences it lacks
+        added (:func:`.force_shape.extended`: a force of several dependences of which the first regression
+        found the strongest). An extra trial of the forward step, tested as every candidate is
+        (:meth:`_passes`). None when nothing stable is added, or the residual follows an input (that is the
+        first regression's to tell, before any learned term)."""
+        old = self.learned_selection_
+        assert old is not None
+        term = force_shape.TERM
+        cand0 = cur.structure.cands[cur.structure.names.index(term)]
+        x_term = cur.structure.part(cur.x, term)
+        held = {p.name: float(v) for p, v in zip(cand0.params, x_term) if p.shape and p.name in force_shape.HELD_SHAPES}
+        sel = self._shape_selection(ev, cur, step, shapes=held)
+        if sel is None or not sel.stable or sel.input_led:
+            return None
+        merged = force_shape.extended(old, x_term[:len(old.stable)], sel.physics(), self.shape_design_)
+        if merged is None:
+            return None
+        self.force_shape_[-1]["extends"] = {"dependences": merged.dependences,
+                                            "added": [f"{c.feature}:{c.axle}" for c in merged.stable[len(old.stable):]],
+                                            "description": merged.description()}
+        cand = force_shape.learned_candidate(merged, progressive=False)
+        st = cur.structure.without(term).with_(cand)
+        fitted = dict(zip(cur.structure.labels(), cur.x))   # every value as fitted, the added ones at the regression's
+        labels = st.labels()
+        x0 = np.array([fitted.get(label, v) for label, v in zip(labels, st.neutral())])
+        lo, hi = st.bounds()
+        for c, v in zip(merged.stable, merged.coef):
+            j = labels.index((term, c.coefficient))
+            if (term, c.coefficient) not in fitted:
+                x0[j] = float(np.clip(v, lo[j], hi[j]))
+        fit = fit_structure(ev, st, x0, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
+        if force_shape.spring_law(merged):
+            fit = self._with_progressive_part(ev, fit, merged)
+        self.extension_selection_ = merged
+        return Option((term,), math.nan, math.nan, np.zeros(0)), fit
+
+    def _amend_learned(self, accepted: list[dict], step: int, share: float, checks: dict) -> None:
+        """The learned term's ``accepted`` entry after its extension passed at ``step``: its dependences and
+        words the extended term's, the extension's figures under ``extended``."""
+        sel = self.extension_selection_
+        assert sel is not None   # set by the extension trial that passed
+        self.learned_selection_ = sel
+        entry = next(a for a in accepted if a["name"] == force_shape.TERM)
+        entry.update(dependences=sel.dependences, description=sel.description())
+        entry.setdefault("extended", []).append({"step": step, "explained_fraction_of_excess": share, **checks})
 
     def _with_progressive_part(self, ev: Evaluator, plain: FitResult, sel: force_shape.Selection) -> FitResult:
         """The learned trial's fit ``plain`` (a contact spring without its progressive part) and, from it, the

@@ -42,7 +42,8 @@ every stable dependence (:data:`LISTED_FOR`), the learned term is not offered: t
 in the competition already (``listed_rivals`` in the record). Limits: the dependences and the offered
 knee or free play are selected on all drives, so the held-out test refits the learned term's values, not
 its choice of dependences; one knee, one free play and one contact gap serve both axles (and one contact
-gap both senses).
+gap both senses). Where ``fit.extend_learned`` is set, a named learned term may grow at a later step by the
+stable dependences the regression of the residual it leaves adds (:func:`extended`; its shapes held there).
 
 Input features (issue 26, item 5): beside the state features, the regression offers forces that follow
 an input and no state (:data:`~susp_sim_ros.model.input_force.INPUT_FEATURES`: the road height under
@@ -163,6 +164,9 @@ def law_key(key: tuple[str, str]) -> tuple[str, str]:
 _SHAPE_OF = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play",
              "relaxing_deflection": "relaxation_time", "bump_contact": "contact_gap", "rebound_contact": "contact_gap",
              "bump_damping": "contact_gap", "rebound_damping": "contact_gap"}
+#: the shapes a learned term holds one value of (for every feature that has it): held at their fitted values when
+#: the term is extended (:func:`extended`)
+HELD_SHAPES = frozenset(_SHAPE_OF.values())
 #: the config entry of each such shape parameter's range in the learned term's fit
 _SHAPE_RANGE = {"knee_velocity": "fit.knee_velocity_range_m_s", "free_play": "fit.free_play_range_m",
                 "relaxation_time": "fit.relaxation_time_range_s", "contact_gap": "fit.contact_gap_range_m"}
@@ -203,18 +207,22 @@ class Column:
         return f"{self.feature}_{self.axle}"
 
 
-def library(cfg: dict) -> list[tuple[str, float | None]]:
+def library(cfg: dict, shapes: dict | None = None) -> list[tuple[str, float | None]]:
     """(feature, shape value) of every library entry: the features with a shape value (knee, free play,
-    relaxation time, contact gap) once per offered value, the others once (a damping beyond a contact gap only
-    where ``library.position_damping`` is set), then the input features offered (``library.input_features``),
-    once each."""
+    relaxation time, contact gap) once per offered value, or once at the value ``shapes`` holds for it
+    (``{shape: value}``, a learned term's as fitted: :func:`extended`), the others once (a damping beyond a
+    contact gap only where ``library.position_damping`` is set), then the input features offered
+    (``library.input_features``), once each."""
     out: list[tuple[str, float | None]] = []
+    shapes = shapes or {}
     for f in FEATURES:
         if f in LAW_SHAPE_FEATURES:
             continue   # a friction law's shape, fitted once a friction is stable (learned_candidate)
         if f in POSITION_DAMPING and not bool(cfg["library.position_damping"]):
             continue
-        if f in _SHAPE_VALUES:
+        if _SHAPE_OF.get(f) in shapes:
+            out.append((f, float(shapes[_SHAPE_OF[f]])))
+        elif f in _SHAPE_VALUES:
             out += [(f, float(v)) for v in cfg[_SHAPE_VALUES[f]]]
         else:
             out.append((f, None))
@@ -537,6 +545,42 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
     return Selection(freq, cols, coef, share, done, law_freq, _kept(by_law, cols))
 
 
+def extended(old: Selection, fitted: np.ndarray, new: Selection, design: Design,
+             cfg: dict | None = None) -> Selection | None:
+    """The learned term's selection ``old`` (its coefficients as fitted: ``fitted``, in ``old.stable`` order)
+    extended by the stable dependences of ``new`` it lacks, read off the residual the learned term leaves
+    (``design``, :func:`design_for` with the term in the structure and its shapes held): a force of two or
+    more dependences of which one regression found the strongest (a position-sensitive damper's damping beyond
+    a gap in bump at the front, then in rebound and at the rear). None when ``new`` adds no (feature, axle).
+
+    The coefficients: the old ones as fitted plus, with the added ones, the least-squares fit of all their
+    columns to the residual (the old ones' columns are increments on the fitted term); shares from that sum.
+    An added dependence that carries less than ``selection.min_share`` of the force is left out, as in
+    :func:`select`; the old ones stay."""
+    cfg = settings() if cfg is None else cfg
+    have = {c.key for c in old.stable}
+    added = [c for c in new.stable if c.key not in have]
+    if not added:
+        return None
+    by_key = {c.key: j for j, c in enumerate(design.columns)}   # one column per key: the shapes are held
+    cols = list(old.stable) + added
+    A = design.X[:, [by_key[c.key] for c in cols]]
+    step, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+    coef = step + np.concatenate([np.asarray(fitted, float), np.zeros(len(added))])
+    contrib = A * coef
+    share = np.var(contrib, axis=0) / max(float(np.var(contrib.sum(axis=1))), 1e-300)
+    share = share / max(float(share.sum()), 1e-300)
+    keep = np.arange(len(cols)) < len(old.stable)
+    keep |= share >= float(cfg["selection.min_share"])
+    if not keep[len(old.stable):].any():
+        return None
+    cols = [c for c, k in zip(cols, keep) if k]
+    coef, share = coef[keep], share[keep] / max(float(share[keep].sum()), 1e-300)
+    frequency = {**new.frequency, **old.frequency}
+    law_frequency = {**new.law_frequency, **old.law_frequency}
+    return Selection(frequency, cols, coef, share, old.resamples, law_frequency, _kept(old.by_law + new.by_law, cols))
+
+
 def _kept(by_law, cols: list[Column]) -> tuple[tuple[str, str], ...]:
     """The keys of ``by_law`` that are still among the columns ``cols``."""
     keys = {c.key for c in cols}
@@ -709,8 +753,9 @@ def damper_law(sel: Selection, cfg: dict) -> dict[str, tuple[float, float, list[
 
 def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
     """One library column as a one-parameter candidate (its coefficient [N], in the learned term or, for
-    an input feature, in the input term); the shape value is set only while the coefficient acts, so the
-    columns of one feature's knees do not overwrite each other."""
+    an input feature, in the input term, added to what the structure holds there: a learned term's fitted
+    coefficient when the structure has one, else none); the shape value is set only while the coefficient
+    acts, so the columns of one feature's knees do not overwrite each other."""
     shape_name = _SHAPE_OF.get(col.feature)
     term = INPUT_TERM if col.feature in INPUT_FEATURES else TERM
 
@@ -719,7 +764,7 @@ def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
             return
         sl = model.term_param_slice(term, f"c_{col.feature}")
         a = sl.start + 2 * AXLES.index(col.axle)
-        P[:, a:a + 2] = x[0]
+        P[:, a:a + 2] += x[0]   # on top of a learned term's own coefficient where the structure has one
         if shape_name is not None and col.shape is not None:
             P[:, model.term_param_slice(TERM, shape_name)] = col.shape
 
@@ -727,16 +772,20 @@ def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
                      (CandParam("coef", "N", 0.0, -bound, bound, step),), apply, (col.axle,))
 
 
-def design_for(f, st0, x0: np.ndarray, idx, cfg: dict | None = None) -> Design:
+def design_for(f, st0, x0: np.ndarray, idx, cfg: dict | None = None, shapes: dict | None = None) -> Design:
     """The regression problem of the fitted finder ``f`` at the model ``st0`` / ``x0`` over the drives
     ``idx``: the whitened residual (the target is measured - simulated, every compared signal and drive,
     as the finder's criteria see it) against each
     library column's effect on it (the forward-difference Jacobian of the residual in the column's
     coefficient, one batch of simulations). The missing force is thus regressed through the model's own
     dynamics rather than on its smoothed estimate (:mod:`.missing_force`), whose body-mode band and
-    uncertainty blur the fast forces of a bump impact (a valve blowing off)."""
+    uncertainty blur the fast forces of a bump impact (a valve blowing off).
+
+    ``shapes`` (``{shape: value}``, e.g. the contact gap a learned term in ``st0`` holds as fitted): the
+    features of those shapes are offered at that value only, since the term has one value of each
+    (:func:`extended`)."""
     cfg = settings() if cfg is None else cfg
-    entries = library(cfg)
+    entries = library(cfg, shapes)
     cols = columns_of(entries)
     bound = float(cfg["fit.coefficient_bound_N"])
     lib = [_column_candidate(c, float(cfg["library.step_N"]), bound) for c in cols]
