@@ -1007,4 +1007,5 @@ def test_a_learned_term_is_extended_by_the_dependences_the_residual_it_leaves_ad
     assert fs.extended(old, np.array([1.6]), fs.Selection({first.key: 0.7}, [first], np.array([0.4]),
                                                           np.array([1.0]), 24), design) is None
     cfg = fs.settings()
-    assert cfg["fit.extend_learned"] is False   # off as shipped, until the family is measured with it
+    # on as shipped since the family's cases with a learned term ran with it (benchmarks/RESULTS.md, 2026-11-30)
+    assert cfg["fit.extend_learned"] is True
