@@ -50,6 +50,10 @@ CASE_DRIVES = (("bump", INTACT, "bump_intact"), ("bump", FRONT_EMPTY, "bump_fron
 #: perturbation bands of a car's parameters (fraction, random sign): within the vehicle file's priors and
 #: beyond them
 CAR_BANDS = {"nominal": None, "within": (0.05, 0.15), "beyond": (0.15, 0.30)}
+#: the leading dependences that read a hydraulic stop or a position-sensitive damper right: a damping of any
+#: law (the damping family; its two members met beyond a contact gap, bump_damping and rebound_damping, added to
+#: the vocabulary after the first such form, count as such too)
+DAMPING_LAW = ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping", "rebound_damping")
 
 
 @dataclass(frozen=True)
@@ -354,8 +358,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       "front dampers without",
                       hidden=TruthHidden(hydraulic_stop_damping_N_s_m=(0.0, 3000.0), hydraulic_stop_gap_m=0.02,
                                          hydraulic_stop_length_m=0.02),
-                      leading=("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
-                               "rebound_damping"), **unl),
+                      leading=DAMPING_LAW, **unl),
         # added 2026-11-30 (issue 26), held out from the start, before any run of the finder on it and before the
         # learned friction's creep (a viscous part below a creep velocity, probed that day on the seen load-friction
         # forms) is run on it: a friction law of another shape at low velocity (algebraic, not tanh-smoothed),
@@ -377,8 +380,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(hydraulic_stop_damping_N_s_m=(2500.0, 0.0), hydraulic_stop_gap_m=0.01,
                                          hydraulic_stop_length_m=0.025, hydraulic_stop_in_rebound=True,
                                          hydraulic_stop_exponent=2.0),
-                      leading=("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
-                               "rebound_damping"), **unl),
+                      leading=DAMPING_LAW, **unl),
         # added 2026-11-30 (issue 26), held out from the start, before any run of the finder on it: a second blind
         # test of the learned term's damping beyond a contact gap (the rebound stop above was missed by it): a
         # position-dependent damping of another kind (a comfort zone around static, firmer on both sides of it),
@@ -391,8 +393,7 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(hydraulic_stop_damping_N_s_m=(1400.0, 1100.0), hydraulic_stop_gap_m=0.012,
                                          hydraulic_stop_length_m=0.02, hydraulic_stop_both_ways=True,
                                          hydraulic_stop_exponent=1.5),
-                      leading=("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
-                               "rebound_damping"), **unl),
+                      leading=DAMPING_LAW, **unl),
     ]
     return {f.name: f for f in fs}
 
