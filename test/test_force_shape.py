@@ -1009,3 +1009,23 @@ def test_a_learned_term_is_extended_by_the_dependences_the_residual_it_leaves_ad
     cfg = fs.settings()
     # on as shipped since the family's cases with a learned term ran with it (benchmarks/RESULTS.md, 2026-11-30)
     assert cfg["fit.extend_learned"] is True
+
+
+def test_a_rewritten_learned_term_starts_from_its_fitted_values_by_label():
+    """``Structure.embed_by_label``: a learned term rewritten with one more column (an extension) keeps its
+    fitted coefficient and the other terms' values, the added column at neutral; ``embed`` would copy the
+    term as a whole block, which no longer lines up."""
+    from susp_sim_ros.analysis.discrepancy.engine import Structure
+    first, added = fs.Column("sign_velocity", "rear"), fs.Column("deflection_velocity", "front")
+    one = fs.learned_candidate(fs.Selection({first.key: 0.9}, [first], np.array([1.5]), np.array([1.0]), 24))
+    two = fs.learned_candidate(fs.Selection({first.key: 0.9, added.key: 0.8}, [first, added],
+                                            np.array([1.5, 2.0]), np.array([0.5, 0.5]), 24))
+    old = Structure(["time_offset"]).with_(one)
+    new = Structure(["time_offset"]).with_(two)
+    x_old = old.neutral() + np.linspace(0.01, 0.02, len(old.neutral()))
+    x_new = new.embed_by_label(old, x_old)
+    fitted = dict(zip(old.labels(), x_old))
+    for label, v, v0 in zip(new.labels(), x_new, new.neutral()):
+        assert v == (fitted[label] if label in fitted else v0), label
+    assert (fs.TERM, added.coefficient) not in fitted
+    assert x_new[new.labels().index((fs.TERM, first.coefficient))] == fitted[(fs.TERM, first.coefficient)]

@@ -106,6 +106,13 @@ class Structure:
                 x[self.offsets[k]:self.offsets[k + 1]] = other.part(x_other, n)
         return x
 
+    def embed_by_label(self, other: "Structure", x_other: np.ndarray) -> np.ndarray:
+        """This structure's vector with each parameter ``(term, parameter)`` that ``other`` has at its value in
+        ``x_other``, the rest at neutral: for a term whose parameters changed (a learned term rewritten with
+        more columns or a freed part), where :meth:`embed` would copy whole terms."""
+        fitted = dict(zip(other.labels(), x_other))
+        return np.array([fitted.get(label, v) for label, v in zip(self.labels(), self.neutral())], float)
+
 
 class Evaluator:
     """Simulate parameter sets over the drives and compute residuals.
