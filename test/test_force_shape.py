@@ -922,7 +922,7 @@ def test_a_damping_beyond_a_gap_is_offered_to_the_regression_only_where_the_sett
     shipped since the whole family ran with it), each of bump and rebound at every offered contact gap, a
     damping in the damping law family, described with its gap and sense."""
     cfg = fs.settings()
-    # on as shipped since the whole family ran with it (benchmarks/RESULTS.md, 2026-11-30, 19:04-21:05)
+    # on as shipped since the whole family ran with it (benchmarks/RESULTS.md, 2026-11-30, 19:04-21:07)
     assert cfg["library.position_damping"] is True
     off = fs.library(dict(cfg) | {"library.position_damping": False})
     assert not {"bump_damping", "rebound_damping"} & {f for f, _ in off}
