@@ -1017,9 +1017,9 @@ def test_a_learned_term_is_extended_by_the_dependences_the_residual_it_leaves_ad
 
 
 def test_a_rewritten_learned_term_starts_from_its_fitted_values_by_label():
-    """``Structure.embed_by_label``: a learned term rewritten with one more column (an extension) keeps its
-    fitted coefficient and the other terms' values, the added column at neutral; ``embed`` would copy the
-    term as a whole block, which no longer lines up."""
+    """``Structure.embed``: a learned term rewritten with one more column (an extension) keeps its fitted
+    coefficient and the other terms' values, the added column at neutral (by label: copied as a whole block,
+    the term would no longer line up)."""
     from susp_sim_ros.analysis.discrepancy.engine import Structure
     first, added = fs.Column("sign_velocity", "rear"), fs.Column("deflection_velocity", "front")
     one = fs.learned_candidate(fs.Selection({first.key: 0.9}, [first], np.array([1.5]), np.array([1.0]), 24))
@@ -1028,7 +1028,7 @@ def test_a_rewritten_learned_term_starts_from_its_fitted_values_by_label():
     old = Structure(["time_offset"]).with_(one)
     new = Structure(["time_offset"]).with_(two)
     x_old = old.neutral() + np.linspace(0.01, 0.02, len(old.neutral()))
-    x_new = new.embed_by_label(old, x_old)
+    x_new = new.embed(old, x_old)
     fitted = dict(zip(old.labels(), x_old))
     for label, v, v0 in zip(new.labels(), x_new, new.neutral()):
         assert v == (fitted[label] if label in fitted else v0), label

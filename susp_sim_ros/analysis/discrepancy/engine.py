@@ -99,17 +99,9 @@ class Structure:
         return out
 
     def embed(self, other: "Structure", x_other: np.ndarray) -> np.ndarray:
-        """This structure's vector with values taken from ``x_other`` where ``other`` has the term."""
-        x = self.neutral()
-        for k, n in enumerate(self.names):
-            if n in other.names:
-                x[self.offsets[k]:self.offsets[k + 1]] = other.part(x_other, n)
-        return x
-
-    def embed_by_label(self, other: "Structure", x_other: np.ndarray) -> np.ndarray:
         """This structure's vector with each parameter ``(term, parameter)`` that ``other`` has at its value in
-        ``x_other``, the rest at neutral: for a term whose parameters changed (a learned term rewritten with
-        more columns or a freed part), where :meth:`embed` would copy whole terms."""
+        ``x_other``, the rest at neutral. By label, not by position in a term: a term whose parameters changed
+        (a learned term rewritten with more columns or a freed part) keeps the values it shares."""
         fitted = dict(zip(other.labels(), x_other))
         return np.array([fitted.get(label, v) for label, v in zip(self.labels(), self.neutral())], float)
 

@@ -1065,7 +1065,7 @@ class DiscrepancyFinder:
                                             "description": merged.description()}
         cand = force_shape.learned_candidate(merged, progressive=False)
         st = cur.structure.without(term).with_(cand)
-        x0 = st.embed_by_label(cur.structure, cur.x)   # every value as fitted, the added ones at the regression's
+        x0 = st.embed(cur.structure, cur.x)   # every value as fitted, the added ones at the regression's
         labels, had = st.labels(), set(cur.structure.labels())
         lo, hi = st.bounds()
         for c, v in zip(merged.stable, merged.coef):
@@ -1096,7 +1096,7 @@ class DiscrepancyFinder:
         basin (a rebound spring beyond 15 mm: 1.12-1.15 -> 1.17-1.22x the noise held out, 2026-11-30)."""
         cand = force_shape.learned_candidate(sel)
         st = plain.structure.without(cand.name).with_(cand)
-        x1 = st.embed_by_label(plain.structure, plain.x)   # every value as fitted, the cube at neutral
+        x1 = st.embed(plain.structure, plain.x)   # every value as fitted, the cube at neutral
         freed = fit_structure(ev, st, x1, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
         return freed if freed.bic < plain.bic else plain
 
