@@ -1016,6 +1016,16 @@ class DiscrepancyFinder:
         sel = sel.physics()
         if not sel.stable or sel.listed_rivals():
             return None   # nothing stable, or listed terms stand for every dependence: they compete already
+        fit = self._learned_fit(ev, cur, sel)
+        if sel.by_law and force_shape.settings()["fit.law_members_compete"]:
+            fit, sel = self._law_members_compete(ev, cur, fit, sel)
+        self.learned_selection_ = sel
+        return Option((force_shape.TERM,), math.nan, math.nan, np.zeros(0)), fit
+
+    def _learned_fit(self, ev: Evaluator, cur: FitResult, sel: force_shape.Selection) -> FitResult:
+        """``cur`` with the learned term of ``sel`` fitted on every drive, its coefficients started at the
+        regression's (its friction law in two stages, a contact spring's progressive part after the plain
+        contact)."""
         cand = force_shape.learned_candidate(sel, progressive=False)
         st = cur.structure.with_(cand)
         x0 = st.embed(cur.structure, cur.x)
@@ -1026,8 +1036,28 @@ class DiscrepancyFinder:
         fit = self._fit_with_friction_law(ev, st, x0, a, sel)
         if force_shape.spring_law(sel):
             fit = self._with_progressive_part(ev, fit, sel)
-        self.learned_selection_ = sel
-        return Option((cand.name,), math.nan, math.nan, np.zeros(0)), fit
+        return fit
+
+    def _law_members_compete(self, ev: Evaluator, cur: FitResult, fit: FitResult,
+                             sel: force_shape.Selection) -> tuple[FitResult, force_shape.Selection]:
+        """The learned trial's fit ``fit`` of ``sel`` against the same term with a dependence that stands for
+        its law family replaced by each other member some resample chose (:func:`.force_shape.law_members`:
+        the family is stable, its form open), each fitted as the first; the one the criterion prefers is
+        the trial (``fit.law_members_compete`` in ``config/force_shape.yaml``). What competed is recorded
+        in ``force_shape_`` (``law_members``)."""
+        tried = []
+        best, best_sel = fit, sel
+        for key, alt in force_shape.law_members(sel, self.shape_design_):
+            f = self._learned_fit(ev, cur, alt)
+            member = next(c for c in alt.stable if c.key not in {x.key for x in sel.stable})
+            tried.append({"replaced": f"{key[0]}:{key[1]}", "member": f"{member.feature}:{member.axle}",
+                          "bic": f.bic, "rms_x_noise": math.sqrt(f.rss / f.n)})
+            if f.bic < best.bic:
+                best, best_sel = f, alt
+        self.force_shape_[-1]["law_members"] = {
+            "first": {"bic": fit.bic, "rms_x_noise": math.sqrt(fit.rss / fit.n)}, "tried": tried,
+            "kept": [f"{c.feature}:{c.axle}" for c in best_sel.stable]}
+        return best, best_sel
 
     def _learned_words(self, name: str) -> dict:
         """A learned term's dependences and description for its ``accepted`` entry (none for another term)."""

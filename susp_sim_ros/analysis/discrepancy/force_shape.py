@@ -581,6 +581,52 @@ def extended(old: Selection, fitted: np.ndarray, new: Selection, design: Design,
     return Selection(frequency, cols, coef, share, old.resamples, law_frequency, _kept(old.by_law + new.by_law, cols))
 
 
+def law_members(sel: Selection, design: Design, cfg: dict | None = None) -> list[tuple[tuple[str, str], Selection]]:
+    """The forms a stable law family's dependence may take, for the fit to decide between: for each dependence
+    of ``sel`` that stands for its law family (:attr:`Selection.by_law`: the family stable, no member on its
+    own), ``(its key, sel with it replaced)`` by each other member of the family on that axle that some
+    resample selected (:attr:`Selection.frequency`), in the order of the vocabulary. The regression chose the
+    member most resamples chose, from columns at a few offered shape values linearised at the model as fitted;
+    a family whose votes split says the dependence's kind and leaves its form open (a position-sensitive
+    damper read as a plain viscous damping at the rear: the members' columns correlate over a bump crossing
+    and a sine steer).
+
+    A member with a shape (a knee, a contact gap) takes the value another stable column of the selection
+    holds for it (one value per shape serves the term: :func:`learned_candidate`), else the offered value
+    that fits best together with the other columns; the coefficients are the least-squares fit of all the
+    columns to ``design``'s target, the shares from it, as in :func:`select` (a member carrying less than
+    ``selection.min_share`` is still offered: the fit decides)."""
+    cfg = settings() if cfg is None else cfg
+    out: list[tuple[tuple[str, str], Selection]] = []
+    for key in sel.by_law:
+        k = next(j for j, c in enumerate(sel.stable) if c.key == key)
+        others = [c for j, c in enumerate(sel.stable) if j != k]
+        held = {_SHAPE_OF[c.feature]: c.shape for c in others if c.shape is not None}
+        for f in FEATURES:
+            if (f, key[1]) == key or (f, key[1]) not in sel.frequency or law_key((f, key[1])) != law_key(key):
+                continue
+            offered = [c for c in design.columns if c.key == (f, key[1])
+                       and (c.shape is None or _SHAPE_OF[f] not in held or c.shape == held[_SHAPE_OF[f]])]
+            best = None
+            for c in offered:
+                cols = sel.stable[:k] + [c] + sel.stable[k + 1:]
+                A = design.X[:, [design.columns.index(x) for x in cols]]
+                coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+                rss = float(np.sum((design.y - A @ coef) ** 2))
+                if best is None or rss < best[0]:
+                    best = (rss, cols, A, coef)
+            if best is None:
+                continue   # offered at no shape value the term holds
+            _, cols, A, coef = best
+            contrib = A * coef
+            share = np.var(contrib, axis=0) / max(float(np.var(contrib.sum(axis=1))), 1e-300) if len(cols) > 1 \
+                else np.ones(1)
+            share = share / max(float(share.sum()), 1e-300)
+            by_law = tuple((f, key[1]) if b == key else b for b in sel.by_law)
+            out.append((key, Selection(sel.frequency, cols, coef, share, sel.resamples, sel.law_frequency, by_law)))
+    return out
+
+
 def _kept(by_law, cols: list[Column]) -> tuple[tuple[str, str], ...]:
     """The keys of ``by_law`` that are still among the columns ``cols``."""
     keys = {c.key for c in cols}
