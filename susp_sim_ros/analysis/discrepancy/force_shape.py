@@ -535,14 +535,21 @@ def select(design: Design, cfg: dict | None = None) -> Selection | None:
     idx = [design.columns.index(c) for c in cols]
     A = design.X[:, idx]
     coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
-    contrib = A * coef
-    var = np.var(contrib, axis=0)
-    share = var / max(float(np.var(contrib.sum(axis=1))), 1e-300) if len(idx) > 1 else np.ones(1)
-    share = share / max(float(share.sum()), 1e-300)
+    share = _shares(A, coef)
     keep = share >= float(cfg["selection.min_share"])
     cols = [c for c, k in zip(cols, keep) if k]
     coef, share = coef[keep], share[keep]
     return Selection(freq, cols, coef, share, done, law_freq, _kept(by_law, cols))
+
+
+def _shares(A: np.ndarray, coef: np.ndarray) -> np.ndarray:
+    """Each column's share of the variance of the fitted force ``A @ coef`` (its own contribution's variance
+    over the sum's, normalised to 1 over the columns); a single column carries all of it."""
+    if A.shape[1] == 1:
+        return np.ones(1)
+    contrib = A * coef
+    share = np.var(contrib, axis=0) / max(float(np.var(contrib.sum(axis=1))), 1e-300)
+    return share / max(float(share.sum()), 1e-300)
 
 
 def extended(old: Selection, fitted: np.ndarray, new: Selection, design: Design,
@@ -567,9 +574,7 @@ def extended(old: Selection, fitted: np.ndarray, new: Selection, design: Design,
     A = design.X[:, [by_key[c.key] for c in cols]]
     step, *_ = np.linalg.lstsq(A, design.y, rcond=None)
     coef = step + np.concatenate([np.asarray(fitted, float), np.zeros(len(added))])
-    contrib = A * coef
-    share = np.var(contrib, axis=0) / max(float(np.var(contrib.sum(axis=1))), 1e-300)
-    share = share / max(float(share.sum()), 1e-300)
+    share = _shares(A, coef)
     keep = np.arange(len(cols)) < len(old.stable)
     keep |= share >= float(cfg["selection.min_share"])
     if not keep[len(old.stable):].any():
@@ -618,10 +623,7 @@ def law_members(sel: Selection, design: Design, cfg: dict | None = None) -> list
             if best is None:
                 continue   # offered at no shape value the term holds
             _, cols, A, coef = best
-            contrib = A * coef
-            share = np.var(contrib, axis=0) / max(float(np.var(contrib.sum(axis=1))), 1e-300) if len(cols) > 1 \
-                else np.ones(1)
-            share = share / max(float(share.sum()), 1e-300)
+            share = _shares(A, coef)
             by_law = tuple((f, key[1]) if b == key else b for b in sel.by_law)
             out.append((key, Selection(sel.frequency, cols, coef, share, sel.resamples, sel.law_frequency, by_law)))
     return out
