@@ -638,6 +638,13 @@ def test_the_report_gives_a_form_that_stands_for_its_law_family_the_familys_freq
     assert "0.58 (spring law 0.92), 0.95 |" in row
     old = {k: v for k, v in step.items() if k not in ("law_frequency", "stable_by_law")}   # records before
     assert "| 0.58, 0.95 |" in _md_force_shape(None, {"force_shape": [old]}, {}, "x")[-1]
+    step["law_members"] = {"first": {"bic": 2436.17, "rms_x_noise": 1.79},
+                           "tried": [{"replaced": "rebound_contact:rear", "member": "bump_contact:rear", "bic": 1859.84,
+                                      "rms_x_noise": 1.54}],
+                           "kept": ["bump_contact:rear", "roll_deflection:front"]}
+    said = _md_force_shape(None, {"force_shape": [step]}, {}, "x")[-1]
+    assert "as read 2436.2; `rebound_contact:rear` -> `bump_contact:rear` 1859.8" in said
+    assert said.endswith("Kept: `bump_contact:rear`, `roll_deflection:front`.")
 
 
 def test_the_stable_set_is_in_the_same_order_whatever_the_interpreters_string_hashing():

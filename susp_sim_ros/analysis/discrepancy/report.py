@@ -830,6 +830,21 @@ def _md_force_shape(f, rep: dict, paths: dict, name: str) -> list[str]:
     for e in steps:
         freq = ", ".join(_stable_frequency(e, k) for k in e["stable"]) or "-"
         L.append(f"| {e['step']} | {', '.join(e['stable']) or 'none'} | {freq} | {e['description'] or '-'} |")
+    L += _law_members_lines(steps)
+    return L
+
+
+def _law_members_lines(steps: list[dict]) -> list[str]:
+    """Where a law family's form was left to the fit (``fit.law_members_compete``): what competed, the BIC of
+    each, and the form kept."""
+    L: list[str] = []
+    for e in steps:
+        m = e.get("law_members")
+        if not m:
+            continue
+        tried = ", ".join(f"`{t['replaced']}` -> `{t['member']}` {t['bic']:.1f}" for t in m["tried"]) or "none"
+        L += ["", f"Step {e['step']}: a law family stable, its form open; the fit decided (BIC, lower is better): "
+                  f"as read {m['first']['bic']:.1f}; {tried}. Kept: {', '.join(f'`{k}`' for k in m['kept'])}."]
     return L
 
 
