@@ -124,18 +124,18 @@ def test_a_learned_force_whose_effect_a_held_value_could_take_competes_with_it()
 
 
 def test_the_form_of_a_stable_law_family_the_criterion_prefers_is_the_trial(monkeypatch):
-    """``fit.law_members_compete`` (finder ``_law_members_compete``): the learned trial of a selection whose
-    rear damping stands for its law family is fitted again with each other member a resample chose in its
-    place; the fit with the lowest criterion is the trial, its selection the learned term's, and what competed
-    is recorded. When no member beats the first form, the first stays."""
+    """``fit.law_members_compete`` (finder ``_law_members_compete``): the learned trial is fitted again with
+    each stable dependence of a law family replaced by each other member a resample chose, dependence by
+    dependence from the best so far; the fit with the lowest criterion is the trial, its selection the learned
+    term's, and what competed is recorded. When no member beats the first form, the first stays."""
     cols = [force_shape.Column("bump_damping", "front", 0.0), force_shape.Column("deflection_velocity", "rear"),
             force_shape.Column("velocity_squared", "rear"), force_shape.Column("bump_damping", "rear", 0.0),
-            force_shape.Column("sign_velocity", "rear")]
+            force_shape.Column("rebound_damping", "front", 0.0), force_shape.Column("sign_velocity", "rear")]
     rng = np.random.default_rng(2)
     X = rng.normal(size=(400, len(cols)))
     design = force_shape.Design(X, X[:, 0] + 2.0 * X[:, 3] + rng.normal(0.0, 0.1, 400), np.repeat(np.arange(4), 100),
                                 cols)
-    freq = {cols[0].key: 0.7, cols[1].key: 0.33, cols[2].key: 0.12, cols[3].key: 0.12, cols[4].key: 0.2}
+    freq = {c.key: q for c, q in zip(cols, (0.7, 0.33, 0.12, 0.12, 0.29, 0.2))}
     sel = force_shape.Selection(freq, cols[:2], np.array([1.0, 0.5]), np.array([0.8, 0.2]), 24,
                                 {("damping", "rear"): 0.62}, (cols[1].key,))
 
@@ -143,15 +143,26 @@ def test_the_form_of_a_stable_law_family_the_criterion_prefers_is_the_trial(monk
         f = fm.DiscrepancyFinder()
         f.shape_design_, f.force_shape_ = design, [{"step": 1}]
         monkeypatch.setattr(f, "_learned_fit", lambda ev, cur, s: SimpleNamespace(
-            bic=bic_of[s.stable[1].feature], rss=100.0, n=100, sel=s))
-        first = SimpleNamespace(bic=bic_of["deflection_velocity"], rss=100.0, n=100)
+            bic=bic_of[tuple(c.feature for c in s.stable)], rss=100.0, n=100, sel=s))
+        first = SimpleNamespace(bic=bic_of[("bump_damping", "deflection_velocity")], rss=100.0, n=100)
         return f, f._law_members_compete(None, None, first, sel), first
 
-    f, (fit, kept), _ = run({"deflection_velocity": 2436.0, "velocity_squared": 2115.0, "bump_damping": 1860.0})
+    bics = {("bump_damping", "deflection_velocity"): 2436.0, ("rebound_damping", "deflection_velocity"): 2500.0,
+            ("bump_damping", "velocity_squared"): 2115.0, ("bump_damping", "bump_damping"): 1860.0}
+    f, (fit, kept), _ = run(bics)
     assert [c.key for c in kept.stable] == [cols[0].key, cols[3].key] and fit.sel is kept
+    assert kept.by_law == (cols[3].key,)
     rec = f.force_shape_[-1]["law_members"]
-    assert [t["member"] for t in rec["tried"]] == ["velocity_squared:rear", "bump_damping:rear"]
+    assert [(t["replaced"], t["member"]) for t in rec["tried"]] == [
+        ("bump_damping:front", "rebound_damping:front"), ("deflection_velocity:rear", "velocity_squared:rear"),
+        ("deflection_velocity:rear", "bump_damping:rear")]
     assert rec["kept"] == ["bump_damping:front", "bump_damping:rear"] and rec["first"]["bic"] == 2436.0
-    f, (fit, kept), first = run({"deflection_velocity": 1800.0, "velocity_squared": 2115.0, "bump_damping": 1860.0})
+    # the front's other form better: the rear's members are tried with it
+    bics.update({("rebound_damping", "deflection_velocity"): 2000.0, ("rebound_damping", "velocity_squared"): 2100.0,
+                 ("rebound_damping", "bump_damping"): 1900.0})
+    f, (fit, kept), _ = run(bics)
+    assert [c.key for c in kept.stable] == [cols[4].key, cols[3].key]
+    bics.update({("bump_damping", "deflection_velocity"): 1800.0})
+    f, (fit, kept), first = run(bics)
     assert fit is first and kept is sel and f.force_shape_[-1]["law_members"]["kept"] == ["bump_damping:front",
                                                                                           "deflection_velocity:rear"]

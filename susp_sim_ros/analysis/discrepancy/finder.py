@@ -1017,7 +1017,7 @@ class DiscrepancyFinder:
         if not sel.stable or sel.listed_rivals():
             return None   # nothing stable, or listed terms stand for every dependence: they compete already
         fit = self._learned_fit(ev, cur, sel)
-        if sel.by_law and force_shape.settings()["fit.law_members_compete"]:
+        if force_shape.settings()["fit.law_members_compete"]:
             fit, sel = self._law_members_compete(ev, cur, fit, sel)
         self.learned_selection_ = sel
         return Option((force_shape.TERM,), math.nan, math.nan, np.zeros(0)), fit
@@ -1040,23 +1040,27 @@ class DiscrepancyFinder:
 
     def _law_members_compete(self, ev: Evaluator, cur: FitResult, fit: FitResult,
                              sel: force_shape.Selection) -> tuple[FitResult, force_shape.Selection]:
-        """The learned trial's fit ``fit`` of ``sel`` against the same term with a dependence that stands for
-        its law family replaced by each other member some resample chose (:func:`.force_shape.law_members`:
-        the family is stable, its form open), each fitted as the first; the one the criterion prefers is
-        the trial (``fit.law_members_compete`` in ``config/force_shape.yaml``). What competed is recorded
-        in ``force_shape_`` (``law_members``)."""
+        """The learned trial's fit ``fit`` of ``sel`` against the same term with a dependence of a law family
+        replaced by each other member a resample chose (:func:`.force_shape.law_members`: the regression may
+        be sure of a force's kind and wrong in its form), each fitted as the first; dependence by dependence in
+        the selection's order, each from the best so far, the one the criterion prefers is the trial
+        (``fit.law_members_compete`` in ``config/force_shape.yaml``). What competed is recorded in
+        ``force_shape_`` (``law_members``) where anything did."""
         tried = []
         best, best_sel = fit, sel
-        for key, alt in force_shape.law_members(sel, self.shape_design_):
-            f = self._learned_fit(ev, cur, alt)
-            member = next(c for c in alt.stable if c.key not in {x.key for x in sel.stable})
-            tried.append({"replaced": f"{key[0]}:{key[1]}", "member": f"{member.feature}:{member.axle}",
-                          "bic": f.bic, "rms_x_noise": math.sqrt(f.rss / f.n)})
-            if f.bic < best.bic:
-                best, best_sel = f, alt
-        self.force_shape_[-1]["law_members"] = {
-            "first": {"bic": fit.bic, "rms_x_noise": math.sqrt(fit.rss / fit.n)}, "tried": tried,
-            "kept": [f"{c.feature}:{c.axle}" for c in best_sel.stable]}
+        for key in force_shape.law_keys(sel):
+            start = {c.key for c in best_sel.stable}
+            for alt in force_shape.law_members(best_sel, key, self.shape_design_):
+                f = self._learned_fit(ev, cur, alt)
+                member = next(c for c in alt.stable if c.key not in start)
+                tried.append({"replaced": f"{key[0]}:{key[1]}", "member": f"{member.feature}:{member.axle}",
+                              "bic": f.bic, "rms_x_noise": math.sqrt(f.rss / f.n)})
+                if f.bic < best.bic:
+                    best, best_sel = f, alt
+        if tried:
+            self.force_shape_[-1]["law_members"] = {
+                "first": {"bic": fit.bic, "rms_x_noise": math.sqrt(fit.rss / fit.n)}, "tried": tried,
+                "kept": [f"{c.feature}:{c.axle}" for c in best_sel.stable]}
         return best, best_sel
 
     def _learned_words(self, name: str) -> dict:

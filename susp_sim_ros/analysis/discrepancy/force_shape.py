@@ -586,46 +586,54 @@ def extended(old: Selection, fitted: np.ndarray, new: Selection, design: Design,
     return Selection(frequency, cols, coef, share, old.resamples, law_frequency, _kept(old.by_law + new.by_law, cols))
 
 
-def law_members(sel: Selection, design: Design, cfg: dict | None = None) -> list[tuple[tuple[str, str], Selection]]:
-    """The forms a stable law family's dependence may take, for the fit to decide between: for each dependence
-    of ``sel`` that stands for its law family (:attr:`Selection.by_law`: the family stable, no member on its
-    own), ``(its key, sel with it replaced)`` by each other member of the family on that axle that some
-    resample selected (:attr:`Selection.frequency`), in the order of the vocabulary. The regression chose the
-    member most resamples chose, from columns at a few offered shape values linearised at the model as fitted;
-    a family whose votes split says the dependence's kind and leaves its form open (a position-sensitive
-    damper read as a plain viscous damping at the rear: the members' columns correlate over a bump crossing
-    and a sine steer).
+def law_keys(sel: Selection) -> list[tuple[str, str]]:
+    """The stable dependences of ``sel`` whose feature belongs to a law family (:data:`LAW_OF`: a spring,
+    damping, friction or roll form of one axle), in the selection's order: those whose form the fit may
+    decide (:func:`law_members`)."""
+    families = set(LAW_OF.values())
+    return [c.key for c in sel.stable if law_key(c.key)[0] in families]
+
+
+def law_members(sel: Selection, key: tuple[str, str], design: Design) -> list[Selection]:
+    """The other forms the stable dependence ``key`` of ``sel`` may take, for the fit to decide between:
+    ``sel`` with it replaced by each other member of its law family (:data:`LAW_OF`) on its axle that some
+    resample selected (:attr:`Selection.frequency`) and that ``sel`` does not hold already, in the order of
+    the vocabulary. The regression reads a form off columns at a few offered shape values, linearised at the
+    model as fitted, and the members' columns correlate over a bump crossing and a sine steer: it may be sure
+    of the kind and wrong in the form (a hydraulic rebound stop read as a valve opening above a knee, selected
+    in every resample; a position-sensitive damper read as a plain viscous damping at the rear, where the votes
+    split).
 
     A member with a shape (a knee, a contact gap) takes the value another stable column of the selection
     holds for it (one value per shape serves the term: :func:`learned_candidate`), else the offered value
     that fits best together with the other columns; the coefficients are the least-squares fit of all the
-    columns to ``design``'s target, the shares from it, as in :func:`select` (a member carrying less than
-    ``selection.min_share`` is still offered: the fit decides)."""
-    cfg = settings() if cfg is None else cfg
-    out: list[tuple[tuple[str, str], Selection]] = []
-    for key in sel.by_law:
-        k = next(j for j, c in enumerate(sel.stable) if c.key == key)
-        others = [c for j, c in enumerate(sel.stable) if j != k]
-        held = {_SHAPE_OF[c.feature]: c.shape for c in others if c.shape is not None}
-        for f in FEATURES:
-            if (f, key[1]) == key or (f, key[1]) not in sel.frequency or law_key((f, key[1])) != law_key(key):
-                continue
-            offered = [c for c in design.columns if c.key == (f, key[1])
-                       and (c.shape is None or _SHAPE_OF[f] not in held or c.shape == held[_SHAPE_OF[f]])]
-            best = None
-            for c in offered:
-                cols = sel.stable[:k] + [c] + sel.stable[k + 1:]
-                A = design.X[:, [design.columns.index(x) for x in cols]]
-                coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
-                rss = float(np.sum((design.y - A @ coef) ** 2))
-                if best is None or rss < best[0]:
-                    best = (rss, cols, A, coef)
-            if best is None:
-                continue   # offered at no shape value the term holds
-            _, cols, A, coef = best
-            share = _shares(A, coef)
-            by_law = tuple((f, key[1]) if b == key else b for b in sel.by_law)
-            out.append((key, Selection(sel.frequency, cols, coef, share, sel.resamples, sel.law_frequency, by_law)))
+    columns to ``design``'s target, the shares from it (a member carrying less than ``selection.min_share``
+    is still offered: the fit decides). ``key`` standing for its family (:attr:`Selection.by_law`), the member
+    does."""
+    k = next(j for j, c in enumerate(sel.stable) if c.key == key)
+    others = [c for j, c in enumerate(sel.stable) if j != k]
+    held = {_SHAPE_OF[c.feature]: c.shape for c in others if c.shape is not None}
+    have = {c.key for c in sel.stable}
+    out: list[Selection] = []
+    for f in FEATURES:
+        member = (f, key[1])
+        if member in have or member not in sel.frequency or law_key(member) != law_key(key):
+            continue
+        offered = [c for c in design.columns if c.key == member
+                   and (c.shape is None or _SHAPE_OF[f] not in held or c.shape == held[_SHAPE_OF[f]])]
+        best = None
+        for c in offered:
+            cols = sel.stable[:k] + [c] + sel.stable[k + 1:]
+            A = design.X[:, [design.columns.index(x) for x in cols]]
+            coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+            rss = float(np.sum((design.y - A @ coef) ** 2))
+            if best is None or rss < best[0]:
+                best = (rss, cols, A, coef)
+        if best is None:
+            continue   # offered at no shape value the term holds
+        _, cols, A, coef = best
+        by_law = tuple(member if b == key else b for b in sel.by_law)
+        out.append(Selection(sel.frequency, cols, coef, _shares(A, coef), sel.resamples, sel.law_frequency, by_law))
     return out
 
 

@@ -835,7 +835,7 @@ def _md_force_shape(f, rep: dict, paths: dict, name: str) -> list[str]:
 
 
 def _law_members_lines(steps: list[dict]) -> list[str]:
-    """Where a law family's form was left to the fit (``fit.law_members_compete``): what competed, the BIC of
+    """Where the forms of a law family competed in the fit (``fit.law_members_compete``): what competed, the BIC of
     each, and the form kept."""
     L: list[str] = []
     for e in steps:
@@ -843,7 +843,7 @@ def _law_members_lines(steps: list[dict]) -> list[str]:
         if not m:
             continue
         tried = ", ".join(f"`{t['replaced']}` -> `{t['member']}` {t['bic']:.1f}" for t in m["tried"]) or "none"
-        L += ["", f"Step {e['step']}: a law family stable, its form open; the fit decided (BIC, lower is better): "
+        L += ["", f"Step {e['step']}: the forms of the law families competed in the fit (BIC, lower is better): "
                   f"as read {m['first']['bic']:.1f}; {tried}. Kept: {', '.join(f'`{k}`' for k in m['kept'])}."]
     return L
 
