@@ -127,7 +127,8 @@ def test_the_form_of_a_stable_law_family_the_criterion_prefers_is_the_trial(monk
     """``fit.law_members_compete`` (finder ``_law_members_compete``): the learned trial is fitted again with
     each stable dependence of a law family replaced by each other member a resample chose, dependence by
     dependence from the best so far; the fit with the lowest criterion is the trial, its selection the learned
-    term's, and what competed is recorded. When no member beats the first form, the first stays."""
+    term's, and what competed is recorded, provided it also predicts the drives held out one at a time better.
+    When no member beats the first form, the first stays."""
     cols = [force_shape.Column("bump_damping", "front", 0.0), force_shape.Column("deflection_velocity", "rear"),
             force_shape.Column("velocity_squared", "rear"), force_shape.Column("bump_damping", "rear", 0.0),
             force_shape.Column("rebound_damping", "front", 0.0), force_shape.Column("sign_velocity", "rear")]
@@ -139,20 +140,24 @@ def test_the_form_of_a_stable_law_family_the_criterion_prefers_is_the_trial(monk
     sel = force_shape.Selection(freq, cols[:2], np.array([1.0, 0.5]), np.array([0.8, 0.2]), 24,
                                 {("damping", "rear"): 0.62}, (cols[1].key,))
 
-    def run(bic_of):
+    def run(bic_of, held_of=None):
+        held_of = held_of or bic_of   # held out as in sample unless told
         f = fm.DiscrepancyFinder()
         f.shape_design_, f.force_shape_ = design, [{"step": 1}]
+        form = ("bump_damping", "deflection_velocity")
         monkeypatch.setattr(f, "_learned_fit", lambda ev, cur, s: SimpleNamespace(
-            bic=bic_of[tuple(c.feature for c in s.stable)], rss=100.0, n=100, sel=s))
-        first = SimpleNamespace(bic=bic_of[("bump_damping", "deflection_velocity")], rss=100.0, n=100)
+            bic=bic_of[tuple(c.feature for c in s.stable)], rss=100.0, n=100, form=tuple(c.feature for c in s.stable)))
+        monkeypatch.setattr(f, "_held_out_sums", lambda ev, a, b: (held_of[a.form], held_of[b.form]))
+        first = SimpleNamespace(bic=bic_of[form], rss=100.0, n=100, form=form)
         return f, f._law_members_compete(None, None, first, sel), first
 
     bics = {("bump_damping", "deflection_velocity"): 2436.0, ("rebound_damping", "deflection_velocity"): 2500.0,
             ("bump_damping", "velocity_squared"): 2115.0, ("bump_damping", "bump_damping"): 1860.0}
     f, (fit, kept), _ = run(bics)
-    assert [c.key for c in kept.stable] == [cols[0].key, cols[3].key] and fit.sel is kept
+    assert [c.key for c in kept.stable] == [cols[0].key, cols[3].key] and fit.form == ("bump_damping", "bump_damping")
     assert kept.by_law == (cols[3].key,)
     rec = f.force_shape_[-1]["law_members"]
+    assert rec["tried"][2]["heldout_sq"] == 1860.0 and rec["tried"][2]["heldout_sq_best_so_far"] == 2115.0
     assert [(t["replaced"], t["member"]) for t in rec["tried"]] == [
         ("bump_damping:front", "rebound_damping:front"), ("deflection_velocity:rear", "velocity_squared:rear"),
         ("deflection_velocity:rear", "bump_damping:rear")]
@@ -162,6 +167,9 @@ def test_the_form_of_a_stable_law_family_the_criterion_prefers_is_the_trial(monk
                  ("rebound_damping", "bump_damping"): 1900.0})
     f, (fit, kept), _ = run(bics)
     assert [c.key for c in kept.stable] == [cols[4].key, cols[3].key]
+    # better in sample, worse on the drives held out: not kept
+    f, (fit, kept), first = run(bics, {**bics, ("rebound_damping", "bump_damping"): 2500.0})
+    assert [c.key for c in kept.stable] == [cols[4].key, cols[1].key]
     bics.update({("bump_damping", "deflection_velocity"): 1800.0})
     f, (fit, kept), first = run(bics)
     assert fit is first and kept is sel and f.force_shape_[-1]["law_members"]["kept"] == ["bump_damping:front",
