@@ -640,10 +640,10 @@ def test_the_report_gives_a_form_that_stands_for_its_law_family_the_familys_freq
     assert "| 0.58, 0.95 |" in _md_force_shape(None, {"force_shape": [old]}, {}, "x")[-1]
     step["law_members"] = {"first": {"bic": 2436.17, "rms_x_noise": 1.79},
                            "tried": [{"replaced": "rebound_contact:rear", "member": "bump_contact:rear", "bic": 1859.84,
-                                      "rms_x_noise": 1.54}],
+                                      "rms_x_noise": 1.54, "heldout_sq": 5210.4, "heldout_sq_best_so_far": 6020.0}],
                            "kept": ["bump_contact:rear", "roll_deflection:front"]}
     said = _md_force_shape(None, {"force_shape": [step]}, {}, "x")[-1]
-    assert "as read 2436.2; `rebound_contact:rear` -> `bump_contact:rear` 1859.8" in said
+    assert "as read 2436.2; `rebound_contact:rear` -> `bump_contact:rear` 1859.8 (held out 5210 against 6020)" in said
     assert said.endswith("Kept: `bump_contact:rear`, `roll_deflection:front`.")
 
 

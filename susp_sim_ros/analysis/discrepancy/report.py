@@ -836,16 +836,26 @@ def _md_force_shape(f, rep: dict, paths: dict, name: str) -> list[str]:
 
 def _law_members_lines(steps: list[dict]) -> list[str]:
     """Where the forms of a law family competed in the fit (``fit.law_members_compete``): what competed, the BIC of
-    each, and the form kept."""
+    each (and, where it beat the best so far, the squared whitened residual of the drives held out one at a
+    time), and the form kept."""
     L: list[str] = []
     for e in steps:
         m = e.get("law_members")
         if not m:
             continue
-        tried = ", ".join(f"`{t['replaced']}` -> `{t['member']}` {t['bic']:.1f}" for t in m["tried"]) or "none"
+        tried = ", ".join(f"`{t['replaced']}` -> `{t['member']}` {t['bic']:.1f}" + _held_out_words(t)
+                          for t in m["tried"]) or "none"
         L += ["", f"Step {e['step']}: the forms of the law families competed in the fit (BIC, lower is better): "
                   f"as read {m['first']['bic']:.1f}; {tried}. Kept: {', '.join(f'`{k}`' for k in m['kept'])}."]
     return L
+
+
+def _held_out_words(t: dict) -> str:
+    """A competing form's held-out figures where it beat the best so far in sample (it is kept only when it
+    predicts the drives held out better too)."""
+    if "heldout_sq" not in t:
+        return ""
+    return f" (held out {t['heldout_sq']:.0f} against {t['heldout_sq_best_so_far']:.0f})"
 
 
 def _stable_frequency(e: dict, key: str) -> str:
