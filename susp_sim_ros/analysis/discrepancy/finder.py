@@ -1508,14 +1508,10 @@ class DiscrepancyFinder:
         if R < 2 or new.jac is None:
             return {"passed": True, "heldout": "single drive: in-sample criterion only"}
         k_new = len(new.x) - len(cur.x)
-        sq_old = sq_new = 0.0
-        n_held = 0
+        folds = self._folds(ev, cur, new)
+        sq_old, sq_new, n_held = (sum(f[i] for f in folds) for i in (0, 2, 4))
         n_sel = 0
-        for h in range(R):
-            old_h, old_t, new_h, new_t, n_h = self._fold_pair(ev, cur, new, h)
-            sq_old += old_h
-            sq_new += new_h
-            n_held += n_h
+        for _, old_t, _, new_t, n_h in folds:
             ne_t = max(new.n_eff * (len(new.residual) - n_h) / len(new.residual), 1.0)
             d_bic = ne_t * math.log(max(old_t, 1e-300) / max(new_t, 1e-300)) - k_new * math.log(ne_t)
             n_sel += int(d_bic >= MIN_DELTA_BIC)
@@ -1532,12 +1528,12 @@ class DiscrepancyFinder:
         hold out, the in-sample criterion decides."""
         if len(ev.cases) < 2 or a.jac is None or b.jac is None:
             return None
-        sq_a = sq_b = 0.0
-        for h in range(len(ev.cases)):
-            a_h, _, b_h, _, _ = self._fold_pair(ev, a, b, h)
-            sq_a += a_h
-            sq_b += b_h
-        return sq_a, sq_b
+        folds = self._folds(ev, a, b)
+        return sum(f[0] for f in folds), sum(f[2] for f in folds)
+
+    def _folds(self, ev: Evaluator, cur: FitResult, new: FitResult) -> list[tuple[float, float, float, float, int]]:
+        """:meth:`_fold_pair` for every drive held out in turn."""
+        return [self._fold_pair(ev, cur, new, h) for h in range(len(ev.cases))]
 
     @staticmethod
     def _fold_pair(ev: Evaluator, cur: FitResult, new: FitResult, h: int) -> tuple[float, float, float, float, int]:

@@ -136,6 +136,8 @@ LAW_OF = {**{f: "spring" for f in ("deflection", "deflection_cubed", "bump_conta
                                     "rebound_damping")},
           **{f: "friction" for f in FRICTION_LIKE},
           **{f: "roll" for f in ("roll_deflection", "roll_free_play")}}
+#: the law families themselves; any other feature is a family of its own, stable or not as itself
+LAW_FAMILIES = frozenset(LAW_OF.values())
 
 #: springs met beyond a gap of bump or rebound, and a spring law's smooth progressive part (:func:`spring_law`)
 CONTACTS = ("bump_contact", "rebound_contact")
@@ -590,8 +592,7 @@ def law_keys(sel: Selection) -> list[tuple[str, str]]:
     """The stable dependences of ``sel`` whose feature belongs to a law family (:data:`LAW_OF`: a spring,
     damping, friction or roll form of one axle), in the selection's order: those whose form the fit may
     decide (:func:`law_members`)."""
-    families = set(LAW_OF.values())
-    return [c.key for c in sel.stable if law_key(c.key)[0] in families]
+    return [c.key for c in sel.stable if law_key(c.key)[0] in LAW_FAMILIES]
 
 
 def law_members(sel: Selection, key: tuple[str, str], design: Design) -> list[Selection]:
@@ -649,10 +650,9 @@ def _law_representatives(freq: dict, law_freq: dict, stable_keys: list, min_freq
     Faletto and Bien 2022, arXiv:2201.00494, whose clusters' votes are pooled the same way; ties: the first
     in the vocabulary's order): the family is a stable dependence, its form the one the resamples preferred."""
     stable_laws = {law_key(k) for k in stable_keys}
-    families = set(LAW_OF.values())   # any other key is a family of its own: stable or not as itself
     reps = []
     for law, q in sorted(law_freq.items()):
-        if law[0] not in families or q < min_frequency or law in stable_laws:
+        if law[0] not in LAW_FAMILIES or q < min_frequency or law in stable_laws:
             continue
         members = [k for k in freq if law_key(k) == law]
         reps.append(max(members, key=lambda k: (freq[k], -FEATURES.index(k[0]))))
