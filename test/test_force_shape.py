@@ -1058,6 +1058,17 @@ def test_the_forms_of_a_stable_law_family_are_offered_to_the_fit_with_their_shap
     # a member the selection holds already is not offered
     assert fs.law_members(fs.Selection(freq, [friction, valve, viscous], np.ones(3), np.full(3, 1 / 3), 24),
                           viscous.key, design) == []
+    # a member with which listed terms stand for every dependence is not offered (they compete already):
+    # friction growing with the peak deflection alone is the listed amplitude friction; beside a dependence
+    # no listed term stands for, it is the learned term's
+    amp = next(c for c in d.columns if c.key == ("peak_deflection", "front"))
+    roll = next(c for c in d.columns if c.key == ("roll_deflection", "rear"))
+    alone = fs.Selection({**freq, amp.key: 0.4}, [friction], np.ones(1), np.ones(1), 24)
+    assert fs.LISTED_FOR[amp.feature] == "friction_amplitude"
+    assert fs.law_members(alone, friction.key, design) == []
+    (beside,) = fs.law_members(fs.Selection({**freq, amp.key: 0.4}, [friction, roll], np.ones(2), np.full(2, 0.5),
+                                            24), friction.key, design)
+    assert [c.key for c in beside.stable] == [amp.key, roll.key] and beside.listed_rivals() == []
     # off as shipped: not yet run over the truth-generator family (benchmarks/RESULTS.md, 2026-11-30)
     assert fs.settings()["fit.law_members_compete"] is False
 

@@ -610,7 +610,10 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design) -> list[Se
     that fits best together with the other columns; the coefficients are the least-squares fit of all the
     columns to ``design``'s target, the shares from it (a member carrying less than ``selection.min_share``
     is still offered: the fit decides). ``key`` standing for its family (:attr:`Selection.by_law`), the member
-    does."""
+    does. A member with which listed terms stand for every dependence (:meth:`Selection.listed_rivals`) is
+    not offered, as the learned term is not in that case: those listed terms are in the competition already
+    (a learned friction at the rear read as growing with the peak deflection alone is the listed amplitude
+    friction's business)."""
     k = next(j for j, c in enumerate(sel.stable) if c.key == key)
     others = [c for j, c in enumerate(sel.stable) if j != k]
     held = {_SHAPE_OF[c.feature]: c.shape for c in others if c.shape is not None}
@@ -634,7 +637,9 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design) -> list[Se
             continue   # offered at no shape value the term holds
         _, cols, A, coef = best
         by_law = tuple(member if b == key else b for b in sel.by_law)
-        out.append(Selection(sel.frequency, cols, coef, _shares(A, coef), sel.resamples, sel.law_frequency, by_law))
+        alt = Selection(sel.frequency, cols, coef, _shares(A, coef), sel.resamples, sel.law_frequency, by_law)
+        if not alt.listed_rivals():   # listed terms standing for every dependence compete already
+            out.append(alt)
     return out
 
 
