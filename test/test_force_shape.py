@@ -1069,8 +1069,8 @@ def test_the_forms_of_a_stable_law_family_are_offered_to_the_fit_with_their_shap
     (beside,) = fs.law_members(fs.Selection({**freq, amp.key: 0.4}, [friction, roll], np.ones(2), np.full(2, 0.5),
                                             24), friction.key, design)
     assert [c.key for c in beside.stable] == [amp.key, roll.key] and beside.listed_rivals() == []
-    # off as shipped: not yet run over the truth-generator family (benchmarks/RESULTS.md, 2026-11-30)
-    assert fs.settings()["fit.law_members_compete"] is False
+    # on as shipped since every case of the truth-generator family ran with it (benchmarks/RESULTS.md, 2026-12-01)
+    assert fs.settings()["fit.law_members_compete"] is True
 
 
 def test_a_rewritten_learned_term_starts_from_its_fitted_values_by_label():
