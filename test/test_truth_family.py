@@ -283,7 +283,8 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/seal_gas_friction", "unlisted/bushing_rear", "road/bump_recorded_low",
                    "gas/polytropic_charge_rear", "unlisted/bump_stop_exponential_front",
                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
-                   "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper"}
+                   "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
+                   "gas/isothermal_charge_front"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -316,11 +317,13 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-7:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+    assert doc["held_out"][-8:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
                                     "unlisted/bump_stop_exponential_front",
                                     "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
-                                    "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper"]
-    assert doc["held_out"][-19:-7] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+                                    "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
+                                    "gas/isothermal_charge_front"]
+    assert "added 2026-12-01 (issues 24 and 26)" in text
+    assert doc["held_out"][-20:-8] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -618,6 +621,26 @@ def test_the_polytropic_charge_form_is_a_gas_law_on_the_rear_dampers():
     case = dict(family.make_case(form, seed=1))
     assert json.loads(case["bump_intact"].metadata["truth"])["hidden"]["air_spring_height_m"] == 0.07
     assert all(np.all(np.isfinite(d.imu.gyro)) for d in case.values())
+
+
+def test_the_isothermal_charge_form_is_a_gas_law_on_the_front_dampers():
+    """``gas/isothermal_charge_front`` (held out): the polytropic form's gas element on the other axle, with
+    another exponent (1.0), column and preload: zero at static, +150 N at 40 mm bump and +50 N at 40 mm rebound
+    over the 300 N preload (the figures its description states); on the bump crossing the hidden force the
+    generator exposes is the preload and that law at the front, nothing at the rear."""
+    form = family.FORMS["gas/isothermal_charge_front"]
+    h = form.hidden
+    assert form.split == "held_out" and form.effect == "gas_spring" and not form.expect
+    assert set(form.optional) == {"damper_gas_preload", "unlisted_force"}
+    assert h.gas_preload_N == (300.0, 300.0, 0.0, 0.0) and h.air_spring_rate_N_m == (300.0 / 0.08, 0.0)
+    law = [ind._air_spring(d, h.air_spring_rate_N_m[0], h.air_spring_height_m, h.air_spring_exponent)
+           for d in (0.0, 0.04, -0.04)]
+    assert law == pytest.approx([0.0, 150.0, 50.0], abs=1e-6)
+    tr = family.case_truth(form, 1, "bump_intact")
+    assert not np.any(tr.hidden[:, 2:])
+    law_now = [ind._air_spring(d, h.air_spring_rate_N_m[0], 0.08, 1.0) + 300.0 for d in tr.deflection[:, 0]]
+    assert tr.hidden[:, 0] == pytest.approx(law_now, abs=1e-6)
+    assert tr.hidden[:, 0].max() > 350.0
 
 
 def test_the_exponential_bump_stop_form_stiffens_beyond_its_gap_at_the_front():
