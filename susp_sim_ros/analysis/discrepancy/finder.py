@@ -924,13 +924,35 @@ class DiscrepancyFinder:
         if not silent:
             return None, []
         state = force_shape.select(force_shape.without_inputs(design))
+        offered = None
         if state is None or not state.stable:
-            return None, silent
+            state = offered = self._spring_where_road_leads_one_axle(sel, 0 if state is None else state.resamples)
+            if state is None:
+                return None, silent
         self.force_shape_[-1]["state_reading"] = {   # this step's record (_shape_selection)
             "input_feature": sel.leading, "dependences": state.dependences,
             "stable": [f"{c.feature}:{c.axle}" for c in state.stable],
-            "description": state.description(), "input_silent_drives": [self.cases_[g].name for g in silent]}
+            "description": state.description(), "input_silent_drives": [self.cases_[g].name for g in silent],
+            **({"offered_where_road_leads_one_axle": True} if offered is not None else {})}
         return state, silent
+
+    def _spring_where_road_leads_one_axle(self, sel: force_shape.Selection,
+                                          resamples: int) -> force_shape.Selection | None:
+        """Where the recorded road leads ``sel`` on one axle only (:meth:`_road_on_one_axle`: no road recorded
+        off, which would show at both) and no reading of the states is stable, a spring of that axle for the
+        fit to test (:func:`.force_shape.spring_on_axle`; ``fit.spring_where_road_leads_one_axle`` in
+        ``config/force_shape.yaml``): a law of the states the road excites there and no feature has (a gas
+        charge's even part over a bump, ``gas/polytropic_charge_rear``: the road height under the rear wheels
+        led, nothing of the states was stable, and nothing was named). It is tested as the states' reading is
+        (:meth:`_states_explain_silent`). None when off, or the road leads on both axles or on drives without
+        their road."""
+        if not force_shape.settings()["fit.spring_where_road_leads_one_axle"]:
+            return None
+        lead = force_shape.group_of(sel.leading or "")
+        axles = sorted({c.axle for c in sel.stable if force_shape.group_of(c.feature) == lead},
+                       key=force_shape.AXLES.index)
+        one = self._road_on_one_axle(sel, axles)
+        return None if one is None else force_shape.spring_on_axle(self.shape_design_, one["axle"], resamples)
 
     def _states_explain_silent(self, ev: Evaluator, cur: FitResult, new: FitResult, silent: list[int], ok: bool,
                                checks: dict) -> bool:

@@ -598,7 +598,8 @@ def law_keys(sel: Selection) -> list[tuple[str, str]]:
 def law_members(sel: Selection, key: tuple[str, str], design: Design) -> list[Selection]:
     """The other forms the stable dependence ``key`` of ``sel`` may take, for the fit to decide between:
     ``sel`` with it replaced by each other member of its law family (:data:`LAW_OF`) on its axle that some
-    resample selected (:attr:`Selection.frequency`) and that ``sel`` does not hold already, in the order of
+    resample selected (:attr:`Selection.frequency`; a family offered as a whole lists every member, at 0:
+    :func:`spring_on_axle`) and that ``sel`` does not hold already, in the order of
     the vocabulary. The regression reads a form off columns at a few offered shape values, linearised at the
     model as fitted, and the members' columns correlate over a bump crossing and a sine steer: it may be sure
     of the kind and wrong in the form (a hydraulic rebound stop read as a valve opening above a knee, selected
@@ -641,6 +642,29 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design) -> list[Se
         if not alt.listed_rivals():   # listed terms standing for every dependence compete already
             out.append(alt)
     return out
+
+
+def spring_on_axle(design: Design, axle: str, resamples: int) -> Selection | None:
+    """A spring of ``axle`` for the fit to test where the recorded road leads the missing force on that axle
+    only and no reading of the states is stable (``fit.spring_where_road_leads_one_axle``): the spring-family
+    column (:data:`LAW_OF`) on the axle, at the offered shape, that alone fits ``design``'s target best by least
+    squares, standing for its family (:attr:`Selection.by_law`); every other member of the family on the axle at
+    frequency 0 (no resample chose any: the family is offered, not a form), so :func:`law_members` offers each
+    to the fit. A spring of a law no feature has (a gas charge's even part) moves with the road over a bump
+    better than with any one state feature; the fit and the held-out tests decide whether it stands. None when
+    the design has no spring column on the axle. ``resamples``: those of the regression that found nothing
+    stable (recorded)."""
+    cols = [c for c in design.columns if c.axle == axle and LAW_OF.get(c.feature) == "spring"]
+    if not cols:
+        return None
+    fits = []
+    for c in cols:
+        A = design.X[:, [design.columns.index(c)]]
+        coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+        fits.append((float(np.sum((design.y - A @ coef) ** 2)), c, coef))
+    _, col, coef = min(fits, key=lambda f: f[0])
+    return Selection({c.key: 0.0 for c in cols}, [col], coef, np.ones(1), resamples, {law_key(col.key): 0.0},
+                     (col.key,))
 
 
 def _kept(by_law, cols: list[Column]) -> tuple[tuple[str, str], ...]:
