@@ -152,3 +152,11 @@ def test_the_reason_says_why_a_road_led_force_was_named_as_physics():
     assert words.startswith("the force the model lacks follows the road height under the wheel where the drives")
     assert "(bump_contact)" in words and "(sine_intact, sine_rear_empty)" in words and "62 %" in words
     assert "an input, not a state" not in words and words.endswith("physics, not an input")
+    # no law of the states stable, a spring offered on the axle the road led alone: said so, no first form named
+    offered = input_weighed_words({"input_feature": "road_height", "dependences": ["deflection_cubed"],
+                                   "spring_offered_on_axle": "rear", "input_silent_drives": ["sine_intact"],
+                                   "input_silent_heldout_gain": 0.47, "added": ["unlisted_force"]})
+    assert offered.startswith("the force the model lacks follows the road height under the wheel on the rear axle "
+                              "only where the drives carry it")
+    assert "no law of the states was stable, but a spring of that axle offered to the fit passed every test" in offered
+    assert "(deflection_cubed)" not in offered and "47 %" in offered and offered.endswith("physics, not an input")

@@ -1122,5 +1122,5 @@ def test_a_spring_is_offered_on_the_axle_the_road_leads_alone():
     no_springs = [c for c in cols if fs.LAW_OF.get(c.feature) != "spring"]
     keep = [cols.index(c) for c in no_springs]
     assert fs.spring_on_axle(fs.Design(X[:, keep], y, groups, no_springs), "rear", 24) is None
-    # off as shipped until the truth-generator family ran with it
-    assert fs.settings()["fit.spring_where_road_leads_one_axle"] is False
+    # on as shipped since the family's cases it can reach ran with it (benchmarks/RESULTS.md, 2026-12-01)
+    assert fs.settings()["fit.spring_where_road_leads_one_axle"] is True

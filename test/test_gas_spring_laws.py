@@ -12,7 +12,9 @@ drives (bump crossings and sine steers, intact / front-empty / rear-empty):
   recorded road height under the rear wheels leads the missing force, on that axle only, and no reading of the
   states is stable: front and rear wheels roll over the same recorded track, so it is no road recorded off and
   no ``unmeasured_input`` is found (before the rule, every seed was; the form was added as a blind test and is
-  seen since).
+  seen since). A spring of the rear is offered to the fit (``fit.spring_where_road_leads_one_axle``) and named
+  as the learned force: it predicts the sine steers, which the road does not reach, held out (before the offer
+  nothing was named, 1.79x the noise held out; with it 1.51x, benchmarks/RESULTS.md, 2026-12-01).
 
 Slow: two diagnoses of six drives without the final leave-one-drive-out (one to two minutes each).
 """
@@ -47,10 +49,18 @@ def test_a_progressive_gas_spring_is_a_contact_with_its_smooth_progressive_part(
     assert (f.result_.rss / f.result_.n) ** 0.5 < 1.4
 
 
-def test_a_recorded_road_that_leads_on_one_axle_is_no_input():
+def test_a_recorded_road_that_leads_on_one_axle_is_a_spring_of_that_axle():
     f, rep = _diagnose("gas/polytropic_charge_rear")
     step = f.force_shape_[0]
     assert step["input_led"] and step["dependences"][0] == "road_height"
-    assert step["road_one_axle"]["axle"] == "rear" and step["road_one_axle"]["input_feature"] == "road_height"
-    assert not f.unmeasured_ and rep["verdict"] != "unmeasured_input"
-    assert "on the rear axle only, while both axles roll over the same recorded track" in rep["reason"]
+    assert not f.unmeasured_ and rep["verdict"] == "missing_physics"
+    # no reading of the states stable: a spring of the rear offered, named as the learned force
+    reading = step["state_reading"]
+    assert reading["spring_offered_on_axle"] == "rear" and reading["states_explain_input_silent_drives"]
+    learned = [t for t in rep["terms"] if t["name"] == fs.TERM]
+    assert len(learned) == 1 and fs.LAW_OF[learned[0]["dependences"][0]] == "spring", rep["terms"]
+    assert "rear axle only" in learned[0]["description"]
+    assert "on the rear axle only where the drives carry it" in rep["reason"]
+    assert "a spring of that axle offered to the fit passed every test" in rep["reason"]
+    # on as shipped since the family cases it can reach ran with it (benchmarks/RESULTS.md, 2026-12-01)
+    assert fs.settings()["fit.spring_where_road_leads_one_axle"] is True

@@ -933,7 +933,7 @@ class DiscrepancyFinder:
             "input_feature": sel.leading, "dependences": state.dependences,
             "stable": [f"{c.feature}:{c.axle}" for c in state.stable],
             "description": state.description(), "input_silent_drives": [self.cases_[g].name for g in silent],
-            **({"offered_where_road_leads_one_axle": True} if offered is not None else {})}
+            **({"spring_offered_on_axle": offered.stable[0].axle} if offered is not None else {})}
         return state, silent
 
     def _spring_where_road_leads_one_axle(self, sel: force_shape.Selection,

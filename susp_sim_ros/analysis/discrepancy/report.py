@@ -248,8 +248,14 @@ def input_weighed_words(reading: dict) -> str:
     finder's ``input_weighed_``, the step's ``state_reading``): what the input led, and why the states'
     reading is named instead."""
     led = _input_words(reading["input_feature"])
-    return (f"the force the model lacks {led} where the drives carry it, but a law of the states "
-            f"({', '.join(reading['dependences'])}) passed every test and also predicts the drives the input "
+    axle = reading.get("spring_offered_on_axle")
+    if axle:   # no law of the states was stable: a spring of the axle the road led alone was offered
+        what = (f"{led} on the {axle} axle only where the drives carry it (a road recorded off would show at both "
+                f"axles, which roll over the same recorded track) and no law of the states was stable, but a spring "
+                f"of that axle offered to the fit")
+    else:
+        what = f"{led} where the drives carry it, but a law of the states ({', '.join(reading['dependences'])})"
+    return (f"the force the model lacks {what} passed every test and also predicts the drives the input "
             f"does not reach ({', '.join(reading['input_silent_drives'])}) held out, "
             f"{100 * float(reading['input_silent_heldout_gain']):.0f} % of their excess: physics, not an input")
 
