@@ -595,16 +595,18 @@ def law_keys(sel: Selection) -> list[tuple[str, str]]:
     return [c.key for c in sel.stable if law_key(c.key)[0] in LAW_FAMILIES]
 
 
-def law_members(sel: Selection, key: tuple[str, str], design: Design) -> list[Selection]:
+def law_members(sel: Selection, key: tuple[str, str], design: Design, cfg: dict | None = None) -> list[Selection]:
     """The other forms the stable dependence ``key`` of ``sel`` may take, for the fit to decide between:
     ``sel`` with it replaced by each other member of its law family (:data:`LAW_OF`) on its axle that some
     resample selected (:attr:`Selection.frequency`; a family offered as a whole lists every member, at 0:
-    :func:`spring_on_axle`) and that ``sel`` does not hold already, in the order of
-    the vocabulary. The regression reads a form off columns at a few offered shape values, linearised at the
-    model as fitted, and the members' columns correlate over a bump crossing and a sine steer: it may be sure
-    of the kind and wrong in the form (a hydraulic rebound stop read as a valve opening above a knee, selected
-    in every resample; a position-sensitive damper read as a plain viscous damping at the rear, where the votes
-    split).
+    :func:`spring_on_axle`), or every member of the family on the axle with ``fit.law_members_whole_family``
+    (``cfg``, default ``config/force_shape.yaml``: a form no resample chose may still be the one, as the front
+    valve of the blind ``unlisted/damper_blow_off`` #3, read as an orifice), and that ``sel`` does not hold
+    already, in the order of the vocabulary. The regression reads a form off columns at a few offered shape
+    values, linearised at the model as fitted, and the members' columns correlate over a bump crossing and a
+    sine steer: it may be sure of the kind and wrong in the form (a hydraulic rebound stop read as a valve
+    opening above a knee, selected in every resample; a position-sensitive damper read as a plain viscous
+    damping at the rear, where the votes split).
 
     A member with a shape (a knee, a contact gap) takes the value another stable column of the selection
     holds for it (one value per shape serves the term: :func:`learned_candidate`), else the offered value
@@ -615,6 +617,8 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design) -> list[Se
     not offered, as the learned term is not in that case: those listed terms are in the competition already
     (a learned friction at the rear read as growing with the peak deflection alone is the listed amplitude
     friction's business)."""
+    cfg = settings() if cfg is None else cfg
+    whole = bool(cfg["fit.law_members_whole_family"])
     k = next(j for j, c in enumerate(sel.stable) if c.key == key)
     others = [c for j, c in enumerate(sel.stable) if j != k]
     held = {_SHAPE_OF[c.feature]: c.shape for c in others if c.shape is not None}
@@ -622,7 +626,7 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design) -> list[Se
     out: list[Selection] = []
     for f in FEATURES:
         member = (f, key[1])
-        if member in have or member not in sel.frequency or law_key(member) != law_key(key):
+        if member in have or (member not in sel.frequency and not whole) or law_key(member) != law_key(key):
             continue
         offered = [c for c in design.columns if c.key == member
                    and (c.shape is None or _SHAPE_OF[f] not in held or c.shape == held[_SHAPE_OF[f]])]
