@@ -732,17 +732,10 @@ class DiscrepancyFinder:
                     accepted: list, why: dict[str, str] | None = None) -> FitResult:
         """``cur`` without the terms ``names`` (refitted, calibration jointly), each drop in the path with
         its reason (``why``: name -> reason; default: the measurement chain's)."""
-        allidx = tuple(range(len(ev.cases)))
-        st = cur.structure
+        f = _refit_without(ev, cur, names)
         for name in names:
-            st = st.without(name)
-        f = fit_structure(ev, st, st.embed(cur.structure, cur.x), allidx, max_nfev=TRIAL_NFEV)
-        for name in names:
-            path.append({"step": len(path), "removed": name, "structure": list(st.names), "rss": f.rss,
-                         "bic": f.bic, "delta_bic": cur.bic - f.bic,
-                         "why": (why or {}).get(name, "its 95 % interval from the drives holds no effect: "
-                                                      "not named")})
-        accepted[:] = [a for a in accepted if a["name"] not in names]
+            _record_drop(path, accepted, cur, f, name, (why or {}).get(
+                name, "its 95 % interval from the drives holds no effect: not named"))
         return f
 
     def _base_run(self, ev: Evaluator, model, cases: list[DriveCase]) -> None:
@@ -915,7 +908,7 @@ class DiscrepancyFinder:
         rotation acts on every drive: nothing tells a state from it) or nothing of the states is stable."""
         design = self.shape_design_
         lead = force_shape.group_of(sel.leading or "")
-        axles = {c.axle for c in sel.stable if force_shape.group_of(c.feature) == lead}
+        axles = _lead_axles(sel)
         cols = [j for j, c in enumerate(design.columns) if force_shape.group_of(c.feature) == lead and c.axle in axles]
         # a drive that lacks its road is not one the road does not reach: its road is unknown, not flat
         known = (lambda g: has_road_input(self.cases_[g])) if sel.input_kind == "road" else (lambda g: True)
@@ -948,10 +941,7 @@ class DiscrepancyFinder:
         their road."""
         if not force_shape.settings()["fit.spring_where_road_leads_one_axle"]:
             return None
-        lead = force_shape.group_of(sel.leading or "")
-        axles = sorted({c.axle for c in sel.stable if force_shape.group_of(c.feature) == lead},
-                       key=force_shape.AXLES.index)
-        one = self._road_on_one_axle(sel, axles)
+        one = self._road_on_one_axle(sel, _lead_axles(sel))
         return None if one is None else force_shape.spring_on_axle(self.shape_design_, one["axle"], resamples)
 
     def _states_explain_silent(self, ev: Evaluator, cur: FitResult, new: FitResult, silent: list[int], ok: bool,
@@ -993,7 +983,7 @@ class DiscrepancyFinder:
         lead = sel.leading
         assert lead is not None
         ks = [k for k, c in enumerate(sel.stable) if force_shape.group_of(c.feature) == force_shape.group_of(lead)]
-        axles = sorted({sel.stable[k].axle for k in ks}, key=force_shape.AXLES.index)
+        axles = _lead_axles(sel)
         one = self._road_on_one_axle(sel, axles)
         if one is not None:
             self.force_shape_[-1]["road_one_axle"] = one   # this step's record (_shape_selection)
@@ -1205,22 +1195,17 @@ class DiscrepancyFinder:
         redundant (removing it costs less than :data:`MIN_DELTA_BIC`) is dropped, latest-accepted last,
         and the drop is recorded in the selection path. A term accepted in a pair with the dropped one must
         then earn its place alone (:meth:`_partner_alone`)."""
-        allidx = tuple(range(len(ev.cases)))
         phys = [c.name for c in cur.structure.cands if c.kind == PHYSICS]
         if len(phys) < 2:
             return cur
         for name in phys:
             if name not in cur.structure.names:
                 continue   # dropped as a partner already
-            st_wo = cur.structure.without(name)
-            f_wo = fit_structure(ev, st_wo, st_wo.embed(cur.structure, cur.x), allidx, max_nfev=TRIAL_NFEV)
+            f_wo = _refit_without(ev, cur, [name])
             if f_wo.bic - cur.bic < MIN_DELTA_BIC:
-                path.append({"step": len(path), "removed": name, "structure": list(st_wo.names),
-                             "rss": f_wo.rss, "bic": f_wo.bic, "delta_bic": cur.bic - f_wo.bic,
-                             "why": "redundant once the later terms are in (removing it costs less than "
-                                    f"{MIN_DELTA_BIC:.0f} BIC)"})
                 partners = [a["name"] for a in accepted if a["name"] != name and name in a.get("with", ())]
-                accepted[:] = [a for a in accepted if a["name"] != name]
+                _record_drop(path, accepted, cur, f_wo, name, "redundant once the later terms are in (removing it "
+                                                              f"costs less than {MIN_DELTA_BIC:.0f} BIC)")
                 cur = f_wo
                 for partner in partners:
                     cur = self._partner_alone(ev, cur, partner, name, path, accepted)
@@ -1236,17 +1221,12 @@ class DiscrepancyFinder:
         amplitude friction and an extra damping was accepted, the friction dropped as redundant later, and the
         damping stayed, named for a gas spring). The drop is recorded in the selection path with its figures;
         ``cur`` when it earns its place."""
-        allidx = tuple(range(len(ev.cases)))
-        st_wo = cur.structure.without(name)
-        f_wo = fit_structure(ev, st_wo, st_wo.embed(cur.structure, cur.x), allidx, max_nfev=TRIAL_NFEV)
+        f_wo = _refit_without(ev, cur, [name])
         checks = self._heldout_check(ev, f_wo, cur)
         if f_wo.bic - cur.bic >= MIN_DELTA_BIC and checks["passed"]:
             return cur
-        path.append({"step": len(path), "removed": name, "structure": list(st_wo.names), "rss": f_wo.rss,
-                     "bic": f_wo.bic, "delta_bic": cur.bic - f_wo.bic, **checks,
-                     "why": f"accepted in a pair with {dropped} only: alone it does not earn its place (the "
-                            f"criterion by {MIN_DELTA_BIC:.0f} BIC and the held-out test)"})
-        accepted[:] = [a for a in accepted if a["name"] != name]
+        _record_drop(path, accepted, cur, f_wo, name, f"accepted in a pair with {dropped} only: alone it does not "
+                     f"earn its place (the criterion by {MIN_DELTA_BIC:.0f} BIC and the held-out test)", **checks)
         return f_wo
 
     def _measurement_terms(self, ev: Evaluator) -> list[str]:
@@ -1435,8 +1415,7 @@ class DiscrepancyFinder:
         for name in meas:
             if name not in cur.structure.names:
                 continue
-            st_wo = cur.structure.without(name)
-            f_wo = fit_structure(ev, st_wo, st_wo.embed(cur.structure, cur.x), allidx, max_nfev=10)
+            f_wo = _refit_without(ev, cur, [name], max_nfev=10)
             if cur.bic - f_wo.bic > -MIN_DELTA_BIC:
                 cur = f_wo
         self.informed_ = informed
@@ -1895,6 +1874,30 @@ def _fold_refit(fit: FitResult, held: np.ndarray, fixed: Sequence[int] | None = 
         return float(r[held] @ r[held]), float(r[tr] @ r[tr])
     e = r + fit.jac @ _fold_step(fit, held, fixed=fixed)
     return float(e[held] @ e[held]), float(e[tr] @ e[tr])
+
+
+def _lead_axles(sel: force_shape.Selection) -> list[str]:
+    """The axles on which ``sel``'s leading dependence (a rotation harmonic's sine and cosine as one) is
+    stable, front first."""
+    lead = force_shape.group_of(sel.leading or "")
+    return sorted({c.axle for c in sel.stable if force_shape.group_of(c.feature) == lead}, key=force_shape.AXLES.index)
+
+
+def _refit_without(ev: Evaluator, cur: FitResult, names: Sequence[str], max_nfev: int = TRIAL_NFEV) -> FitResult:
+    """``cur`` without the terms ``names``, refitted on every drive from its values (calibration jointly)."""
+    st = cur.structure
+    for name in names:
+        st = st.without(name)
+    return fit_structure(ev, st, st.embed(cur.structure, cur.x), tuple(range(len(ev.cases))), max_nfev=max_nfev)
+
+
+def _record_drop(path: list, accepted: list, cur: FitResult, f: FitResult, name: str, why: str,
+                 **figures) -> None:
+    """Term ``name`` dropped from ``cur`` (``f`` the fit without it): its entry in the selection path with the
+    fit's figures, ``figures`` (a test's) and the reason ``why``; its ``accepted`` entry gone."""
+    path.append({"step": len(path), "removed": name, "structure": list(f.structure.names), "rss": f.rss,
+                 "bic": f.bic, "delta_bic": cur.bic - f.bic, **figures, "why": why})
+    accepted[:] = [a for a in accepted if a["name"] != name]
 
 
 def _drives_reached(design: force_shape.Design, cols: Sequence[int]) -> list[int]:
