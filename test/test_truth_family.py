@@ -284,7 +284,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "gas/polytropic_charge_rear", "unlisted/bump_stop_exponential_front",
                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
                    "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
-                   "gas/isothermal_charge_front"}
+                   "gas/isothermal_charge_front", "gas/unequal_axle_charges"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -317,13 +317,13 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-8:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+    assert doc["held_out"][-9:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
                                     "unlisted/bump_stop_exponential_front",
                                     "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
                                     "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
-                                    "gas/isothermal_charge_front"]
-    assert "added 2026-12-01 (issues 24 and 26)" in text
-    assert doc["held_out"][-20:-8] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+                                    "gas/isothermal_charge_front", "gas/unequal_axle_charges"]
+    assert "added 2026-12-01 (issues 24 and 26)" in text and "added 2026-12-01 (issue 24)" in text
+    assert doc["held_out"][-21:-9] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -641,6 +641,27 @@ def test_the_isothermal_charge_form_is_a_gas_law_on_the_front_dampers():
     law_now = [ind._air_spring(d, h.air_spring_rate_N_m[0], 0.08, 1.0) + 300.0 for d in tr.deflection[:, 0]]
     assert tr.hidden[:, 0] == pytest.approx(law_now, abs=1e-6)
     assert tr.hidden[:, 0].max() > 350.0
+
+
+def test_the_unequal_charges_form_charges_both_axles_at_their_own_preloads():
+    """``gas/unequal_axle_charges`` (held out): gas charges on both axles, 260 N front and 70 N rear, one gas law
+    (h 0.09 m, n 1.3) at each axle's preload: the figures its description states (+148 / +40 N at 40 mm bump,
+    +51 / +14 N at 40 mm rebound over the preload), and on the bump crossing the hidden force the generator
+    exposes is each axle's preload and law."""
+    form = family.FORMS["gas/unequal_axle_charges"]
+    h = form.hidden
+    assert form.split == "held_out" and form.effect == "gas_spring" and not form.expect
+    assert set(form.optional) == {"damper_gas_preload", "unlisted_force"}
+    assert h.gas_preload_N == (260.0, 260.0, 70.0, 70.0)
+    laws = [[ind._air_spring(d, rate, 0.09, 1.3) for d in (0.0, 0.04, -0.04)] for rate in h.air_spring_rate_N_m]
+    assert laws[0] == pytest.approx([0.0, 148.0, 51.4], abs=0.1)
+    assert laws[1] == pytest.approx([0.0, 39.9, 13.8], abs=0.1)
+    tr = family.case_truth(form, 1, "bump_intact")
+    for axle, (cols, f0) in enumerate((((0, 1), 260.0), ((2, 3), 70.0))):
+        for c in cols:
+            law_now = [ind._air_spring(d, h.air_spring_rate_N_m[axle], 0.09, 1.3) + f0 for d in tr.deflection[:, c]]
+            assert tr.hidden[:, c] == pytest.approx(law_now, abs=1e-6)
+    assert tr.hidden[:, 0].max() > tr.hidden[:, 2].max() + 150.0
 
 
 def test_the_exponential_bump_stop_form_stiffens_beyond_its_gap_at_the_front():
