@@ -1025,8 +1025,9 @@ def test_a_learned_term_is_extended_by_the_dependences_the_residual_it_leaves_ad
 
 def test_the_forms_of_a_stable_law_family_are_offered_to_the_fit_with_their_shapes_and_coefficients():
     """:func:`force_shape.law_members`: a stable dependence of a law family is offered replaced by each other
-    member of the family on its axle that a resample chose, never by a member no resample chose, one the
-    selection holds already or one of another family; a member with a shape takes the value that fits best,
+    member of the family on its axle that a resample chose (with ``fit.law_members_whole_family`` off; on, by
+    every member on the axle), never by one the selection holds already or one of another family; a member
+    with a shape takes the value that fits best,
     or the one another stable column holds (one value per shape serves the term); the coefficients are the
     least-squares fit of all the columns; standing for its family, the member does."""
     truth = {("sign_velocity", "front"): 1.0}
@@ -1041,8 +1042,9 @@ def test_the_forms_of_a_stable_law_family_are_offered_to_the_fit_with_their_shap
     sel = fs.Selection(freq, [friction, viscous], np.array([1.0, 1.0]), np.array([0.5, 0.5]), 24,
                        {("friction", "front"): 0.9, ("damping", "rear"): 0.7}, (viscous.key,))
     assert fs.law_keys(sel) == [friction.key, viscous.key]
-    assert fs.law_members(sel, friction.key, design) == []   # no other friction form chosen at the front
-    (alt,) = fs.law_members(sel, viscous.key, design)   # velocity_squared: no resample chose it
+    chosen = {**fs.settings(), "fit.law_members_whole_family": False}   # the members some resample chose
+    assert fs.law_members(sel, friction.key, design, chosen) == []   # no other friction form chosen at the front
+    (alt,) = fs.law_members(sel, viscous.key, design, chosen)   # velocity_squared: no resample chose it
     assert [c.key for c in alt.stable] == [friction.key, valve.key]
     assert alt.stable[1].shape == 0.2 and alt.by_law == (valve.key,)
     A = design.X[:, [d.columns.index(c) for c in alt.stable]]
@@ -1053,11 +1055,11 @@ def test_the_forms_of_a_stable_law_family_are_offered_to_the_fit_with_their_shap
     front_valve = next(c for c in d.columns if c.key == ("velocity_beyond_knee", "front") and c.shape == 0.4)
     held = fs.Selection({**freq, front_valve.key: 0.8}, [friction, front_valve, viscous], np.ones(3),
                         np.full(3, 1 / 3), 24)
-    (alt2,) = fs.law_members(held, viscous.key, design)
+    (alt2,) = fs.law_members(held, viscous.key, design, chosen)
     assert alt2.stable[2].key == valve.key and alt2.stable[2].shape == 0.4 and alt2.by_law == ()
     # a member the selection holds already is not offered
     assert fs.law_members(fs.Selection(freq, [friction, valve, viscous], np.ones(3), np.full(3, 1 / 3), 24),
-                          viscous.key, design) == []
+                          viscous.key, design, chosen) == []
     # a member with which listed terms stand for every dependence is not offered (they compete already):
     # friction growing with the peak deflection alone is the listed amplitude friction; beside a dependence
     # no listed term stands for, it is the learned term's
@@ -1065,9 +1067,9 @@ def test_the_forms_of_a_stable_law_family_are_offered_to_the_fit_with_their_shap
     roll = next(c for c in d.columns if c.key == ("roll_deflection", "rear"))
     alone = fs.Selection({**freq, amp.key: 0.4}, [friction], np.ones(1), np.ones(1), 24)
     assert fs.LISTED_FOR[amp.feature] == "friction_amplitude"
-    assert fs.law_members(alone, friction.key, design) == []
+    assert fs.law_members(alone, friction.key, design, chosen) == []
     (beside,) = fs.law_members(fs.Selection({**freq, amp.key: 0.4}, [friction, roll], np.ones(2), np.full(2, 0.5),
-                                            24), friction.key, design)
+                                            24), friction.key, design, chosen)
     assert [c.key for c in beside.stable] == [amp.key, roll.key] and beside.listed_rivals() == []
     # on as shipped since every case of the truth-generator family ran with it (benchmarks/RESULTS.md, 2026-12-01)
     assert fs.settings()["fit.law_members_compete"] is True
@@ -1080,8 +1082,8 @@ def test_the_forms_of_a_stable_law_family_are_offered_to_the_fit_with_their_shap
     # the front's other friction form drawn here (the peak deflection) beside the viscous damping: listed terms
     # stand for both, so it is not offered even now
     assert fs.law_members(sel, friction.key, design, whole) == []
-    # off as shipped until the family's cases with a learned trial ran with it
-    assert fs.settings()["fit.law_members_whole_family"] is False
+    # on as shipped since the family's cases with a stable physics dependence ran with it (RESULTS.md, 2026-12-01)
+    assert fs.settings()["fit.law_members_whole_family"] is True
 
 
 def test_a_rewritten_learned_term_starts_from_its_fitted_values_by_label():
