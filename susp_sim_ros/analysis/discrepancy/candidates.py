@@ -219,10 +219,8 @@ def _gas(P, P0, x, model):
 
 def _gas_axles(P, P0, x, model):
     """Preload and rate per axle: ``x`` = (f0 front, k front, f0 rear, k rear)."""
-    for param, front, rear in (("f0", x[0], x[2]), ("k", x[1], x[3])):
-        sl = model.term_param_slice("damper_gas_preload", param)
-        P[:, sl.start:sl.start + 2] = front
-        P[:, sl.start + 2:sl.stop] = rear
+    _term_axles("damper_gas_preload", "f0")(P, P0, x[0::2], model)
+    _term_axles("damper_gas_preload", "k")(P, P0, x[1::2], model)
 
 
 def _mass(P, P0, x, model):
