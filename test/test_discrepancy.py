@@ -85,6 +85,28 @@ def test_runs_are_simulated_once_and_only_as_far_as_they_are_compared(bump_rear_
     np.testing.assert_array_equal(e_cut, ev.case_residual(0, whole, -0.05, False))
 
 
+def test_runs_under_one_steering_offset_share_their_inputs(bump_rear_amp, monkeypatch):
+    """A batch under steering offsets (a Jacobian column of another parameter) copies the inputs once per
+    (drive, offset), not once per run, and gives each run the bits it has simulated alone."""
+    from susp_sim_ros.analysis.discrepancy import engine
+    ev = Evaluator(extended_model("passat_b8_like", "dahl_only"), [bump_rear_amp])
+    st = Structure(["friction_amplitude", "steering_offset"])
+    x = st.neutral()
+    X = np.array([x, x, x])
+    X[:, -1] = [0.01, 0.01, 0.02]  # steering offsets [rad]
+    X[1, 0] = 5.0                  # a second run under the first offset: extra level front [N]
+    alone = [ev.simulate(st, X[k][None])[0, 0] for k in range(3)]
+    rows = []
+    real = engine.simulate_batch
+    monkeypatch.setattr(engine, "simulate_batch", lambda model, P, U, **kw: rows.append(U.shape[0]) or
+                        real(model, P, U, **kw))
+    batch = ev.simulate(st, X)
+    assert rows == [2]
+    for k in range(3):
+        np.testing.assert_array_equal(batch[k, 0], alone[k])
+    assert not np.array_equal(batch[0, 0], batch[1, 0]) and not np.array_equal(batch[0, 0], batch[2, 0])
+
+
 def test_jacobian_from_a_known_residual_is_the_same(bump_rear_amp):
     """fit_structure simulates the Jacobian only at accepted points, from the residual it has: the same
     numbers as simulating residual and Jacobian in one batch."""

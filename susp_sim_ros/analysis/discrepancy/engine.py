@@ -172,9 +172,10 @@ class Evaluator:
         Runs that are the same (one drive, the same kernel parameters and inputs: a finite-difference
         column of a parameter that drive does not use, or of the time offset, which only shifts the
         comparison) are simulated once; the kernel gives a vehicle the same bits in any lane of any
-        batch. Each drive is simulated up to its last compared sample (:attr:`n_compared` steps, the
-        length of its items), or to the longest drive's end with ``to_end`` (the raw samples outside the
-        comparison window: noise floors). Drives of one length run in one batch; items are views of
+        batch. Runs of one drive under one steering offset share one row of inputs. Each drive is
+        simulated up to its last compared sample (:attr:`n_compared` steps, the length of its items), or
+        to the longest drive's end with ``to_end`` (the raw samples outside the comparison window: noise
+        floors). Drives of one length run in one batch; items are views of
         the batch outputs (no copies), one item shared by the same runs."""
         idx = list(range(len(self.cases))) if idx is None else list(idx)
         X = np.atleast_2d(X)
@@ -189,10 +190,12 @@ class Evaluator:
         runs = np.unique(run_of, return_index=True)[1]  # one lane of each distinct run, in run order
         P, drive, steer = P[runs], drive[runs], steer[runs]
         U, u_row = self.U, drive
-        if np.any(steer != 0.0):  # the inputs differ per run: one input row each
-            U = self.U[drive].copy()
-            U[:, :, U_INDEX["SWA"]] -= steer[:, None]
-            u_row = np.arange(len(runs))
+        if np.any(steer != 0.0):  # the inputs differ per (drive, steering offset): one input row for each
+            rows: dict[tuple[int, float], int] = {}
+            u_row = np.array([rows.setdefault((int(d), float(s)), len(rows)) for d, s in zip(drive, steer)],
+                             np.int64)
+            U = self.U[[d for d, _ in rows]]  # fancy indexing: a copy
+            U[:, :, U_INDEX["SWA"]] -= np.array([s for _, s in rows])[:, None]
         n_run = np.full(len(runs), self.n_max) if to_end else self.n_compared[drive]
         signals = np.empty(len(runs), object)
         for n in np.unique(n_run):
