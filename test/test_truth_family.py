@@ -284,7 +284,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "gas/polytropic_charge_rear", "unlisted/bump_stop_exponential_front",
                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
                    "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
-                   "gas/isothermal_charge_front", "gas/unequal_axle_charges"}
+                   "gas/isothermal_charge_front", "gas/unequal_axle_charges", "unlisted/rising_rate_linkage"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -317,13 +317,14 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-9:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
-                                    "unlisted/bump_stop_exponential_front",
-                                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
-                                    "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
-                                    "gas/isothermal_charge_front", "gas/unequal_axle_charges"]
+    assert doc["held_out"][-10:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+                                     "unlisted/bump_stop_exponential_front",
+                                     "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
+                                     "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
+                                     "gas/isothermal_charge_front", "gas/unequal_axle_charges",
+                                     "unlisted/rising_rate_linkage"]
     assert "added 2026-12-01 (issues 24 and 26)" in text and "added 2026-12-01 (issue 24)" in text
-    assert doc["held_out"][-21:-9] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert doc["held_out"][-22:-10] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -662,6 +663,31 @@ def test_the_unequal_charges_form_charges_both_axles_at_their_own_preloads():
             law_now = [ind._air_spring(d, h.air_spring_rate_N_m[axle], 0.09, 1.3) + f0 for d in tr.deflection[:, c]]
             assert tr.hidden[:, c] == pytest.approx(law_now, abs=1e-6)
     assert tr.hidden[:, 0].max() > tr.hidden[:, 2].max() + 150.0
+
+
+def test_the_rising_rate_form_is_an_even_spring_law_on_both_axles():
+    """``unlisted/rising_rate_linkage`` (held out): + k2 d^2 at every corner (120000 / 90000 N/m^2 front / rear),
+    the figures its description states (+192 / +144 N at 40 mm either way), one sense in bump and rebound; on the
+    bump crossing the hidden force the generator exposes is that law; the pitch or roll rate moves by more than
+    three times the cases' gyro noise on some drive."""
+    form = family.FORMS["unlisted/rising_rate_linkage"]
+    assert form.split == "held_out" and form.effect == "unlisted_force" and form.expect == ("unlisted_force",)
+    assert set(form.leading) == {"deflection", "deflection_cubed", "bump_contact", "rebound_contact"}
+    row = np.zeros(ind.NW)
+    for k2, at40 in ((120000.0, 192.0), (90000.0, 144.0)):
+        row[ind.WRR] = k2
+        assert ind._hidden_springs(0.04, row) == pytest.approx(at40) == ind._hidden_springs(-0.04, row)
+    row[ind.WRR] = 0.0
+    assert ind._hidden_springs(0.04, row) == 0.0
+    tr = family.case_truth(form, 1, "bump_intact")
+    for c, k2 in enumerate((120000.0,) * 2 + (90000.0,) * 2):
+        np.testing.assert_allclose(tr.hidden[:, c], k2 * tr.deflection[:, c] ** 2, atol=1e-9)
+    assert tr.deflection.min() < -0.03 and tr.hidden.min() >= 0.0 and tr.hidden[:, 0].max() > 150.0
+    nominal, best = family.FORMS["structure/nominal"], 0.0
+    for _, _, lbl in family.CASE_DRIVES:
+        a, b = family.case_truth(form, 1, lbl), family.case_truth(nominal, 1, lbl)
+        best = max(best, float(np.degrees(np.sqrt(np.mean((a.gyro[:, :2] - b.gyro[:, :2]) ** 2, axis=0))).max()))
+    assert best >= 3 * 0.05, best
 
 
 def test_the_exponential_bump_stop_form_stiffens_beyond_its_gap_at_the_front():

@@ -417,6 +417,17 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(gas_preload_N=(260.0, 260.0, 70.0, 70.0),
                                          air_spring_rate_N_m=(1.3 * 260.0 / 0.09, 1.3 * 70.0 / 0.09),
                                          air_spring_height_m=0.09, air_spring_exponent=1.3), **gas),
+        # added 2026-12-01 (issues 24 and 26), held out from the start, before any run of the finder on it and before
+        # a spring feature even in the deflection is tried again (deflection_squared, withdrawn 2026-11-28, never
+        # run on the gas forms that read worst since): a smooth spring law of one sense in bump and rebound, on
+        # both axles, from the geometry rather than a gas or an elastomer
+        GeneratorForm("unlisted/rising_rate_linkage", description="rising-rate linkages at all four corners: the "
+                      "motion ratio changes with travel, so the wheel rate grows linearly through the whole stroke, "
+                      "k + 2 k2 d, + k2 d^2 at every deflection with k2 120000 / 90000 N/m^2 front / rear (the "
+                      "wheel rate +9.6 / +7.2 kN/m at 40 mm bump and as much lower at 40 mm rebound; +192 / +144 N "
+                      "at 40 mm either way)",
+                      hidden=TruthHidden(rising_rate_N_m2=(120000.0, 90000.0)),
+                      leading=("deflection", "deflection_cubed", "bump_contact", "rebound_contact"), **unl),
     ]
     return {f.name: f for f in fs}
 

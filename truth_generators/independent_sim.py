@@ -231,6 +231,10 @@ class TruthHidden:
     creep_friction_N: tuple = (0.0, 0.0)          # a strut friction that builds with the sliding velocity by an
     creep_friction_velocity_m_s: float = 0.004    # algebraic law (front, rear): F_c v / sqrt(v^2 + v_c^2) [N], a
     #                                               seal that creeps at low velocity rather than sticking
+    rising_rate_N_m2: tuple = (0.0, 0.0)          # a rising-rate linkage (front, rear): the motion ratio changes
+    #                                               with travel, so the wheel rate grows linearly through the
+    #                                               whole stroke, k + 2 k2 d: + k2 d^2 [N] at every deflection
+    #                                               (stiffer in bump, softer in rebound, smoothly through static)
 
 
 AMP_ENVELOPES = ("decaying_peak", "stroke", "windowed_rms")
@@ -370,7 +374,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
  WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, WSEAL, WSEALH, WSEALN, WBSF, WBSL, WBSG,
- WHSC, WHSG, WHSL, WCRF, WCRV, WHSR, WHSN, NW) = range(58)
+ WHSC, WHSG, WHSL, WCRF, WCRV, WHSR, WHSN, WRR, NW) = range(59)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -442,6 +446,7 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WCRF], W[i, WCRV] = hid.creep_friction_N[k], hid.creep_friction_velocity_m_s
         W[i, WHSR] = 0.0 if hid.hydraulic_stop_both_ways else -1.0 if hid.hydraulic_stop_in_rebound else 1.0
         W[i, WHSN] = hid.hydraulic_stop_exponent
+        W[i, WRR] = hid.rising_rate_N_m2[k]
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
 
@@ -530,7 +535,8 @@ def _hidden_springs(d, w):
     """The force [N, in Fs's sense] of the hidden spring laws of one corner (its row ``w`` of W) at
     deflection ``d`` [m] (positive in bump): a progressive coil's + k2 max(d, 0)^2, an air-assist spring
     (:func:`_air_spring`), a rebound spring's - k_r max(-d - g, 0), a jounce bumper's k_j e + k_j3 e^3 with
-    e = max(d - g, 0), an exponential bump stop's F0 (exp(e / s) - 1) with e = max(d - g, 0)."""
+    e = max(d - g, 0), an exponential bump stop's F0 (exp(e / s) - 1) with e = max(d - g, 0), a rising-rate
+    linkage's + k2 d^2."""
     F = 0.0
     if w[WPRG] > 0.0 and d > 0.0:          # progressive coil: the rate grows in bump
         F += w[WPRG] * d * d
@@ -543,6 +549,8 @@ def _hidden_springs(d, w):
         F += w[WJBK] * e + w[WJBK3] * e * e * e
     if w[WBSF] > 0.0 and d > w[WBSG]:       # exponential bump stop: met beyond its gap of bump
         F += w[WBSF] * math.expm1((d - w[WBSG]) / w[WBSL])
+    if w[WRR] != 0.0:                       # rising-rate linkage: the rate grows through the whole stroke
+        F += w[WRR] * d * d
     return F
 
 
@@ -866,8 +874,9 @@ class TruthResult:
     anti-roll-bar free play: the bar's force with the gap minus without it (``-k clip(delta, -g, g)``);
     Stribeck friction; load-dependent strut friction ``mu max(F_z0 + F_t, 0) tanh(v/v_eps)``; strut friction
     growing with the compression; the viscoelastic bushings' force; the progressive, air-assist and rebound springs'
-    and the jounce bumpers' and exponential bump stops' forces; a hydraulic compression stop's damping. Friction
-    and bushing forces are those held over the step that starts at ``t`` (as ``friction``)."""
+    and the jounce bumpers', exponential bump stops' and rising-rate linkages' forces; a hydraulic compression
+    stop's damping. Friction and bushing forces are those held over the step that starts at ``t`` (as
+    ``friction``)."""
 
     t: np.ndarray
     gyro: np.ndarray
