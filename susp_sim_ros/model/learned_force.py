@@ -73,6 +73,12 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             says so
 ``rebound_damping``         oil (v / v_ref) max(-d - g, 0) / d_ref: the same beyond the gap of rebound (a
                             hydraulic rebound stop)
+``deflection_squared``      (d / d_ref)^2: a spring whose rate grows linearly through the whole stroke (rate
+                            k + 2 c d / d_ref^2), its force of one sense in bump and rebound: the second term of
+                            any smooth spring law beyond its static rate (a gas charge's or an air spring's
+                            n (n + 1) / 2 F0 (d / h)^2, a linkage whose motion ratio changes with travel);
+                            offered to the regression only where ``config/force_shape.yaml``
+                            ``library.deflection_squared`` says so
 ==========================  =======================================================================
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
@@ -102,7 +108,8 @@ from .terms import PhysicsTerm, TermParam, dahl_exact, register_term
 FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity", "velocity_squared",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
             "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection", "bump_contact",
-            "rebound_contact", "compression", "creep_damping", "bump_damping", "rebound_damping")
+            "rebound_contact", "compression", "creep_damping", "bump_damping", "rebound_damping",
+            "deflection_squared")
 N_FEATURES = len(FEATURES)
 #: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
 FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force", "compression")
@@ -177,8 +184,10 @@ def _law_shape_feature(k, v, z, vs, vc):
 
 @njit(cache=True, inline="always")
 def _gap_or_relaxing_feature(k, d, u, oil, rel, dref, cgap):
-    """Features 13-15, 18 and 19 of :data:`FEATURES` (a relaxing spring, springs and dampings met beyond a
-    contact gap)."""
+    """Features 13-15 and 18-20 of :data:`FEATURES` (a relaxing spring, springs and dampings met beyond a
+    contact gap, the spring of one sense in bump and rebound)."""
+    if k == 20:
+        return (d / dref) * (d / dref)
     if k == 13:
         return rel / dref
     if k == 14:
@@ -214,7 +223,8 @@ def learned_force_force(p, po, s, so, i, c):
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
             + p[q + 52] * s[so + _REL + i] / dref
             + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + cgap, 0.0)) / dref
-            + c[i, _C_OIL] * u * (p[q + 72] * max(d - cgap, 0.0) + p[q + 76] * max(-d - cgap, 0.0)) / dref)
+            + c[i, _C_OIL] * u * (p[q + 72] * max(d - cgap, 0.0) + p[q + 76] * max(-d - cgap, 0.0)) / dref
+            + p[q + 80] * x * x)
 
 
 @njit(cache=True, inline="always")
@@ -294,7 +304,9 @@ _COEF_MEANING = {
     "compression": "friction level at d = d_ref of bump over its level at static (less in rebound)",
     "creep_damping": "creep force at the creep velocity (viscous below it, fading above)",
     "bump_damping": "damping force at v = v_ref, d_ref of bump beyond the contact gap, of an intact damper",
-    "rebound_damping": "damping force at v = v_ref, d_ref of rebound beyond the contact gap, of an intact damper"}
+    "rebound_damping": "damping force at v = v_ref, d_ref of rebound beyond the contact gap, of an intact damper",
+    "deflection_squared": "force at d = +-d_ref of a spring whose rate grows through the stroke (one sense in bump "
+                          "and rebound)"}
 
 LEARNED_FORCE = register_term(PhysicsTerm(
     name="unlisted_force", component="axle",

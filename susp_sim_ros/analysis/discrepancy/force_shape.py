@@ -104,6 +104,9 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
                          "holds oil (a hydraulic compression stop, a position-sensitive damper)",
          "rebound_damping": "a damping met beyond {gap_mm:.0f} mm of rebound, growing with the depth, as far as the "
                             "damper holds oil (a hydraulic rebound stop, a position-sensitive damper)",
+         "deflection_squared": "a spring whose rate grows through the whole stroke, its force of one sense in bump "
+                               "and rebound (a gas charge's or air spring's law beyond its static rate, a "
+                               "rising-rate linkage)",
          "road_height": "follows the road height under the wheel (an input, not a state)",
          "road_rate": "follows the rate of the road height under the wheel (an input, not a state)",
          **{f"rotation_{t}{k}": f"follows the wheel's rotation, harmonic {k}, {part} part (an input, not a state)"
@@ -112,6 +115,7 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
 
 #: what a positive and a negative coefficient of a dependence mean (the force is positive up on the body)
 SENSE = {"constant": ("pushes the body up", "pulls the body down"),
+         "deflection_squared": ("stiffer in bump, softer in rebound", "softer in bump, stiffer in rebound"),
          **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play",
                                                 "relaxing_deflection", "bump_contact", "rebound_contact")},
          **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
@@ -131,7 +135,8 @@ GROUP_OF = {f"rotation_{t}{k}": f"rotation_{k}" for t in ("sin", "cos") for k in
 #: a cubic in some, a spring stiffer in rebound than in bump in others); a family selected in most resamples
 #: is a stable dependence of its kind although no single member is (:func:`select`). Features not listed are
 #: a family of their own (the relaxing spring, both spring and damper; the constant; the inputs).
-LAW_OF = {**{f: "spring" for f in ("deflection", "deflection_cubed", "bump_contact", "rebound_contact")},
+LAW_OF = {**{f: "spring" for f in ("deflection", "deflection_cubed", "bump_contact", "rebound_contact",
+                                    "deflection_squared")},
           **{f: "damping" for f in ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
                                     "rebound_damping")},
           **{f: "friction" for f in FRICTION_LIKE},
@@ -179,6 +184,8 @@ _SHAPE_VALUES = {"velocity_beyond_knee": "library.knee_velocities_m_s", "roll_fr
                  "rebound_damping": "library.contact_gaps_m"}
 #: a damping met beyond a contact gap: offered to the regression only where ``library.position_damping`` is set
 POSITION_DAMPING = ("bump_damping", "rebound_damping")
+#: a spring of one sense in bump and rebound: offered only where ``library.deflection_squared`` is set
+EVEN_SPRING = "deflection_squared"
 
 
 def learned_in(variant) -> bool:
@@ -213,7 +220,8 @@ def library(cfg: dict, shapes: dict | None = None) -> list[tuple[str, float | No
     """(feature, shape value) of every library entry: the features with a shape value (knee, free play,
     relaxation time, contact gap) once per offered value, or once at the value ``shapes`` holds for it
     (``{shape: value}``, a learned term's as fitted: :func:`extended`), the others once (a damping beyond a
-    contact gap only where ``library.position_damping`` is set), then the input features offered
+    contact gap only where ``library.position_damping`` is set, the square of the deflection only where
+    ``library.deflection_squared`` is), then the input features offered
     (``library.input_features``), once each."""
     out: list[tuple[str, float | None]] = []
     shapes = shapes or {}
@@ -221,6 +229,8 @@ def library(cfg: dict, shapes: dict | None = None) -> list[tuple[str, float | No
         if f in LAW_SHAPE_FEATURES:
             continue   # a friction law's shape, fitted once a friction is stable (learned_candidate)
         if f in POSITION_DAMPING and not bool(cfg["library.position_damping"]):
+            continue
+        if f == EVEN_SPRING and not bool(cfg["library.deflection_squared"]):
             continue
         if _SHAPE_OF.get(f) in shapes:
             out.append((f, float(shapes[_SHAPE_OF[f]])))
