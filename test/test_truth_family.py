@@ -297,7 +297,8 @@ def test_existing_forms_keep_their_split_and_their_truth():
              off.load_friction_coefficient, off.position_friction_N, off.position_friction_rate_N_m,
              off.seal_friction_N, off.creep_friction_N), name
         if family.FORMS[name].effect == "gas_spring":   # a learned spring is right there (family.py, gas forms)
-            assert family.FORMS[name].leading == ("deflection", "deflection_cubed", "bump_contact", "rebound_contact")
+            assert family.FORMS[name].leading == ("deflection", "deflection_cubed", "bump_contact", "rebound_contact",
+                                                  "deflection_squared")
             assert family.FORMS[name].optional == ("damper_gas_preload", "unlisted_force")
         else:
             assert family.FORMS[name].leading == ()
@@ -672,7 +673,8 @@ def test_the_rising_rate_form_is_an_even_spring_law_on_both_axles():
     three times the cases' gyro noise on some drive."""
     form = family.FORMS["unlisted/rising_rate_linkage"]
     assert form.split == "held_out" and form.effect == "unlisted_force" and form.expect == ("unlisted_force",)
-    assert set(form.leading) == {"deflection", "deflection_cubed", "bump_contact", "rebound_contact"}
+    assert set(form.leading) == {"deflection", "deflection_cubed", "bump_contact", "rebound_contact",
+                                 "deflection_squared"}
     row = np.zeros(ind.NW)
     for k2, at40 in ((120000.0, 192.0), (90000.0, 144.0)):
         row[ind.WRR] = k2

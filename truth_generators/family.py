@@ -104,8 +104,10 @@ def _forms() -> dict[str, GeneratorForm]:
     # law no listed term has, which the learned term (issue 26, written after these forms) may name, right only
     # as a spring of the deflection (amended 2026-11-28 after the first run of the law-family stability named a
     # learned spring on gas/progressive and the bench scored it a false positive: benchmarks/RESULTS.md)
+    # (amended 2026-12-01: deflection_squared, the spring of one sense in bump and rebound, added to the vocabulary
+    # behind library.deflection_squared, is a spring of the deflection too)
     gas = dict(effect="gas_spring", optional=("damper_gas_preload", "unlisted_force"),
-               leading=("deflection", "deflection_cubed", "bump_contact", "rebound_contact"))
+               leading=("deflection", "deflection_cubed", "bump_contact", "rebound_contact", "deflection_squared"))
     unl = dict(effect="unlisted_force", expect=("unlisted_force",))
     lat = dict(effect="lateral_force_friction", base="no_horizontal", expect=("friction_lateral_force",),
                optional=("friction_longitudinal_force",))
@@ -427,7 +429,8 @@ def _forms() -> dict[str, GeneratorForm]:
                       "wheel rate +9.6 / +7.2 kN/m at 40 mm bump and as much lower at 40 mm rebound; +192 / +144 N "
                       "at 40 mm either way)",
                       hidden=TruthHidden(rising_rate_N_m2=(120000.0, 90000.0)),
-                      leading=("deflection", "deflection_cubed", "bump_contact", "rebound_contact"), **unl),
+                      leading=("deflection", "deflection_cubed", "bump_contact", "rebound_contact",
+                               "deflection_squared"), **unl),
     ]
     return {f.name: f for f in fs}
 
