@@ -157,19 +157,26 @@ def test_the_learned_roll_and_friction_features_are_the_models_own_elements_in_t
     assert np.max(np.abs(listed["PITCH_RATE"] - plain["PITCH_RATE"])) > 1e-2 * scale
 
 
+def _frictionless_bump(**learned):
+    """A bump crossing of the ``dahl_only`` car without friction of note (the terms' force output is the learned
+    term's alone) with a learned term of ``learned`` values: the vehicle, the run's (n, 9) outputs (deflections,
+    the terms' force per corner, pitch rate), its deflections D and forces F."""
+    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
+                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
+    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
+        _learned(**learned),)))
+    man = build_maneuver("bump_crossing", vp.wheelbase)
+    outs = [f"{o}_{w}" for o in ("DEFL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
+    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs)
+    return vp, res, res.values[:, :4], res.values[:, 4:8]
+
+
 def test_the_learned_relaxing_spring_in_the_kernel_is_its_feature_on_the_run():
     """The kernel's ``relaxing_deflection`` force along a bump crossing (``dahl_only`` without friction of
     note: the terms' force output is the learned term's alone) is its coefficient times the feature evaluated on
     the run's own deflections (:func:`feature_series`), and it changes the motion."""
-    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
-                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
     coef, tau = 50.0, 0.05
-    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
-        _learned(c_relaxing_deflection=coef, relaxation_time=tau),)))
-    man = build_maneuver("bump_crossing", vp.wheelbase)
-    outs = [f"{o}_{w}" for o in ("DEFL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
-    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs)
-    D, F = res.values[:, :4], res.values[:, 4:8]
+    vp, res, D, F = _frictionless_bump(c_relaxing_deflection=coef, relaxation_time=tau)
     zero = np.zeros_like(D)
     want = coef * feature_series("relaxing_deflection", D, zero, zero, zero, DT,
                                  shape={"relaxation_time": tau})
@@ -185,15 +192,8 @@ def test_the_learned_relaxing_spring_in_the_kernel_is_its_feature_on_the_run():
 def test_the_learned_contact_spring_in_the_kernel_is_its_feature_on_the_run(feature):
     """The kernel's ``bump_contact`` / ``rebound_contact`` force along a bump crossing is its coefficient times
     the feature on the run's own deflections at the contact gap (none within it), and it changes the motion."""
-    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
-                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
     coef, gap = 200.0, 0.01
-    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
-        _learned(**{f"c_{feature}": coef}, contact_gap=gap),)))
-    man = build_maneuver("bump_crossing", vp.wheelbase)
-    outs = [f"{o}_{w}" for o in ("DEFL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
-    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs)
-    D, F = res.values[:, :4], res.values[:, 4:8]
+    vp, res, D, F = _frictionless_bump(**{f"c_{feature}": coef}, contact_gap=gap)
     zero = np.zeros_like(D)
     want = coef * feature_series(feature, D, zero, zero, zero, DT, shape={"contact_gap": gap})
     assert np.abs(F).max() > 100.0 and np.all(np.abs(F[1:][np.abs(D[:-1]) <= gap]) < 1e-9)
@@ -205,15 +205,8 @@ def test_the_learned_contact_spring_in_the_kernel_is_its_feature_on_the_run(feat
 def test_the_learned_even_spring_in_the_kernel_is_its_feature_on_the_run():
     """The kernel's ``deflection_squared`` force along a bump crossing is its coefficient times the square of the
     run's own deflections over d_ref, of one sense in bump and rebound, and it changes the motion."""
-    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
-                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
     coef = 30.0   # [N] at d = +-d_ref (10 mm)
-    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
-        _learned(c_deflection_squared=coef),)))
-    man = build_maneuver("bump_crossing", vp.wheelbase)
-    outs = [f"{o}_{w}" for o in ("DEFL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
-    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs)
-    D, F = res.values[:, :4], res.values[:, 4:8]
+    vp, res, D, F = _frictionless_bump(c_deflection_squared=coef)
     zero = np.zeros_like(D)
     want = coef * feature_series("deflection_squared", D, zero, zero, zero, DT)
     np.testing.assert_allclose(want, coef * (D / 0.01) ** 2, rtol=1e-12)
@@ -227,15 +220,8 @@ def test_the_learned_friction_growing_with_the_compression_in_the_kernel_is_its_
     """The kernel's ``compression`` force along a bump crossing is its coefficient times the feature on the
     run's own deflections (the unit friction element advanced over the same increments; beside a plain
     friction level it raises the level in bump and lowers it in rebound), and it changes the motion."""
-    vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
-                             damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
     coef = 60.0   # [N] of friction level at d_ref of bump
-    model = Model(vp, dataclasses.replace(load_variant("dahl_only"), terms=load_variant("dahl_only").terms + (
-        _learned(c_compression=coef),)))
-    man = build_maneuver("bump_crossing", vp.wheelbase)
-    outs = [f"{o}_{w}" for o in ("DEFL", "F_FRICTION") for w in ("FL", "FR", "RL", "RR")] + ["PITCH_RATE"]
-    res = simulate(model, man.to_inputs(DT), dt=DT, road=man.road, outputs=outs)
-    D, F = res.values[:, :4], res.values[:, 4:8]
+    vp, res, D, F = _frictionless_bump(c_compression=coef)
     zero = np.zeros_like(D)
     want = coef * feature_series("compression", D, zero, zero, zero, DT)
     np.testing.assert_allclose(F[1:], want[:-1], rtol=0, atol=1e-9 * np.abs(F).max())
