@@ -170,6 +170,12 @@ class SimDriver:
         self.pub_clock.publish(msg)
         self.spin_until(lambda: self.node.now_ns() == int(t_ns))
         self.spin_idle()
+        self.wait_delivered()
+
+    def wait_delivered(self, timeout: float = 5.0) -> None:
+        """Spin until every ``/sim/imu/data`` sample the node published has reached the driver: under load a
+        sample published on the last ``/clock`` may still be in DDS after a few idle spins."""
+        self.spin_until(lambda: len(self.imu) >= self.node.published, timeout)
 
     def spin_idle(self, n: int = 3) -> None:
         for _ in range(n):
