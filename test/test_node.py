@@ -354,6 +354,38 @@ def test_a_shutdown_between_two_waits_is_a_normal_stop(capsys):
     assert not rclpy.ok()
 
 
+def test_wall_time_begins_when_the_executor_first_spins():
+    """No tick thread (and so no /sim sample, which would provoke a controller's commands) before the
+    executor spins: inputs that arrive then would wait in DDS while the process still starts up (measured:
+    the first commands 150-190 ms late). The first spin starts it, once."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from _ros_helpers import ros_env
+    from susp_sim_ros.ros.node import SuspSimNode
+    ros_env()
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    try:
+        from rclpy.parameter import Parameter
+        # no SCHED_FIFO for this (the test) process's threads: later tests would inherit it
+        node = SuspSimNode(context=ctx, parameter_overrides=[Parameter("realtime_priority", value=0)])
+        try:
+            assert node._ticker is None and not node.core.started
+            ex = SingleThreadedExecutor(context=ctx)
+            ex.add_node(node)
+            end = time.monotonic() + 10.0
+            while not node.core.started and time.monotonic() < end:
+                ex.spin_once(timeout_sec=0.05)
+            ticker = node._ticker
+            assert ticker is not None and node.core.started
+            ex.spin_once(timeout_sec=0.05)
+            assert node._ticker is ticker and node._start_timer is None
+        finally:
+            node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+
+
 def test_controller_parameters_are_read_only_and_ranged():
     """The controller reads its parameters at start only: rclpy refuses a change instead of accepting one
     that would have no effect; the sample period's range is in its descriptor."""

@@ -74,3 +74,40 @@ def test_misses_and_jitter_counted():
     assert s["deadline_misses"] == 1 and s["ticks"] == 4
     assert abs(s["jitter_max_ms"] - 1.995) < 1e-9
     assert abs(s["lateness_p50_ms"] - 0.0055) <= 1e-3
+
+
+def test_start_up_heap_is_collected_then_frozen():
+    """Garbage left by start-up is collected (a reference cycle is freed, not frozen forever) and every
+    survivor goes to the permanent generation, so no later full collection walks it in real time."""
+    import gc
+    import weakref
+
+    from susp_sim_ros.ros.timing import freeze_start_up_heap
+
+    class Cycle:
+        pass
+
+    a = Cycle()
+    a.self = a
+    dead = weakref.ref(a)
+    del a
+    alive = Cycle()
+    try:
+        freeze_start_up_heap()
+        assert dead() is None
+        assert gc.get_freeze_count() > 0
+        assert not any(o is alive for o in gc.get_objects())  # frozen objects are out of every generation
+    finally:
+        gc.unfreeze()
+
+
+def test_warm_up_loads_the_semi_active_family_before_real_time():
+    """The first damper command must not load the damper family (~20 ms of YAML) inside a tick."""
+    from susp_sim_ros.model.params import DEFAULT_VEHICLE
+    from susp_sim_ros.model.vehicle import Model
+    from susp_sim_ros.ros.parameters import warm_up
+
+    model = Model(DEFAULT_VEHICLE, "full")
+    assert model._dampers is None
+    warm_up(model)
+    assert model._dampers is not None

@@ -98,7 +98,9 @@ class DamperControllerNode(Node):
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``susp_damper_controller [--ros-args ...]``. Exit 0 on SIGINT/SIGTERM, 2 on a
     bad parameter."""
-    return run_node(DamperControllerNode, NODE_NAME, args, help_text=usage(NODE_NAME, HELP_SUMMARY, PARAMETERS))
+    # real time too: a full garbage collection in the controller would hold its commands back as well
+    return run_node(DamperControllerNode, NODE_NAME, args, realtime=True,
+                    help_text=usage(NODE_NAME, HELP_SUMMARY, PARAMETERS))
 
 
 if __name__ == "__main__":

@@ -30,6 +30,7 @@ import time
 import numpy as np
 
 from rclpy.node import Node
+from rclpy.timer import Timer
 from rclpy.serialization import serialize_message
 
 from diagnostic_msgs.msg import DiagnosticArray
@@ -86,8 +87,12 @@ class SuspSimNode(Node):
         self._wall0 = time.monotonic()
         self.published = 0
         self._ticker: TickThread | None = None
+        self._start_timer: Timer | None = None
         if start_thread and not self.sim_time:
-            self._start_ticker(int(p["realtime_priority"]))
+            # Real time begins when the executor first spins, not here: the first samples provoke inputs (a
+            # controller's commands) that would otherwise wait in DDS while the process still starts up.
+            priority = int(p["realtime_priority"])
+            self._start_timer = self.create_timer(0.0, lambda: self._begin_real_time(priority))
         self.create_timer(1.0 / float(p["diagnostics_rate_hz"]), self.publish_diagnostics)
         self.get_logger().info(
             f"{NODE_NAME}: vehicle {self.vehicle}, variant {self.variant}, oil {oil.tolist()}, "
@@ -137,6 +142,13 @@ class SuspSimNode(Node):
         self.pub_odom = self.create_publisher(Odometry, SIM_ODOM, OUTPUT_QOS)
         self.pub_susp = self.create_publisher(Float64MultiArray, SIM_SUSPENSION, OUTPUT_QOS)
         self.pub_diag = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10)
+
+    def _begin_real_time(self, priority: int) -> None:
+        """The one-shot timer's callback at the executor's first spin: start the tick thread."""
+        if self._start_timer is not None:
+            self.destroy_timer(self._start_timer)
+            self._start_timer = None
+            self._start_ticker(priority)
 
     def _start_ticker(self, priority: int) -> None:
         """Wall time: the tick thread publishing at fixed deadlines, at SCHED_FIFO ``priority`` when
