@@ -354,10 +354,38 @@ def test_a_shutdown_between_two_waits_is_a_normal_stop(capsys):
     assert not rclpy.ok()
 
 
+def test_a_real_time_node_spins_with_its_start_up_heap_collected_and_frozen(monkeypatch):
+    """run_node(realtime=True) collects and freezes the start-up heap after the node is made and before the
+    executor first spins (a full collection in real time held the GIL for 90-200 ms)."""
+    import sys
+    from rclpy.node import Node
+    from _ros_helpers import ros_env
+    from susp_sim_ros.ros import run
+    ros_env()
+    order: list[str] = []
+    monkeypatch.setattr(run, "freeze_start_up_heap", lambda: order.append("freeze"))
+
+    def make():
+        order.append("make")
+        return Node("freeze_order_probe")
+
+    def stop(node):
+        order.append("spin")
+        return True
+
+    interval = sys.getswitchinterval()
+    try:
+        assert run.run_node(make, "probe", ["prog"], realtime=True, stop_when=stop) == 0
+    finally:
+        sys.setswitchinterval(interval)
+    assert order == ["make", "freeze", "spin"]
+
+
 def test_wall_time_begins_when_the_executor_first_spins():
     """No tick thread (and so no /sim sample, which would provoke a controller's commands) before the
     executor spins: inputs that arrive then would wait in DDS while the process still starts up (measured:
-    the first commands 150-190 ms late). The first spin starts it, once."""
+    the first commands 150-190 ms late). The first spin starts it, once; a node
+    closed before it spins never starts it."""
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from _ros_helpers import ros_env
@@ -380,8 +408,21 @@ def test_wall_time_begins_when_the_executor_first_spins():
             assert ticker is not None and node.core.started
             ex.spin_once(timeout_sec=0.05)
             assert node._ticker is ticker and node._start_timer is None
+            assert len(list(node.timers)) == 1  # the one-shot timer is gone; only the diagnostics timer is left
+            ex.shutdown()
         finally:
             node.destroy_node()
+        closed = SuspSimNode(context=ctx, parameter_overrides=[Parameter("realtime_priority", value=0)])
+        try:
+            closed.close()
+            ex = SingleThreadedExecutor(context=ctx)
+            ex.add_node(closed)
+            ex.spin_once(timeout_sec=0.05)
+            ex.spin_once(timeout_sec=0.05)
+            assert closed._ticker is None and not closed.core.started
+            ex.shutdown()
+        finally:
+            closed.destroy_node()
     finally:
         rclpy.try_shutdown(context=ctx)
 

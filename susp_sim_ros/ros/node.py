@@ -60,8 +60,9 @@ ERROR_DIAGNOSTIC_GRACE_S = 0.5  # after a divergence, spin this long before exit
 
 
 class SuspSimNode(Node):
-    """The simulation node (see the module docstring). ``start_thread=False`` leaves wall-time stepping
-    to the caller (:meth:`tick`), for deterministic in-process tests. ``inputs`` (:class:`.inputs.InputHandler`)
+    """The simulation node (see the module docstring). In wall time its tick thread starts at the
+    executor's first spin; ``start_thread=False`` leaves wall-time stepping to the caller (:meth:`tick`),
+    for deterministic in-process tests. ``inputs`` (:class:`.inputs.InputHandler`)
     holds the input subscriptions; its ``on_*`` methods are their callbacks ``(message, message info or
     None)``, which tests may call directly."""
 
@@ -298,7 +299,10 @@ class SuspSimNode(Node):
 
     # -- shutdown -------------------------------------------------------------------------------------
     def close(self) -> None:
-        """Stop the tick thread and finalise the recording (idempotent)."""
+        """Stop the tick thread (or keep it from starting) and finalise the recording (idempotent)."""
+        if self._start_timer is not None:
+            self.destroy_timer(self._start_timer)
+            self._start_timer = None
         if self._ticker is not None:
             self._ticker.stop()
         with self.lock:
