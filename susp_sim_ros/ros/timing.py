@@ -109,9 +109,9 @@ def freeze_start_up_heap() -> None:
     the compiled model) to the collector's permanent generation (:func:`gc.freeze`), before real time begins.
 
     Why: a full (generation 2) collection walks every tracked object and holds the GIL throughout. With the
-    ~110 000 start-up objects it took 90-200 ms on a 2-core host (measured 2026-12-01), stopping the tick
-    thread and the executor alike: commands queued in DDS for that long, and the first ones after it reached
-    the dampers 150-190 ms late. Frozen objects are never scanned again, so later collections cover only what
+    ~110 000 start-up objects it took 90-280 ms on a 2-core host (measured 2026-12-01); in real time it would
+    stop the tick thread and the executor alike, and every input would wait in DDS that long. Frozen objects
+    are never scanned again, so later collections cover only what
     the run allocates (a full one after the freeze: microseconds). Call it once, after the last start-up
     allocation and before the tick thread starts."""
     gc.collect()
