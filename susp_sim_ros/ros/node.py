@@ -146,10 +146,17 @@ class SuspSimNode(Node):
 
     def _begin_real_time(self, priority: int) -> None:
         """The one-shot timer's callback at the executor's first spin: start the tick thread."""
-        if self._start_timer is not None:
-            self.destroy_timer(self._start_timer)
-            self._start_timer = None
+        if self._cancel_start():
             self._start_ticker(priority)
+
+    def _cancel_start(self) -> bool:
+        """Destroy the one-shot start timer; whether it was still pending (False after close() or a
+        first call)."""
+        if self._start_timer is None:
+            return False
+        self.destroy_timer(self._start_timer)
+        self._start_timer = None
+        return True
 
     def _start_ticker(self, priority: int) -> None:
         """Wall time: the tick thread publishing at fixed deadlines, at SCHED_FIFO ``priority`` when
@@ -300,9 +307,7 @@ class SuspSimNode(Node):
     # -- shutdown -------------------------------------------------------------------------------------
     def close(self) -> None:
         """Stop the tick thread (or keep it from starting) and finalise the recording (idempotent)."""
-        if self._start_timer is not None:
-            self.destroy_timer(self._start_timer)
-            self._start_timer = None
+        self._cancel_start()
         if self._ticker is not None:
             self._ticker.stop()
         with self.lock:
