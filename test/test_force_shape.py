@@ -731,11 +731,11 @@ def _flat_road():
 
 
 def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fit():
-    """A stable spring met beyond a gap (bump or rebound contact) brings the cube of the deflection on its axle
-    into the learned trial (force_shape.spring_law): a coefficient neutral 0 after the stable ones, stepped by
-    config/force_shape.yaml, written into the term like the others, and named in the words with its force at
-    40 mm (d_ref 10 mm: 64 times its coefficient) once fitted. Not where the cube is stable itself, nor beside
-    a friction or an axle without a contact."""
+    """A stable spring met beyond a gap (bump or rebound contact) or of one sense in bump and rebound brings the
+    cube of the deflection on its axle into the learned trial (force_shape.spring_law): a coefficient neutral 0
+    after the stable ones, stepped by config/force_shape.yaml, written into the term like the others, and named
+    in the words with its force at 40 mm (d_ref 10 mm: 64 times its coefficient) once fitted. Not where the cube
+    is stable itself, nor beside a friction or an axle without a contact or an even spring."""
     cfg = fs.settings()
 
     def selection(*cols):
@@ -748,6 +748,11 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     assert fs.spring_law(selection(fs.Column("sign_velocity", "rear"), fs.Column("deflection", "front"))) == []
     both = selection(fs.Column("bump_contact", "front", 0.0), fs.Column("rebound_contact", "rear", 0.02))
     assert fs.spring_law(both) == [fs.Column("deflection_cubed", "front"), fs.Column("deflection_cubed", "rear")]
+    # the even spring is a smooth law's first term beyond the static rate, the cube its next (a gas column)
+    even = selection(fs.Column("deflection_squared", "front"), fs.Column("sign_velocity", "rear"))
+    assert fs.spring_law(even) == [fs.Column("deflection_cubed", "front")]
+    squared_and_cubed = selection(fs.Column("deflection_squared", "rear"), fs.Column("deflection_cubed", "rear"))
+    assert fs.spring_law(squared_and_cubed) == []
 
     cand = fs.learned_candidate(contact, cfg)
     names = [p.name for p in cand.params]

@@ -821,18 +821,23 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
 
 
 def spring_law(sel: Selection) -> list[Column]:
-    """The smooth progressive part of a learned contact spring's law, fitted beside it: on each axle where a
-    spring met beyond a gap (:data:`CONTACTS`) is stable and the cube of the deflection is not, a
-    ``deflection_cubed`` coefficient (neutral 0). A contact is a spring law to first order: piecewise linear,
-    with one corner at its gap. The elements that make such laws stiffen smoothly with travel (an elastomer
-    bumper as it is squeezed, the gas of a damper's charge or an air spring compressed, closely wound coils
-    coming to block: Reimpell, Stoll and Betzler, The Automotive Chassis, 2nd ed., 2001, ch. 5), and a gas
-    acts on both sides of static, so the corner alone reads one side of a law that bends on both. The
-    resamples split their votes between the members of the spring family (:data:`LAW_OF`) and the stable set
-    keeps one member per axle; the fit then decides how much of the cube the drives want, under every test
-    of the trial."""
+    """The smooth progressive part of a learned spring law, fitted beside it: on each axle where a spring met
+    beyond a gap (:data:`CONTACTS`) or the spring of one sense in bump and rebound (:data:`EVEN_SPRING`) is
+    stable and the cube of the deflection is not, a ``deflection_cubed`` coefficient (neutral 0). A contact
+    is a spring law to first order: piecewise linear, with one corner at its gap. The elements that make such
+    laws stiffen smoothly with travel (an elastomer bumper as it is squeezed, the gas of a damper's charge or
+    an air spring compressed, closely wound coils coming to block: Reimpell, Stoll and Betzler, The
+    Automotive Chassis, 2nd ed., 2001, ch. 5), and a gas acts on both sides of static, so the corner alone
+    reads one side of a law that bends on both. The even spring is a smooth law's first term beyond the
+    static rate and the cube its next, with the same sign where the law stiffens in bump (a gas column of
+    height h compressed polytropically, exponent n: F0 n (d / h) (1 + (n + 1) / 2 (d / h) + (n + 1) (n + 2) / 6
+    (d / h)^2 + ...)), so the square alone reads a law that grows in bump and falls in rebound as one of one
+    sense. The resamples split their votes between the members of the spring family (:data:`LAW_OF`) and the
+    stable set keeps one member per axle; the fit then decides how much of the cube the drives want, under
+    every test of the trial."""
     stable = {c.key for c in sel.stable}
-    axles = sorted({c.axle for c in sel.stable if c.feature in CONTACTS}, key=AXLES.index)
+    axles = sorted({c.axle for c in sel.stable if c.feature in CONTACTS or c.feature == EVEN_SPRING},
+                   key=AXLES.index)
     return [Column(PROGRESSIVE, a) for a in axles if (PROGRESSIVE, a) not in stable]
 
 
