@@ -355,7 +355,7 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/progressive_spring_rear"].leading == ("bump_contact", "deflection_cubed",
                                                                         "deflection")
     assert family.FORMS["unlisted/air_assist_front"].leading == ("bump_contact", "deflection_cubed",
-                                                                 "deflection")
+                                                                 "deflection", "deflection_squared")
     assert family.FORMS["unlisted/rebound_spring_front"].leading == ("rebound_contact", "deflection_cubed",
                                                                      "deflection")
     assert family.FORMS["unlisted/jounce_bumper_rear"].leading == ("bump_contact", "deflection_cubed",

@@ -277,7 +277,11 @@ def _forms() -> dict[str, GeneratorForm]:
                       "holds that), k_a 8000 N/m, h 0.12 m, n 1.4 (adiabatic): stiffer in bump, softer in rebound "
                       "(+204 N at 40 mm bump, +93 N at 40 mm rebound); rear springs linear",
                       hidden=TruthHidden(air_spring_rate_N_m=(8000.0, 0.0)),
-                      leading=("bump_contact", "deflection_cubed", "deflection"), **unl),
+                      # (amended 2026-12-02: the law's first term beyond the static rate is k_a (n + 1) / (2 h) d^2,
+                      # about 80000 d^2 N, and its next 755000 d^3: the spring of one sense in bump and rebound
+                      # (deflection_squared, in the vocabulary behind library.deflection_squared since 2026-12-01,
+                      # as for the gas forms) reads it right; no score of a run with that switch off changes)
+                      leading=("bump_contact", "deflection_cubed", "deflection", "deflection_squared"), **unl),
         # added 2026-11-28 (issues 24 and 26), held out from the start, before any run of the finder on it and before
         # the learned term's trial after its listed rival is refused it is to test blind: a spring law no candidate
         # has, one-sided with a gap, in rebound, on the front axle
