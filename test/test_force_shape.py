@@ -734,8 +734,9 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     """A stable spring met beyond a gap (bump or rebound contact) or of one sense in bump and rebound brings the
     cube of the deflection on its axle into the learned trial (force_shape.spring_law): a coefficient neutral 0
     after the stable ones, stepped by config/force_shape.yaml, written into the term like the others, and named
-    in the words with its force at 40 mm (d_ref 10 mm: 64 times its coefficient) once fitted. Not where the cube
-    is stable itself, nor beside a friction or an axle without a contact or an even spring."""
+    in the words with its force at 40 mm (d_ref 10 mm: 64 times its coefficient) once fitted, once per axle with
+    its strongest spring. Not where the cube is stable itself, nor beside a friction or an axle without a contact
+    or an even spring."""
     cfg = fs.settings()
 
     def selection(*cols):
@@ -778,6 +779,15 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     assert "beyond 26 mm of rebound" in words
     assert "progressive part (the cube of the deflection: rear +192 N at 40 mm)" in words
     assert "progressive" not in contact.description(np.array([80.0, 30.0]), {"deflection_cubed_rear": 0.0})
+    # the even spring's cube is named too, and a part shared by two springs of one axle once, with the stronger
+    even_words = even.description(np.array([40.0, 30.0]), {"deflection_cubed_front": -2.0})
+    assert "progressive part (the cube of the deflection: front -128 N at 40 mm)" in even_words
+    two = fs.Selection({("bump_contact", "front"): 1.0, ("deflection_squared", "front"): 1.0},
+                       [fs.Column("bump_contact", "front", 0.01), fs.Column("deflection_squared", "front")],
+                       np.array([60.0, 40.0]), np.array([0.6, 0.4]), 24)
+    two_words = two.description(None, {"deflection_cubed_front": 1.0})
+    assert two_words.count("progressive part") == 1
+    assert two_words.index("progressive part") < two_words.index(fs.WORDS["deflection_squared"].split(",")[0])
 
 
 def test_a_recorded_road_that_leads_on_one_axle_only_is_no_input_finding():

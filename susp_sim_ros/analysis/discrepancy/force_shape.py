@@ -186,6 +186,9 @@ _SHAPE_VALUES = {"velocity_beyond_knee": "library.knee_velocities_m_s", "roll_fr
 POSITION_DAMPING = ("bump_damping", "rebound_damping")
 #: a spring of one sense in bump and rebound: offered only where ``library.deflection_squared`` is set
 EVEN_SPRING = "deflection_squared"
+#: the spring features a smooth progressive part (:data:`PROGRESSIVE`) is fitted beside (:func:`spring_law`) and
+#: named with (:meth:`Selection.description`)
+SMOOTH_LAW_SPRINGS = (*CONTACTS, EVEN_SPRING)
 
 
 def learned_in(variant) -> bool:
@@ -342,6 +345,7 @@ class Selection:
         coef = self.coef if coef is None else np.asarray(coef, float)
         shapes = shapes or {}
         parts = []
+        worded: set[str] = set()
         for feature in self.dependences:
             ks = [k for k in np.argsort(-self.share) if self.stable[k].feature == feature]
             c = self.stable[ks[0]]
@@ -353,8 +357,10 @@ class Selection:
             more, less = SENSE[feature]
             where = ", ".join(f"{self.stable[k].axle} {more if coef[k] > 0 else less} "
                               f"{100 * self.share[k]:.0f} %" for k in ks)
-            if feature in CONTACTS:
-                w += _progressive_words(self, shapes, {self.stable[k].axle for k in ks})
+            if feature in SMOOTH_LAW_SPRINGS:   # the part once per axle, with the strongest spring there
+                axles_here = {self.stable[k].axle for k in ks} - worded
+                w += _progressive_words(self, shapes, axles_here)
+                worded |= axles_here
             parts.append(f"{w} ({where})")
         law = _friction_law_words(self, shapes)
         if law:
@@ -398,7 +404,7 @@ def _friction_law_words(sel: Selection, values: dict) -> str:
 
 
 def _progressive_words(sel: Selection, values: dict, axles: set[str]) -> str:
-    """Words on a contact spring's fitted progressive part on ``axles`` (:func:`spring_law`; ``values`` the
+    """Words on a spring law's fitted progressive part on ``axles`` (:func:`spring_law`; ``values`` the
     fitted coefficients by name, each its force at the learned term's deflection_ref): its force at
     :data:`WORDS_DEFLECTION_M` of bump; none when not fitted."""
     cube = (WORDS_DEFLECTION_M / float(shape_defaults()["deflection_ref"])) ** 3
@@ -836,7 +842,7 @@ def spring_law(sel: Selection) -> list[Column]:
     stable set keeps one member per axle; the fit then decides how much of the cube the drives want, under
     every test of the trial."""
     stable = {c.key for c in sel.stable}
-    axles = sorted({c.axle for c in sel.stable if c.feature in CONTACTS or c.feature == EVEN_SPRING},
+    axles = sorted({c.axle for c in sel.stable if c.feature in SMOOTH_LAW_SPRINGS},
                    key=AXLES.index)
     return [Column(PROGRESSIVE, a) for a in axles if (PROGRESSIVE, a) not in stable]
 
