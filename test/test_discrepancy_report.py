@@ -152,6 +152,11 @@ def test_the_reason_says_why_a_road_led_force_was_named_as_physics():
     assert words.startswith("the force the model lacks follows the road height under the wheel where the drives")
     assert "(bump_contact)" in words and "(sine_intact, sine_rear_empty)" in words and "62 %" in words
     assert "an input, not a state" not in words and words.endswith("physics, not an input")
+    # the law as fitted, where the competition of a family's members kept another form than the reading's
+    kept = input_weighed_words({"input_feature": "road_height", "dependences": ["bump_contact"],
+                                "fitted_dependences": ["deflection_squared"], "input_silent_drives": ["sine_intact"],
+                                "input_silent_heldout_gain": 0.3, "added": ["unlisted_force"]})
+    assert "(deflection_squared)" in kept and "bump_contact" not in kept
     # no law of the states stable, a spring offered on the axle the road led alone: said so, no first form named
     offered = input_weighed_words({"input_feature": "road_height", "dependences": ["deflection_cubed"],
                                    "spring_offered_on_axle": "rear", "input_silent_drives": ["sine_intact"],

@@ -50,6 +50,8 @@ def test_a_law_of_the_states_the_road_excites_is_physics_not_an_input():
     assert [t["name"] for t in rep["terms"] if t["name"] == fs.TERM] == [fs.TERM]
     learned = f.accepted_[0]
     assert learned["name"] == fs.TERM and fs.LAW_OF[learned["dependences"][0]] == "spring"
+    assert reading["fitted_dependences"] == learned["dependences"]   # the reason names the law as fitted
+    assert f"a law of the states ({', '.join(learned['dependences'])})" in rep["reason"]
     assert "front axle only" in learned["description"]
     assert not f.unmeasured_ and "physics, not an input" in rep["reason"]
     assert "road height under the wheel where the drives carry it" in rep["reason"]

@@ -954,7 +954,8 @@ class DiscrepancyFinder:
         reading, while the drives the road does not reach did not tell (the calibration, compromised by
         the road error, leaves a residual there that a refit takes up): this is a condition beside the
         tests, not instead of them. The figures join ``checks`` and the step's ``state_reading``, with the
-        terms the trial ``added``."""
+        terms the trial ``added`` and, where the learned term is one, its ``fitted_dependences`` (the form the
+        competition of :meth:`_law_members_compete` kept, which may differ from the reading's)."""
         folds = [self._fold_pair(ev, cur, new, list(new.idx).index(g)) for g in silent if g in new.idx]
         sq_old = sum(f[0] for f in folds)
         n_held = sum(f[4] for f in folds)
@@ -963,7 +964,11 @@ class DiscrepancyFinder:
         weighed = {"input_silent_heldout_gain": float(gain), "states_explain_input_silent_drives": explains}
         checks.update(weighed)
         record = self.force_shape_[-1]["state_reading"]   # this step's (_state_reading)
-        record.update(weighed, added=[n for n in new.structure.names if n not in cur.structure.names])
+        added = [n for n in new.structure.names if n not in cur.structure.names]
+        record.update(weighed, added=added)
+        if force_shape.TERM in added and self.learned_selection_ is not None:
+            # the law as fitted: the competition of a law family's members may have kept another form
+            record["fitted_dependences"] = self.learned_selection_.dependences
         if explains:
             self.input_weighed_.append(record)
         return explains

@@ -246,7 +246,7 @@ def _input_words(feature: str) -> str:
 def input_weighed_words(reading: dict) -> str:
     """The reason's words for an input-led step whose states' reading stood as physics (an entry of the
     finder's ``input_weighed_``, the step's ``state_reading``): what the input led, and why the states'
-    reading is named instead."""
+    reading is named instead, by the law as fitted (``fitted_dependences``, else the reading's)."""
     led = _input_words(reading["input_feature"])
     axle = reading.get("spring_offered_on_axle")
     if axle:   # no law of the states was stable: a spring of the axle the road led alone was offered
@@ -254,7 +254,8 @@ def input_weighed_words(reading: dict) -> str:
                 f"axles, which roll over the same recorded track) and no law of the states was stable, but a spring "
                 f"of that axle offered to the fit")
     else:
-        what = f"{led} where the drives carry it, but a law of the states ({', '.join(reading['dependences'])})"
+        law = reading.get("fitted_dependences") or reading["dependences"]
+        what = f"{led} where the drives carry it, but a law of the states ({', '.join(law)})"
     return (f"the force the model lacks {what} passed every test and also predicts the drives the input "
             f"does not reach ({', '.join(reading['input_silent_drives'])}) held out, "
             f"{100 * float(reading['input_silent_heldout_gain']):.0f} % of their excess: physics, not an input")
