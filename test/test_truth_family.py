@@ -349,7 +349,8 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert family.FORMS["unlisted/load_friction_front"].leading == ("sign_velocity", "compression")
     assert family.FORMS["unlisted/position_friction"].leading == ("sign_velocity", "compression")
     assert family.FORMS["unlisted/damper_valve_stop_rear"].leading == ("velocity_beyond_knee", "velocity_squared")
-    assert family.FORMS["unlisted/viscoelastic_bushing"].leading == ("deflection_velocity", "deflection")
+    assert family.FORMS["unlisted/viscoelastic_bushing"].leading == ("relaxing_deflection", "deflection_velocity",
+                                                                     "deflection")
     assert family.FORMS["unlisted/bushing_two_branch_front"].leading == ("relaxing_deflection", "deflection_velocity",
                                                                          "deflection")
     assert family.FORMS["unlisted/progressive_spring_rear"].leading == ("bump_contact", "deflection_cubed",
