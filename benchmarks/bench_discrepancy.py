@@ -76,7 +76,8 @@ over three seeds on 2 processes (about 2.5 h on the 2-core VM of ``benchmarks/RE
     .venv/bin/python benchmarks/bench_discrepancy.py --family all --seeds 1,2,3 --jobs 2 --json > family.json
 
 Parts of one run made apart, or cases re-run after a change, are summarised together with
-``--merge a.json b.json ... [--json]`` (a later file's case replaces an earlier one).
+``--merge a.json b.json ... [--json]`` (a later file's case replaces an earlier one; each case's leading
+dependence is scored against the family's labels as they are at the merge).
 """
 from __future__ import annotations
 
@@ -733,11 +734,29 @@ CASE_KEYS = ("case", "family_form", "split", "seed", "noise_deg_s", "effect", "v
              "zero_effect_terms", "elapsed_s", "noise_floor_over_true", "gyro_noise_floors_over_true")
 
 
+def _leading_rescored(case: dict) -> dict:
+    """``case`` with its leading dependence scored against its form's right leading dependences as the family
+    holds them now (a label of the truth amended after the run, e.g. a form that predates the feature that
+    reads its physics); the labels it ran with kept as ``leading_expected_at_run`` where they differ. A case
+    of a form the family no longer has, or that named no learned dependence, is returned as it is."""
+    name = case.get("family_form")
+    form = FORMS_BY_NAME.get(name) if isinstance(name, str) else None
+    deps = case.get("unlisted_dependences")
+    if form is None or not form.leading or not isinstance(deps, list):
+        return case
+    now = list(form.leading)
+    if case.get("leading_expected") == now:
+        return case
+    return {**case, "leading_expected": now, "leading_expected_at_run": case.get("leading_expected"),
+            "leading_dependence_right": bool(deps) and deps[0] in now}
+
+
 def merge_family(outputs: Sequence[tuple[str, dict]]) -> dict:
     """The family output over the cases of several ``--family --json`` outputs (``(file, object)`` in
     order: the parts of one run made side by side, or a run and the cases re-run after it), re-summarised
-    per split; a later file's case replaces an earlier one of the same name and noise. Raises ValueError
-    naming the file that is no family output."""
+    per split; a later file's case replaces an earlier one of the same name and noise, and each case's
+    leading dependence is scored against the family's labels as they are now (:func:`_leading_rescored`).
+    Raises ValueError naming the file that is no family output."""
     cases: dict[tuple[str, float], dict] = {}
     for name, obj in outputs:
         if not isinstance(obj, dict) or not isinstance(obj.get("family"), str) or not isinstance(obj.get("cases"),
@@ -748,7 +767,7 @@ def merge_family(outputs: Sequence[tuple[str, dict]]) -> dict:
             missing = [k for k in CASE_KEYS if k not in r] if isinstance(r, dict) else list(CASE_KEYS)
             if missing:
                 raise ValueError(f"{name}: a case without {', '.join(map(repr, missing))}: not a family case")
-            cases[(r["case"], r["noise_deg_s"])] = r
+            cases[(r["case"], r["noise_deg_s"])] = _leading_rescored(r)
     families = sorted({obj["family"] for _, obj in outputs})
     return _family_output(families[0] if len(families) == 1 else "all", list(cases.values()),
                           sum(float(obj.get("elapsed_s", 0.0)) for _, obj in outputs),

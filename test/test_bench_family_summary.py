@@ -74,6 +74,26 @@ def test_merge_takes_the_later_run_of_a_case_and_re_summarises():
     assert s["verdicts_right"] == 1
 
 
+def test_merge_scores_the_leading_dependence_against_the_labels_as_they_are_now():
+    """A right leading dependence amended after a run (a form that predates the feature reading its physics)
+    counts at the merge; the labels the case ran with are kept beside them."""
+    form = "unlisted/viscoelastic_bushing"
+    case = {**_case(form, "unlisted_force", 1.1, named=["unlisted_force"], expected=["unlisted_force"],
+                    leading_right=False), "unlisted_dependences": ["relaxing_deflection"],
+            "leading_expected": ["deflection_velocity", "deflection"]}
+    out = BENCH.merge_family([("old.json", _run([case]))])
+    merged = out["cases"][0]
+    assert merged["leading_dependence_right"] is True
+    assert merged["leading_expected_at_run"] == ["deflection_velocity", "deflection"]
+    assert "relaxing_deflection" in merged["leading_expected"]
+    assert out["by_split"]["held_out"]["unlisted_named_with_right_leading_dependence"] == 1
+    wrong = {**case, "unlisted_dependences": ["sign_velocity"]}
+    assert BENCH.merge_family([("w.json", _run([wrong]))])["cases"][0]["leading_dependence_right"] is False
+    # a form the family no longer has is summarised as it ran
+    gone = {**case, "family_form": "unlisted/withdrawn", "case": "unlisted/withdrawn#1"}
+    assert BENCH.merge_family([("g.json", _run([gone]))])["cases"][0] == gone
+
+
 def test_merge_names_the_file_that_is_no_family_run():
     with pytest.raises(ValueError, match="report.json: not the JSON of bench_discrepancy.py --family"):
         BENCH.merge_family([("a.json", _run([])), ("report.json", {"verdict": "missing_physics"})])
