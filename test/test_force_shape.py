@@ -790,6 +790,48 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     assert two_words.index("progressive part") < two_words.index(fs.WORDS["deflection_squared"].split(",")[0])
 
 
+@pytest.mark.parametrize("switch", [False, True])
+def test_a_progressive_part_is_kept_where_it_predicts_the_drives_held_out_better(monkeypatch, switch):
+    """``fit.progressive_part_held_out``: the freed cube (a lower criterion) is kept only where the drives held
+    out one at a time are predicted better with it (``DiscrepancyFinder._heldout``), and the step's record says
+    so; off, the criterion alone decides, and a cube the criterion refuses is never held out."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy import finder as fm
+
+    class _Structure:
+        def without(self, name):
+            return self
+
+        def with_(self, cand):
+            return self
+
+        def embed(self, other, x):
+            return x
+
+    plain = SimpleNamespace(bic=100.0, structure=_Structure(), x=np.zeros(2))
+    freed = SimpleNamespace(bic=90.0, structure=_Structure(), x=np.ones(2))
+    held = {id(plain): 0.060, id(freed): 0.066}   # the cube extrapolates held out (unequal_axle_charges#1)
+    stub = SimpleNamespace(force_shape_=[{}], _heldout=lambda ev, f: {"after_deg_s": held[id(f)]})
+    monkeypatch.setattr(fm.force_shape, "learned_candidate", lambda sel: SimpleNamespace(name=fs.TERM))
+    monkeypatch.setattr(fm.force_shape, "settings", lambda: {"fit.progressive_part_held_out": switch})
+    monkeypatch.setattr(fm, "fit_structure", lambda *a, **k: freed)
+    ev = SimpleNamespace(cases=[0, 1, 2])
+    sel = SimpleNamespace(dependences=["deflection_squared"])
+    kept = fm.DiscrepancyFinder._with_progressive_part(stub, ev, plain, sel)
+    assert kept is (plain if switch else freed)
+    if switch:
+        assert stub.force_shape_[-1]["progressive_part"] == [
+            {"dependences": ["deflection_squared"], "heldout_without_deg_s": 0.060, "heldout_with_deg_s": 0.066,
+             "kept": False}]
+        held[id(freed)] = 0.055   # predicts them better: kept
+        assert fm.DiscrepancyFinder._with_progressive_part(stub, ev, plain, sel) is freed
+    else:
+        assert "progressive_part" not in stub.force_shape_[-1]
+    freed.bic = 110.0   # the criterion refuses it: the plain fit, nothing held out
+    stub._heldout = None
+    assert fm.DiscrepancyFinder._with_progressive_part(stub, ev, plain, sel) is plain
+
+
 def test_a_recorded_road_that_leads_on_one_axle_only_is_no_input_finding():
     """Front and rear wheels roll over the same recorded track, so a road recorded off changes both axles'
     input alike: a missing force the recorded road leads on one axle only is a law of the states there that

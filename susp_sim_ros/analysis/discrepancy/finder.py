@@ -1152,12 +1152,24 @@ class DiscrepancyFinder:
         fit with the smooth progressive part freed (:func:`force_shape.spring_law`, starting at 0); the one
         the criterion prefers is kept. In two stages, the corner first and its bending second, as the
         friction's weakening: started together, the gap traded against the cube and the fit found another
-        basin (a rebound spring beyond 15 mm: 1.12-1.15 -> 1.17-1.22x the noise held out, 2026-11-30)."""
+        basin (a rebound spring beyond 15 mm: 1.12-1.15 -> 1.17-1.22x the noise held out, 2026-11-30).
+
+        With ``fit.progressive_part_held_out`` the freed fit must also predict the drives held out one at a
+        time better (:meth:`_heldout`, each refitted in full without the drive): the cube is informed most by
+        the drive with the largest strokes, and refitted without it, it extrapolates. The figures go to the
+        step's record (``progressive_part``)."""
         cand = force_shape.learned_candidate(sel)
         st = plain.structure.without(cand.name).with_(cand)
         x1 = st.embed(plain.structure, plain.x)   # every value as fitted, the cube at neutral
         freed = fit_structure(ev, st, x1, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
-        return freed if freed.bic < plain.bic else plain
+        if freed.bic >= plain.bic or not force_shape.settings()["fit.progressive_part_held_out"]:
+            return freed if freed.bic < plain.bic else plain
+        held_plain, held_freed = (self._heldout(ev, f)["after_deg_s"] for f in (plain, freed))
+        if self.force_shape_:
+            self.force_shape_[-1].setdefault("progressive_part", []).append(
+                {"dependences": sel.dependences, "heldout_without_deg_s": held_plain,
+                 "heldout_with_deg_s": held_freed, "kept": bool(held_freed < held_plain)})
+        return freed if held_freed < held_plain else plain
 
     def _fit_with_friction_law(self, ev: Evaluator, st: Structure, x0: np.ndarray, a: int,
                                sel: force_shape.Selection) -> FitResult:
