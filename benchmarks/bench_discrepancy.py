@@ -378,8 +378,8 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         "diagnostics": _diagnostics(f),
         "generate_s": t_gen, "elapsed_s": time.perf_counter() - t0,
     }
-    res["leading_dependence_right"] = (bool(res["unlisted_dependences"]) and res["unlisted_dependences"][0]
-                                       in spec["leading"]) if spec.get("leading") else None
+    res["leading_dependence_right"] = (_leading_right(res["unlisted_dependences"], spec["leading"])
+                                       if spec.get("leading") else None)
     if "road_class" in spec and spec.get("record_road") is False:
         um = rep.get("unmeasured_input") or {}
         est = um.get("iso8608_class")
@@ -734,6 +734,11 @@ CASE_KEYS = ("case", "family_form", "split", "seed", "noise_deg_s", "effect", "v
              "zero_effect_terms", "elapsed_s", "noise_floor_over_true", "gyro_noise_floors_over_true")
 
 
+def _leading_right(dependences: Sequence[str], leading: Sequence[str]) -> bool:
+    """Whether the first of a named learned term's ``dependences`` is one of its form's right ``leading``."""
+    return bool(dependences) and dependences[0] in leading
+
+
 def _leading_rescored(case: dict) -> dict:
     """``case`` with its leading dependence scored against its form's right leading dependences as the family
     holds them now (a label of the truth amended after the run, e.g. a form that predates the feature that
@@ -748,7 +753,7 @@ def _leading_rescored(case: dict) -> dict:
     if case.get("leading_expected") == now:
         return case
     return {**case, "leading_expected": now, "leading_expected_at_run": case.get("leading_expected"),
-            "leading_dependence_right": bool(deps) and deps[0] in now}
+            "leading_dependence_right": _leading_right(deps, now)}
 
 
 def merge_family(outputs: Sequence[tuple[str, dict]]) -> dict:

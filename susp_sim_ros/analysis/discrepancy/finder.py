@@ -1162,8 +1162,10 @@ class DiscrepancyFinder:
         st = plain.structure.without(cand.name).with_(cand)
         x1 = st.embed(plain.structure, plain.x)   # every value as fitted, the cube at neutral
         freed = fit_structure(ev, st, x1, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
-        if freed.bic >= plain.bic or not force_shape.settings()["fit.progressive_part_held_out"]:
-            return freed if freed.bic < plain.bic else plain
+        if freed.bic >= plain.bic:
+            return plain
+        if not force_shape.settings()["fit.progressive_part_held_out"]:
+            return freed
         held_plain, held_freed = (self._heldout(ev, f)["after_deg_s"] for f in (plain, freed))
         if self.force_shape_:
             self.force_shape_[-1].setdefault("progressive_part", []).append(
