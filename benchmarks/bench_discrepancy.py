@@ -419,6 +419,7 @@ def _diagnostics(f) -> dict:
     out["not_identifiable_why"] = [{"name": s.get("name"), "why": s.get("why")}
                                    for s in (getattr(f, "skipped_", None) or [])]
     out["force_shape"] = getattr(f, "force_shape_", [])   # the shape regression at each step (issue 26)
+    out["progressive_part"] = getattr(f, "progressive_part_", None)   # the final check of a learned cube
     return out
 
 

@@ -791,45 +791,58 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
 
 
 @pytest.mark.parametrize("switch", [False, True])
-def test_a_progressive_part_is_kept_where_it_predicts_the_drives_held_out_better(monkeypatch, switch):
-    """``fit.progressive_part_held_out``: the freed cube (a lower criterion) is kept only where the drives held
-    out one at a time are predicted better with it (``DiscrepancyFinder._heldout``), and the step's record says
-    so; off, the criterion alone decides, and a cube the criterion refuses is never held out."""
+def test_a_progressive_part_is_kept_where_the_final_structure_predicts_the_drives_held_out_better(monkeypatch,
+                                                                                                 switch):
+    """``fit.progressive_part_held_out``: the final structure's learned cube is kept only where the drives held
+    out one at a time are predicted better with it than by the same structure refitted without it
+    (``DiscrepancyFinder._final_progressive_part``), with the kept fit's held-out figure and a record; off, or
+    where the final structure has no cube, the final fit stands and nothing is held out. The step that offers
+    the cube decides on the criterion alone."""
     from types import SimpleNamespace
     from susp_sim_ros.analysis.discrepancy import finder as fm
+    cube = (fs.TERM, fs.Column(fs.PROGRESSIVE, "front").coefficient)
 
     class _Structure:
+        def __init__(self, labels):
+            self.names, self._labels = [fs.TERM], labels
+
+        def labels(self):
+            return self._labels
+
         def without(self, name):
-            return self
+            return _Structure([lab for lab in self._labels if lab != cube])
 
         def with_(self, cand):
             return self
 
         def embed(self, other, x):
-            return x
+            return x[:1]
 
-    plain = SimpleNamespace(bic=100.0, structure=_Structure(), x=np.zeros(2))
-    freed = SimpleNamespace(bic=90.0, structure=_Structure(), x=np.ones(2))
-    held = {id(plain): 0.060, id(freed): 0.066}   # the cube extrapolates held out (unequal_axle_charges#1)
-    stub = SimpleNamespace(force_shape_=[{}], _heldout=lambda ev, f: {"after_deg_s": held[id(f)]})
-    monkeypatch.setattr(fm.force_shape, "learned_candidate", lambda sel: SimpleNamespace(name=fs.TERM))
-    monkeypatch.setattr(fm.force_shape, "settings", lambda: {"fit.progressive_part_held_out": switch})
-    monkeypatch.setattr(fm, "fit_structure", lambda *a, **k: freed)
+    sel = fs.Selection({("deflection_squared", "front"): 1.0}, [fs.Column("deflection_squared", "front")],
+                       np.array([40.0]), np.array([1.0]), 24)
+    final = SimpleNamespace(structure=_Structure([(fs.TERM, "deflection_squared_front"), cube]), x=np.ones(2))
+    plain = SimpleNamespace(structure=_Structure([(fs.TERM, "deflection_squared_front")]), x=np.ones(1))
+    held = {id(final): 0.066, id(plain): 0.060}   # the cube extrapolates held out (unequal_axle_charges#1)
+    stub = SimpleNamespace(heldout=True, learned_selection_=sel, progressive_part_=None,
+                           _heldout=lambda ev, f: {"after_deg_s": held[id(f)]})
+    cfg = {**fs.settings(), "fit.progressive_part_held_out": switch}
+    monkeypatch.setattr(fm.force_shape, "settings", lambda: cfg)
+    monkeypatch.setattr(fm, "fit_structure", lambda *a, **k: plain)
     ev = SimpleNamespace(cases=[0, 1, 2])
-    sel = SimpleNamespace(dependences=["deflection_squared"])
-    kept = fm.DiscrepancyFinder._with_progressive_part(stub, ev, plain, sel)
-    assert kept is (plain if switch else freed)
-    if switch:
-        assert stub.force_shape_[-1]["progressive_part"] == [
-            {"dependences": ["deflection_squared"], "heldout_without_deg_s": 0.060, "heldout_with_deg_s": 0.066,
-             "kept": False}]
-        held[id(freed)] = 0.055   # predicts them better: kept
-        assert fm.DiscrepancyFinder._with_progressive_part(stub, ev, plain, sel) is freed
-    else:
-        assert "progressive_part" not in stub.force_shape_[-1]
-    freed.bic = 110.0   # the criterion refuses it: the plain fit, nothing held out
-    stub._heldout = None
-    assert fm.DiscrepancyFinder._with_progressive_part(stub, ev, plain, sel) is plain
+    kept, kept_held = fm.DiscrepancyFinder._final_progressive_part(stub, ev, final)
+    if not switch:
+        assert (kept, kept_held, stub.progressive_part_) == (final, None, None)
+        return
+    assert kept is plain and kept_held == {"after_deg_s": 0.060}
+    assert stub.progressive_part_ == {"dependences": ["deflection_squared"], "heldout_with_deg_s": 0.066,
+                                      "heldout_without_deg_s": 0.060, "kept": False}
+    held[id(final)] = 0.055   # predicts them better (a rising-rate linkage's cube): kept
+    assert fm.DiscrepancyFinder._final_progressive_part(stub, ev, final) == (final, {"after_deg_s": 0.055})
+    assert stub.progressive_part_["kept"] is True
+    stub._heldout = None   # no cube in the final structure: nothing held out
+    assert fm.DiscrepancyFinder._final_progressive_part(stub, ev, plain) == (plain, None)
+    ev1 = SimpleNamespace(cases=[0])   # one drive: nothing to hold out
+    assert fm.DiscrepancyFinder._final_progressive_part(stub, ev1, final) == (final, None)
 
 
 def test_a_recorded_road_that_leads_on_one_axle_only_is_no_input_finding():
