@@ -284,7 +284,8 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "gas/polytropic_charge_rear", "unlisted/bump_stop_exponential_front",
                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
                    "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
-                   "gas/isothermal_charge_front", "gas/unequal_axle_charges", "unlisted/rising_rate_linkage"}
+                   "gas/isothermal_charge_front", "gas/unequal_axle_charges", "unlisted/rising_rate_linkage",
+                   "unlisted/bypass_zone_rear"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -318,14 +319,15 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-10:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+    assert doc["held_out"][-11:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
                                      "unlisted/bump_stop_exponential_front",
                                      "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
                                      "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
                                      "gas/isothermal_charge_front", "gas/unequal_axle_charges",
-                                     "unlisted/rising_rate_linkage"]
+                                     "unlisted/rising_rate_linkage", "unlisted/bypass_zone_rear"]
+    assert "added 2026-12-02 (issue 26)" in text
     assert "added 2026-12-01 (issues 24 and 26)" in text and "added 2026-12-01 (issue 24)" in text
-    assert doc["held_out"][-22:-10] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert doc["held_out"][-23:-11] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -780,6 +782,30 @@ def test_the_position_sensitive_damper_form_damps_beyond_its_soft_zone_on_both_s
             assert np.corrcoef(intact.hidden[side, i], expected[side, i])[0, 1] > 0.99, i
     rear_empty = family.case_truth(form, 1, "bump_rear_empty")
     assert not np.any(rear_empty.hidden[:, 2:]) and np.abs(rear_empty.hidden[:, :2]).max() > 50.0
+
+
+def test_the_bypass_zone_form_damps_the_rear_beyond_an_off_centre_soft_zone_with_oil():
+    """``unlisted/bypass_zone_rear`` (held out): a damping at the rear corners beyond a soft zone from 6 mm of
+    rebound to 16 mm of bump, growing linearly with the depth over 30 mm (1800 N s/m), in proportion to the
+    deflection velocity there; nothing inside the zone, nothing at the front, none in an oil-empty damper. The
+    symmetric zone of the position-sensitive form is the same code, unchanged (its gap on both sides)."""
+    form = family.FORMS["unlisted/bypass_zone_rear"]
+    assert form.split == "held_out" and form.expect == ("unlisted_force",) and form.leading == family.DAMPING_LAW
+    intact = family.case_truth(form, 1, "bump_intact")
+    d = intact.deflection
+    v = np.gradient(d, intact.t, axis=0)
+    e = np.where(d > 0.0, np.maximum(d - 0.016, 0.0), np.maximum(-d - 0.006, 0.0))
+    expected = 1800.0 * np.minimum(e / 0.03, 1.0) * v
+    assert not np.any(intact.hidden[:, :2])
+    assert np.all(intact.hidden[(d > -0.006) & (d < 0.016)] == 0.0)
+    for i in (2, 3):
+        for side in (d[:, i] > 0.020, d[:, i] < -0.010):   # both ends of the zone are reached and damped
+            assert side.any() and np.abs(intact.hidden[side, i]).max() > 50.0, i
+            assert np.corrcoef(intact.hidden[side, i], expected[side, i])[0, 1] > 0.99, i
+        assert np.any(intact.hidden[(d[:, i] < -0.007) & (d[:, i] > -0.012), i])   # the rebound end is not at -16 mm
+    assert not np.any(family.case_truth(form, 1, "bump_rear_empty").hidden)   # no oil, no damping
+    psd = family.FORMS["unlisted/position_sensitive_damper"]
+    assert psd.hidden.hydraulic_stop_rebound_gap_m is None
 
 
 def test_the_creep_friction_form_builds_with_the_sliding_velocity_by_its_algebraic_law():

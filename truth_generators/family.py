@@ -439,6 +439,19 @@ def _forms() -> dict[str, GeneratorForm]:
                       hidden=TruthHidden(rising_rate_N_m2=(120000.0, 90000.0)),
                       leading=("deflection", "deflection_cubed", "bump_contact", "rebound_contact",
                                "deflection_squared"), **unl),
+        # added 2026-12-02 (issue 26), held out from the start, before any run of the finder on it and before a
+        # damping met beyond a gap on either side (one feature for a soft zone's two ends) is tried: the same
+        # physics as unlisted/position_sensitive_damper (seen since 2026-11-30) of another structure: one axle, a
+        # zone off centre, a linear taper, other values
+        GeneratorForm("unlisted/bypass_zone_rear", description="position-sensitive rear dampers whose soft zone "
+                      "lies off centre of static (the car sits lower than the height the bypass grooves were laid "
+                      "out for): from 6 mm of rebound to 16 mm of bump; beyond it a damping c_p min(e / 0.03, 1) v, "
+                      "e = d - 0.016 in bump and -d - 0.006 in rebound, c_p 1800 N s/m (full 30 mm beyond either "
+                      "end), in both directions of motion, times the damper's oil weight; front dampers without",
+                      hidden=TruthHidden(hydraulic_stop_damping_N_s_m=(0.0, 1800.0), hydraulic_stop_gap_m=0.016,
+                                         hydraulic_stop_rebound_gap_m=0.006, hydraulic_stop_length_m=0.03,
+                                         hydraulic_stop_both_ways=True),
+                      leading=DAMPING_LAW, **unl),
     ]
     return {f.name: f for f in fs}
 

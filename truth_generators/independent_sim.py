@@ -228,6 +228,10 @@ class TruthHidden:
     hydraulic_stop_both_ways: bool = False        # beyond gap g of bump and of rebound, e = max(|d| - g, 0): a
     #                                               position-sensitive damper (bypass grooves open a soft zone
     #                                               of +-g around static; firmer beyond it)
+    hydraulic_stop_rebound_gap_m: float | None = None  # both ways: the soft zone's end in rebound, e = max(-d - g_r,
+    #                                               0) for d < 0, when it lies elsewhere than -g (the grooves off
+    #                                               centre of the static position: a car that sits lower or higher
+    #                                               than the height the damper was laid out for); None: -g
     creep_friction_N: tuple = (0.0, 0.0)          # a strut friction that builds with the sliding velocity by an
     creep_friction_velocity_m_s: float = 0.004    # algebraic law (front, rear): F_c v / sqrt(v^2 + v_c^2) [N], a
     #                                               seal that creeps at low velocity rather than sticking
@@ -374,7 +378,7 @@ def hydraulic_curves(fr: TruthFriction, measured: dict | None = None):
 (WX, WY, WK, WMU, WFZ0, WCA, WKARB, WBUMP, WREB, WFCA, WFCS, WSOIL, WKX, WKY, WCEMPTY, WAXLE, WOIL,
  WAMPX, WGF0, WGK, WCV, WTRACK, WHRC, WGK3, WBOV, WGAP, WSTRS, WSTRC, WLFMU, WPF0, WPFK, WBUK, WBUC, WBUK2, WBUC2,
  WPRG, WAIRK, WAIRH, WAIRN, WRSK, WRSG, WJBK, WJBK3, WJBG, WSEAL, WSEALH, WSEALN, WBSF, WBSL, WBSG,
- WHSC, WHSG, WHSL, WCRF, WCRV, WHSR, WHSN, WRR, NW) = range(59)
+ WHSC, WHSG, WHSL, WCRF, WCRV, WHSR, WHSN, WRR, WHSGR, NW) = range(60)
 NY = 20          # z zd phi phid th thd vy r zw[4] zwd[4] Fy[4]
 NOUT = 22        # p q r  fx fy fz  d[4]  F_friction[4]  Fz[4]  F_hidden[4]
 NAUX = 5         # per corner from _deriv: d, dd, Fz, Fs, the hidden physics' force in Fs
@@ -446,6 +450,8 @@ def _arrays(car: TruthCar, fr: TruthFriction, hid: TruthHidden, oil, dampers_on:
         W[i, WCRF], W[i, WCRV] = hid.creep_friction_N[k], hid.creep_friction_velocity_m_s
         W[i, WHSR] = 0.0 if hid.hydraulic_stop_both_ways else -1.0 if hid.hydraulic_stop_in_rebound else 1.0
         W[i, WHSN] = hid.hydraulic_stop_exponent
+        W[i, WHSGR] = hid.hydraulic_stop_gap_m if hid.hydraulic_stop_rebound_gap_m is None \
+            else hid.hydraulic_stop_rebound_gap_m
         W[i, WRR] = hid.rising_rate_N_m2[k]
     X, C, E, _ = hydraulic_curves(fr)
     return P, W, X, C, E
@@ -637,8 +643,9 @@ def _deriv(y, v, ax, dsw, ZR, ZRD, j, Ff, P, W, X, C, E, dy, aux):
         Fs += P[DSCALE] * Fh + Ff[i] + Fv + W[i, WGF0] + W[i, WGK] * d[i] + W[i, WGK3] * d[i] * d[i] * d[i]
         Fhid += Fv + Fgas
         depth = W[i, WHSR] * d[i] if W[i, WHSR] != 0.0 else abs(d[i])   # WHSR 0: both ways
-        if W[i, WHSC] > 0.0 and depth > W[i, WHSG]:   # hydraulic stop: damping beyond its gap
-            engaged = (depth - W[i, WHSG]) / W[i, WHSL]
+        gap = W[i, WHSGR] if W[i, WHSR] == 0.0 and d[i] < 0.0 else W[i, WHSG]   # both ways: the rebound side's own
+        if W[i, WHSC] > 0.0 and depth > gap:   # hydraulic stop: damping beyond its gap
+            engaged = (depth - gap) / W[i, WHSL]
             if W[i, WHSN] != 1.0:
                 engaged = engaged ** W[i, WHSN]
             Fhs = w_oil * W[i, WHSC] * min(engaged, 1.0) * dd[i]
