@@ -91,7 +91,8 @@ def test_features_are_what_their_names_say():
     np.testing.assert_allclose(get["creep_damping"], V / vc * np.exp(1.0 - np.abs(V) / vc))
     # a damping met beyond the contact gap of bump, of rebound: the deflection velocity times the depth beyond it,
     # none within it, a force of the damper's oil
-    for name, depth in (("bump_damping", np.maximum(D - g, 0.0)), ("rebound_damping", np.maximum(-D - g, 0.0))):
+    for name, depth in (("bump_damping", np.maximum(D - g, 0.0)), ("rebound_damping", np.maximum(-D - g, 0.0)),
+                        ("zone_damping", np.maximum(np.abs(D) - g, 0.0))):
         want = u * depth / sh["deflection_ref"]
         got = feature_series(name, D, V, FX, FY, DT, shape={"contact_gap": g})
         np.testing.assert_allclose(got, want)
@@ -300,7 +301,7 @@ def test_the_learned_viscous_and_spring_features_are_the_listed_terms_in_the_ker
 #: out the same way (with the latter's eight columns drawn in, the truth was the stable set in 25 of the 40 seeds
 #: of _one_drive_dominant as without them, 2026-11-30).
 DRAWN_BEFORE = ("relaxing_deflection", "bump_contact", "rebound_contact", "compression", "bump_damping",
-                "rebound_damping", "deflection_squared")
+                "rebound_damping", "deflection_squared", "zone_damping")
 
 
 def _design(n_drives=6, n=600, seed=1, truth=None, noise=1.0):
@@ -979,7 +980,7 @@ def test_a_learned_friction_is_described_with_its_fitted_law():
     assert "the friction's law" not in spring.description(None, fitted)
 
 
-@pytest.mark.parametrize("feature", ["bump_damping", "rebound_damping"])
+@pytest.mark.parametrize("feature", ["bump_damping", "rebound_damping", "zone_damping"])
 def test_a_learned_damping_beyond_a_gap_in_the_kernel_is_its_feature_on_the_run(feature):
     """The kernel's ``bump_damping`` / ``rebound_damping`` force along a bump crossing is its coefficient times
     the feature on the run's own deflections and deflection velocities at the contact gap (none within it), it
@@ -1016,6 +1017,30 @@ def test_an_even_spring_is_offered_to_the_regression_only_where_the_settings_say
                        np.array([40.0]), np.array([1.0]), 24)
     words = sel.description()
     assert "one sense in bump and rebound" in words and "rear stiffer in bump, softer in rebound" in words
+
+
+def test_a_zone_damping_is_offered_to_the_regression_only_where_the_settings_say():
+    """``library.zone_damping``: off as shipped, the regression's library has no damping beyond a gap on either side
+    of static; on, one entry at every offered contact gap, in the damping law family, described with its gap on
+    both sides; it is the sum of the bump and rebound dampings at one coefficient."""
+    cfg = fs.settings()
+    assert cfg["library.zone_damping"] is False   # off until its blind form and the whole family ran with it
+    off = fs.library(cfg)
+    assert "zone_damping" not in {f for f, _ in off}
+    on = fs.library(dict(cfg) | {"library.zone_damping": True})
+    gaps = [float(v) for v in cfg["library.contact_gaps_m"]]
+    assert [e for e in on if e not in off] == [("zone_damping", g) for g in gaps]
+    assert fs.law_key(("zone_damping", "rear")) == ("damping", "rear")
+    sel = fs.Selection({("zone_damping", "rear"): 1.0}, [fs.Column("zone_damping", "rear", 0.01)],
+                       np.array([80.0]), np.array([1.0]), 24)
+    words = sel.description(shapes={"contact_gap": 0.012})
+    assert "a damping met beyond 12 mm of static in bump and in rebound" in words and "rear more damping" in words
+    D = np.linspace(-0.05, 0.05, 41)[:, None] * np.ones((1, 4))
+    V = np.full_like(D, 0.1)
+    z = np.zeros_like(D)
+    both = [feature_series(f, D, V, z, z, DT, shape={"contact_gap": 0.012}) for f in
+            ("bump_damping", "rebound_damping", "zone_damping")]
+    np.testing.assert_allclose(both[2], both[0] + both[1])
 
 
 def test_a_damping_beyond_a_gap_is_offered_to_the_regression_only_where_the_settings_say():

@@ -52,8 +52,10 @@ CASE_DRIVES = (("bump", INTACT, "bump_intact"), ("bump", FRONT_EMPTY, "bump_fron
 CAR_BANDS = {"nominal": None, "within": (0.05, 0.15), "beyond": (0.15, 0.30)}
 #: the leading dependences that read a hydraulic stop or a position-sensitive damper right: a damping of any
 #: law (the damping family; its two members met beyond a contact gap, bump_damping and rebound_damping, added to
-#: the vocabulary after the first such form, count as such too)
-DAMPING_LAW = ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping", "rebound_damping")
+#: the vocabulary after the first such form, count as such too; so does the member met beyond a gap on either side,
+#: zone_damping, added 2026-12-02: a label of the truth's law family, not a change of any form)
+DAMPING_LAW = ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping", "rebound_damping",
+               "zone_damping")
 
 
 @dataclass(frozen=True)

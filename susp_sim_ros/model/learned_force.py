@@ -79,6 +79,12 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             n (n + 1) / 2 F0 (d / h)^2, a linkage whose motion ratio changes with travel);
                             offered to the regression only where ``config/force_shape.yaml``
                             ``library.deflection_squared`` says so
+``zone_damping``            oil (v / v_ref) max(|d| - g, 0) / d_ref: a damping met beyond the gap on either side
+                            of static, one coefficient for both ends of a soft zone (a position-sensitive
+                            damper, whose bypass grooves open a soft zone around its layout height and close
+                            beyond it in bump and in rebound: Dixon, The Shock Absorber Handbook, 2007, ch. 9);
+                            the sum of ``bump_damping`` and ``rebound_damping`` at one coefficient, offered to
+                            the regression only where ``config/force_shape.yaml`` ``library.zone_damping`` says so
 ==========================  =======================================================================
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
@@ -109,7 +115,7 @@ FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
             "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection", "bump_contact",
             "rebound_contact", "compression", "creep_damping", "bump_damping", "rebound_damping",
-            "deflection_squared")
+            "deflection_squared", "zone_damping")
 N_FEATURES = len(FEATURES)
 #: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
 FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force", "compression")
@@ -184,10 +190,12 @@ def _law_shape_feature(k, v, z, vs, vc):
 
 @njit(cache=True, inline="always")
 def _gap_or_relaxing_feature(k, d, u, oil, rel, dref, cgap):
-    """Features 13-15 and 18-20 of :data:`FEATURES` (a relaxing spring, springs and dampings met beyond a
+    """Features 13-15 and 18-21 of :data:`FEATURES` (a relaxing spring, springs and dampings met beyond a
     contact gap, the spring of one sense in bump and rebound)."""
     if k == 20:
         return (d / dref) * (d / dref)
+    if k == 21:
+        return oil * u * max(abs(d) - cgap, 0.0) / dref
     if k == 13:
         return rel / dref
     if k == 14:
@@ -223,7 +231,8 @@ def learned_force_force(p, po, s, so, i, c):
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
             + p[q + 52] * s[so + _REL + i] / dref
             + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + cgap, 0.0)) / dref
-            + c[i, _C_OIL] * u * (p[q + 72] * max(d - cgap, 0.0) + p[q + 76] * max(-d - cgap, 0.0)) / dref
+            + c[i, _C_OIL] * u * (p[q + 72] * max(d - cgap, 0.0) + p[q + 76] * max(-d - cgap, 0.0)
+                                  + p[q + 84] * max(abs(d) - cgap, 0.0)) / dref
             + p[q + 80] * x * x)
 
 
@@ -306,7 +315,9 @@ _COEF_MEANING = {
     "bump_damping": "damping force at v = v_ref, d_ref of bump beyond the contact gap, of an intact damper",
     "rebound_damping": "damping force at v = v_ref, d_ref of rebound beyond the contact gap, of an intact damper",
     "deflection_squared": "force at d = +-d_ref of a spring whose rate grows through the stroke (one sense in bump "
-                          "and rebound)"}
+                          "and rebound)",
+    "zone_damping": "damping force at v = v_ref, d_ref beyond the contact gap on either side of static, of an "
+                    "intact damper"}
 
 LEARNED_FORCE = register_term(PhysicsTerm(
     name="unlisted_force", component="axle",
@@ -326,8 +337,9 @@ LEARNED_FORCE = register_term(PhysicsTerm(
                   "by 1/e (Stribeck velocity)", 0.01, 1e-4, 1.0),
         TermParam("relaxation_time", "s", "relaxation time of relaxing_deflection's spring (its Maxwell element's "
                   "damping over its rate)", 0.07, 1e-3, 10.0),
-        TermParam("contact_gap", "m", "deflection from static beyond which bump_contact and bump_damping (in bump) "
-                  "and rebound_contact and rebound_damping (in rebound) act", 0.02, 0.0, 0.2),
+        TermParam("contact_gap", "m", "deflection from static beyond which bump_contact and bump_damping (in bump), "
+                  "rebound_contact and rebound_damping (in rebound) and zone_damping (in either) act", 0.02, 0.0,
+                  0.2),
         TermParam("rebound_ratio", "1", "force of velocity_squared and velocity_beyond_knee in rebound over the force "
                   "at the same speed in compression (1: a symmetric law)", 1.0, 0.0, 10.0),
         TermParam("creep_velocity", "m/s", "sliding velocity of creep_damping's peak (viscous below it, fading above)",

@@ -5,7 +5,8 @@ What the model still lacks is regressed on features of the model's own corner st
 square and a knee in it, friction-like states, stroke amplitude, wheel forces, the left-right
 deflection difference and a free play of it, a spring that relaxes, springs met beyond a contact gap of bump
 or rebound, friction growing with the compression, and where ``library.position_damping`` is set a damping
-met beyond such a gap), one coefficient [N] per (feature, axle). The regression
+met beyond such a gap, where ``library.zone_damping`` is one met beyond it on either side of static), one
+coefficient [N] per (feature, axle). The regression
 runs through the model's own dynamics: each column is the effect of a feature's force, acting at the
 axle's two corners as a suspension force does, on every compared signal of every drive (the
 forward-difference Jacobian of the whitened residual, as the finder's criteria see it), and the target
@@ -104,6 +105,9 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
                          "holds oil (a hydraulic compression stop, a position-sensitive damper)",
          "rebound_damping": "a damping met beyond {gap_mm:.0f} mm of rebound, growing with the depth, as far as the "
                             "damper holds oil (a hydraulic rebound stop, a position-sensitive damper)",
+         "zone_damping": "a damping met beyond {gap_mm:.0f} mm of static in bump and in rebound, growing with the "
+                         "depth, as far as the damper holds oil (a position-sensitive damper: a soft zone around "
+                         "static)",
          "deflection_squared": "a spring whose rate grows through the whole stroke, its force of one sense in bump "
                                "and rebound (a gas charge's or air spring's law beyond its static rate, a "
                                "rising-rate linkage)",
@@ -119,7 +123,8 @@ SENSE = {"constant": ("pushes the body up", "pulls the body down"),
          **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play",
                                                 "relaxing_deflection", "bump_contact", "rebound_contact")},
          **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
-                                                           "velocity_beyond_knee", "bump_damping", "rebound_damping")},
+                                                           "velocity_beyond_knee", "bump_damping", "rebound_damping",
+                                                           "zone_damping")},
          **{f: ("more friction", "less friction") for f in FRICTION_LIKE},
          **{f: ("positive", "negative") for f in INPUT_FEATURES}}
 
@@ -138,7 +143,7 @@ GROUP_OF = {f"rotation_{t}{k}": f"rotation_{k}" for t in ("sin", "cos") for k in
 LAW_OF = {**{f: "spring" for f in ("deflection", "deflection_cubed", "bump_contact", "rebound_contact",
                                     "deflection_squared")},
           **{f: "damping" for f in ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
-                                    "rebound_damping")},
+                                    "rebound_damping", "zone_damping")},
           **{f: "friction" for f in FRICTION_LIKE},
           **{f: "roll" for f in ("roll_deflection", "roll_free_play")}}
 #: the law families themselves; any other feature is a family of its own, stable or not as itself
@@ -170,7 +175,7 @@ def law_key(key: tuple[str, str]) -> tuple[str, str]:
 #: the shape parameter of the features that have one
 _SHAPE_OF = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play",
              "relaxing_deflection": "relaxation_time", "bump_contact": "contact_gap", "rebound_contact": "contact_gap",
-             "bump_damping": "contact_gap", "rebound_damping": "contact_gap"}
+             "bump_damping": "contact_gap", "rebound_damping": "contact_gap", "zone_damping": "contact_gap"}
 #: the shapes a learned term holds one value of (for every feature that has it): held at their fitted values when
 #: the term is extended (:func:`extended`)
 HELD_SHAPES = frozenset(_SHAPE_OF.values())
@@ -181,9 +186,12 @@ _SHAPE_RANGE = {"knee_velocity": "fit.knee_velocity_range_m_s", "free_play": "fi
 _SHAPE_VALUES = {"velocity_beyond_knee": "library.knee_velocities_m_s", "roll_free_play": "library.free_plays_m",
                  "relaxing_deflection": "library.relaxation_times_s", "bump_contact": "library.contact_gaps_m",
                  "rebound_contact": "library.contact_gaps_m", "bump_damping": "library.contact_gaps_m",
-                 "rebound_damping": "library.contact_gaps_m"}
+                 "rebound_damping": "library.contact_gaps_m", "zone_damping": "library.contact_gaps_m"}
 #: a damping met beyond a contact gap: offered to the regression only where ``library.position_damping`` is set
 POSITION_DAMPING = ("bump_damping", "rebound_damping")
+#: a damping met beyond a gap on either side of static (one coefficient for a soft zone's two ends): offered only
+#: where ``library.zone_damping`` is set
+ZONE_DAMPING = "zone_damping"
 #: a spring of one sense in bump and rebound: offered only where ``library.deflection_squared`` is set
 EVEN_SPRING = "deflection_squared"
 #: the spring features a smooth progressive part (:data:`PROGRESSIVE`) is fitted beside (:func:`spring_law`) and
@@ -223,8 +231,9 @@ def library(cfg: dict, shapes: dict | None = None) -> list[tuple[str, float | No
     """(feature, shape value) of every library entry: the features with a shape value (knee, free play,
     relaxation time, contact gap) once per offered value, or once at the value ``shapes`` holds for it
     (``{shape: value}``, a learned term's as fitted: :func:`extended`), the others once (a damping beyond a
-    contact gap only where ``library.position_damping`` is set, the square of the deflection only where
-    ``library.deflection_squared`` is), then the input features offered
+    contact gap only where ``library.position_damping`` is set, on either side of static only where
+    ``library.zone_damping`` is, the square of the deflection only where ``library.deflection_squared``
+    is), then the input features offered
     (``library.input_features``), once each."""
     out: list[tuple[str, float | None]] = []
     shapes = shapes or {}
@@ -234,6 +243,8 @@ def library(cfg: dict, shapes: dict | None = None) -> list[tuple[str, float | No
         if f in POSITION_DAMPING and not bool(cfg["library.position_damping"]):
             continue
         if f == EVEN_SPRING and not bool(cfg["library.deflection_squared"]):
+            continue
+        if f == ZONE_DAMPING and not bool(cfg["library.zone_damping"]):
             continue
         if _SHAPE_OF.get(f) in shapes:
             out.append((f, float(shapes[_SHAPE_OF[f]])))
