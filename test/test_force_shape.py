@@ -982,9 +982,9 @@ def test_a_learned_friction_is_described_with_its_fitted_law():
 
 @pytest.mark.parametrize("feature", ["bump_damping", "rebound_damping", "zone_damping"])
 def test_a_learned_damping_beyond_a_gap_in_the_kernel_is_its_feature_on_the_run(feature):
-    """The kernel's ``bump_damping`` / ``rebound_damping`` force along a bump crossing is its coefficient times
-    the feature on the run's own deflections and deflection velocities at the contact gap (none within it), it
-    scales with the damper's oil (none at the oil-empty rear), and it changes the motion."""
+    """The kernel's ``bump_damping`` / ``rebound_damping`` / ``zone_damping`` force along a bump crossing is its
+    coefficient times the feature on the run's own deflections and deflection velocities at the contact gap (none
+    within it), it scales with the damper's oil (none at the oil-empty rear), and it changes the motion."""
     vp = dataclasses.replace(load_vehicle("passat_b8_like"), axle_friction=(0.0, 0.0),
                              damper_friction_intact=(1e-12, 1e-12), damper_friction_empty=(1e-12, 1e-12))
     coef, gap = 400.0, 0.01

@@ -117,14 +117,15 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
             for t, part in (("sin", "sine"), ("cos", "cosine")) for k in (1, 2)}}
 
 
+#: the dampings of the vocabulary: the damping law family's members (:data:`LAW_OF`)
+DAMPINGS = ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping", "rebound_damping",
+            "zone_damping")
 #: what a positive and a negative coefficient of a dependence mean (the force is positive up on the body)
 SENSE = {"constant": ("pushes the body up", "pulls the body down"),
          "deflection_squared": ("stiffer in bump, softer in rebound", "softer in bump, stiffer in rebound"),
          **{f: ("stiffer", "softer") for f in ("deflection", "deflection_cubed", "roll_deflection", "roll_free_play",
                                                 "relaxing_deflection", "bump_contact", "rebound_contact")},
-         **{f: ("more damping", "less damping") for f in ("deflection_velocity", "velocity_squared",
-                                                           "velocity_beyond_knee", "bump_damping", "rebound_damping",
-                                                           "zone_damping")},
+         **{f: ("more damping", "less damping") for f in DAMPINGS},
          **{f: ("more friction", "less friction") for f in FRICTION_LIKE},
          **{f: ("positive", "negative") for f in INPUT_FEATURES}}
 
@@ -142,8 +143,7 @@ GROUP_OF = {f"rotation_{t}{k}": f"rotation_{k}" for t in ("sin", "cos") for k in
 #: a family of their own (the relaxing spring, both spring and damper; the constant; the inputs).
 LAW_OF = {**{f: "spring" for f in ("deflection", "deflection_cubed", "bump_contact", "rebound_contact",
                                     "deflection_squared")},
-          **{f: "damping" for f in ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping",
-                                    "rebound_damping", "zone_damping")},
+          **{f: "damping" for f in DAMPINGS},
           **{f: "friction" for f in FRICTION_LIKE},
           **{f: "roll" for f in ("roll_deflection", "roll_free_play")}}
 #: the law families themselves; any other feature is a family of its own, stable or not as itself
