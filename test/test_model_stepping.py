@@ -67,21 +67,6 @@ def test_batch_blocks_equal_single_runs_and_a_diverging_vehicle_stops_alone(mode
         np.testing.assert_array_equal(res.state[b], single.state)
 
 
-@pytest.mark.parametrize("n_threads", [1, 2, 3, 8])
-def test_a_batch_is_cut_into_blocks_each_thread_steps_equally(model_full, n_threads):
-    """``n_blocks_of``: every vehicle in a block of at most ``LANES``, the blocks' sizes differing by at
-    most one, one block per thread while there are vehicles for it and a multiple of the threads beyond
-    (a batch of 3 on two threads is two blocks, not one block on one thread)."""
-    k = model_full.kernel
-    assert k.n_blocks_of(0, n_threads) == 0
-    for n in range(1, 5 * k.LANES + 3):
-        blocks = k.n_blocks_of(n, n_threads)
-        assert -(-n // blocks) <= k.LANES and blocks <= n
-        assert blocks >= min(n, n_threads) and (blocks % n_threads == 0 or blocks == n)
-        assert blocks < -(-n // k.LANES) + n_threads   # no more blocks than the threads need
-    assert k.n_blocks_of(3, 2) == 2 and k.n_blocks_of(81, 2) == 6
-
-
 def test_batch_mixes_drives_and_roads(model_full):
     bump, sine = bump_crossing(), sine_steer(duration=bump_crossing().duration)
     n = min(bump.n_steps(DT), sine.n_steps(DT))

@@ -668,32 +668,16 @@ def run_one(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y):
     return done[0]
 
 
-@njit(cache=True)
-def n_blocks_of(n_vehicles, n_threads):
-    """Blocks for ``n_vehicles`` on ``n_threads`` threads: at least one per thread while there are
-    vehicles for it, else the fewest of at most :data:`LANES` vehicles rounded up to a multiple of the
-    threads, so each thread steps as many vehicles as the others (a batch of 3 ran as one block on one
-    thread, a batch of 81 as 48 against 33 vehicles on two)."""
-    if n_vehicles <= 0:
-        return 0
-    full = (n_vehicles + LANES - 1) // LANES
-    return min(n_vehicles, (full + n_threads - 1) // n_threads * n_threads)
-
-
 @njit(cache=True, parallel=True, nogil=True)
-def run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done, n_threads):
-    """Run vehicles ``b`` in parallel on ``n_threads`` threads (``numba.get_num_threads()``; an argument,
-    since a compiled function that asks for it cannot be cached), in blocks of at most :data:`LANES` of
-    equal size (:func:`n_blocks_of`): parameters ``P[b]``, state ``S[b]`` (in place), inputs
-    ``U[u_row[b]]``, road ``road_row[b]``, outputs to ``Y[b]``, steps done to ``done[b]``."""
-    n_blocks = n_blocks_of(P.shape[0], n_threads)
-    if n_blocks == 0:
-        return
-    size, extra = P.shape[0] // n_blocks, P.shape[0] % n_blocks
+def run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done):
+    """Run vehicles ``b`` in parallel, in blocks of :data:`LANES`: parameters ``P[b]``, state ``S[b]``
+    (in place), inputs ``U[u_row[b]]``, road ``road_row[b]``, outputs to ``Y[b]``, steps done to
+    ``done[b]``."""
+    n_blocks = (P.shape[0] + LANES - 1) // LANES
     for blk in prange(n_blocks):
-        k = np.int64(blk)  # prange's index is unsigned: mixed with signed integers it would be a float
-        _run_block(P, S, k * size + min(k, extra), size + (1 if k < extra else 0), U, u_row, RS, RZL, RZR, RN,
-                   road_row, mode, dt, decim, sel, Y, done)
+        b0 = blk * LANES
+        _run_block(P, S, b0, min(LANES, P.shape[0] - b0), U, u_row, RS, RZL, RZR, RN, road_row, mode, dt,
+                   decim, sel, Y, done)
 
 
 @njit(cache=True)

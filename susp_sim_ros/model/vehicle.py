@@ -14,7 +14,6 @@ from collections.abc import Iterable, Sequence
 
 from types import ModuleType
 
-import numba
 import numpy as np
 
 from ..errors import SuspInputError
@@ -354,8 +353,7 @@ def simulate_batch(model: Model, P: np.ndarray, U: np.ndarray | Sequence[np.ndar
     Y = np.zeros((B, U.shape[1] // decim, len(sel)))
     done = np.zeros(B, np.int64)
     kernel = model.kernel if bool(np.any(P[:, P_SEMI_ACTIVE] > 0.5)) else model.kernel_passive
-    kernel.run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done,
-                     numba.get_num_threads())
+    kernel.run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done)
     t = dt * decim * np.arange(1, Y.shape[1] + 1)
     return Response(t, Y, labels, done, U.shape[1], S)
 

@@ -311,9 +311,9 @@ def task_batch(data: Mapping, runs: Sequence[Mapping]) -> tuple[list, list]:
     them, as one list (one batched simulation per kernel group). Returns ``(batch, ref_at)``:
     ``ref_at[i]`` is the position in ``batch`` of the reference of ``batch[i]`` (``None``: no reference).
 
-    Riding in the same batch, a reference run costs little: the kernel advances vehicles in blocks of at
-    most 16 lanes of equal size, and one more vehicle adds at most one lane to a block (the example's
-    references are runs of the study itself)."""
+    Riding in the same batch, a reference run usually costs nothing: the kernel advances vehicles in
+    blocks of 16 lanes and the last block of a batch is rarely full (the example's references are runs of
+    the study itself)."""
     batch = list(runs)
     ref = data.get("reference")
     if ref is None:
