@@ -1007,10 +1007,10 @@ def test_an_even_spring_is_offered_to_the_regression_only_where_the_settings_say
     """``library.deflection_squared``: off, the regression's library has no square of the deflection; on, it
     has one column per axle, in the spring law family, described as one sense in bump and rebound."""
     cfg = fs.settings()
-    assert cfg["library.deflection_squared"] is False   # off until the blind form and the whole family ran with it
-    off = fs.library(cfg)
+    assert cfg["library.deflection_squared"] is True   # on since the whole family ran with it
+    off = fs.library(dict(cfg) | {"library.deflection_squared": False})
     assert "deflection_squared" not in {f for f, _ in off}
-    on = fs.library(dict(cfg) | {"library.deflection_squared": True})
+    on = fs.library(cfg)
     assert [e for e in on if e not in off] == [("deflection_squared", None)] and len(on) == len(off) + 1
     assert fs.law_key(("deflection_squared", "front")) == ("spring", "front")
     sel = fs.Selection({("deflection_squared", "rear"): 1.0}, [fs.Column("deflection_squared", "rear")],
