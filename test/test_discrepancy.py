@@ -95,7 +95,8 @@ def test_runs_under_one_steering_offset_share_their_inputs(bump_rear_amp, monkey
     X = np.array([x, x, x])
     X[:, -1] = [0.01, 0.01, 0.02]  # steering offsets [rad]
     X[1, 0] = 5.0                  # a second run under the first offset: extra level front [N]
-    alone = [ev.simulate(st, X[k][None])[0, 0] for k in range(3)]
+    each = Evaluator(ev.model, [bump_rear_amp])  # its own run cache: the batch below simulates all three
+    alone = [each.simulate(st, X[k][None])[0, 0] for k in range(3)]
     rows = []
     real = engine.simulate_batch
     monkeypatch.setattr(engine, "simulate_batch", lambda model, P, U, **kw: rows.append(U.shape[0]) or
@@ -105,6 +106,39 @@ def test_runs_under_one_steering_offset_share_their_inputs(bump_rear_amp, monkey
     for k in range(3):
         np.testing.assert_array_equal(batch[k, 0], alone[k])
     assert not np.array_equal(batch[0, 0], batch[1, 0]) and not np.array_equal(batch[0, 0], batch[2, 0])
+
+
+def test_a_run_asked_for_again_is_not_simulated_again(bump_rear_amp, monkeypatch):
+    """A run an earlier call simulated (a calibration back at a point it tried, a Jacobian about the point
+    just evaluated) comes from the run cache with the same bits, and counts no vehicle-seconds; a run cut
+    at another length is another run; beyond the cache's bytes the least recently used run is dropped."""
+    from susp_sim_ros.analysis.discrepancy import engine
+    ev = Evaluator(extended_model("passat_b8_like", "dahl_only"), [bump_rear_amp])
+    st = Structure(["friction_amplitude"])
+    X = np.array([st.neutral(), st.neutral()])
+    X[1, 0] = 5.0  # extra level front [N]
+    first = ev.simulate(st, X)
+    lanes = []
+    real = engine.simulate_batch
+    monkeypatch.setattr(engine, "simulate_batch", lambda model, P, U, **kw: lanes.append(P.shape[0]) or
+                        real(model, P, U, **kw))
+    before = ev.vehicle_seconds
+    again = ev.simulate(st, X[::-1])
+    assert lanes == [] and ev.vehicle_seconds == before and ev.run_cache.hits == 2
+    np.testing.assert_array_equal(again[0, 0], first[1, 0])
+    np.testing.assert_array_equal(again[1, 0], first[0, 0])
+    with pytest.raises(ValueError):
+        again[0, 0][0, 0] = 0.0  # shared bits are read-only
+    whole = ev.simulate(st, X[:1], to_end=True)[0, 0]  # to the drive's end: another length, simulated
+    assert lanes == [1] and len(whole) > len(first[0, 0])
+    np.testing.assert_array_equal(whole[:len(first[0, 0])], first[0, 0])
+    one_run = first[0, 0].nbytes
+    ev.run_cache = engine.RunCache(2 * one_run)
+    for level in (1.0, 2.0, 3.0):
+        ev.simulate(st, np.r_[level, st.neutral()[1:]][None])
+    assert ev.run_cache.bytes <= 2 * one_run
+    ev.simulate(st, np.r_[1.0, st.neutral()[1:]][None])  # the oldest, dropped: simulated again
+    assert lanes == [1, 1, 1, 1, 1]
 
 
 def test_jacobian_from_a_known_residual_is_the_same(bump_rear_amp):

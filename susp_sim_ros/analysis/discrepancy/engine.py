@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 
+from collections import OrderedDict
 from collections.abc import Sequence
 
 import numpy as np
@@ -22,6 +23,9 @@ from .data import SIGNAL_OF_OUTPUT, SIGNAL_OUTPUT, SIGNALS, DriveCase
 RATES = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")
 MIN_QUIET_BIAS = 20  # quiet lead-in samples for a standstill-style bias estimate
 RUN_QUANTUM_S = 0.5  # a run's length is rounded up to this, so drives of similar length share a batch
+#: bytes of simulated signals kept for runs asked for again in a later call (a calibration returning to a point it
+#: tried, a Jacobian about the point just evaluated); about 1600 six-drive runs of the bundled drives
+RUN_CACHE_BYTES = 512 * 2**20
 _TO_REPORT_UNITS = np.array([SIGNAL_OF_OUTPUT[s][1] for s in SIGNALS])
 
 
@@ -106,6 +110,40 @@ class Structure:
         return np.array([fitted.get(label, v) for label, v in zip(self.labels(), self.neutral())], float)
 
 
+class RunCache:
+    """The simulated signals of recent runs, least recently used dropped first beyond ``max_bytes``.
+
+    Keyed by everything a run depends on within one :class:`Evaluator` (drive, steering offset, kernel
+    parameter bytes, steps): the kernel gives a vehicle the same bits in any lane of any batch, so a hit is
+    the run itself. Items are read-only views of their batch's output; a hit is copied out of its batch,
+    so that an item kept long does not keep a whole Jacobian batch alive."""
+
+    def __init__(self, max_bytes: int):
+        self.max_bytes, self.bytes = int(max_bytes), 0
+        self._items: OrderedDict[tuple, np.ndarray] = OrderedDict()
+        self.hits = 0
+
+    def get(self, key: tuple) -> np.ndarray | None:
+        y = self._items.get(key)
+        if y is None:
+            return None
+        self.hits += 1
+        if y.base is not None:  # first reuse: its own memory
+            y = y.copy()
+            y.flags.writeable = False
+            self._items[key] = y
+        self._items.move_to_end(key)
+        return y
+
+    def put(self, key: tuple, y: np.ndarray) -> None:
+        y.flags.writeable = False
+        old = self._items.pop(key, None)
+        self.bytes += y.nbytes - (old.nbytes if old is not None else 0)
+        self._items[key] = y
+        while self.bytes > self.max_bytes and self._items:
+            self.bytes -= self._items.popitem(last=False)[1].nbytes
+
+
 class Evaluator:
     """Simulate parameter sets over the drives and compute residuals.
 
@@ -134,6 +172,8 @@ class Evaluator:
         self.dt = self.cases[0].dt
         self.vehicle_seconds = 0.0
         self.progress = progress
+        #: runs already simulated (:meth:`simulate`)
+        self.run_cache = RunCache(RUN_CACHE_BYTES)
         # residual weights (n_grid, n_sig): 1 / noise sigma of each drive's signal once known
         self.weights = [np.ones_like(c.y_meas) for c in self.cases]
         #: per drive, the correlation samples (samples per independent one) of each signal's residual after the
@@ -175,8 +215,9 @@ class Evaluator:
         batch. Runs of one drive under one steering offset share one row of inputs. Each drive is
         simulated up to its last compared sample (:attr:`n_compared` steps, the length of its items), or
         to the longest drive's end with ``to_end`` (the raw samples outside the comparison window: noise
-        floors). Drives of one length run in one batch; items are views of
-        the batch outputs (no copies), one item shared by the same runs."""
+        floors). Drives of one length run in one batch; items are read-only views of
+        the batch outputs (no copies), one item shared by the same runs. A run simulated in an earlier
+        call comes from :attr:`run_cache` and is not counted again (progress, :attr:`vehicle_seconds`)."""
         idx = list(range(len(self.cases))) if idx is None else list(idx)
         X = np.atleast_2d(X)
         M, R = X.shape[0], len(idx)
@@ -188,6 +229,17 @@ class Evaluator:
         run_of = np.array([first.setdefault((int(drive[b]), float(steer[b]), P[b].tobytes()), len(first))
                            for b in range(M * R)], np.int64)
         runs = np.unique(run_of, return_index=True)[1]  # one lane of each distinct run, in run order
+        n_all = np.full(len(runs), self.n_max) if to_end else self.n_compared[drive[runs]]
+        keys = [(int(drive[b]), float(steer[b]), P[b].tobytes(), int(n)) for b, n in zip(runs, n_all)]
+        signals = np.empty(len(runs), object)
+        todo = []
+        for q, key in enumerate(keys):
+            y = self.run_cache.get(key)
+            if y is None:
+                todo.append(q)
+            else:
+                signals[q] = y
+        runs, n_run = runs[todo], n_all[todo]
         P, drive, steer = P[runs], drive[runs], steer[runs]
         U, u_row = self.U, drive
         if np.any(steer != 0.0):  # the inputs differ per (drive, steering offset): one input row for each
@@ -196,8 +248,6 @@ class Evaluator:
                              np.int64)
             U = self.U[[d for d, _ in rows]]  # fancy indexing: a copy
             U[:, :, U_INDEX["SWA"]] -= np.array([s for _, s in rows])[:, None]
-        n_run = np.full(len(runs), self.n_max) if to_end else self.n_compared[drive]
-        signals = np.empty(len(runs), object)
         for n in np.unique(n_run):
             lanes = np.nonzero(n_run == n)[0]
             res = simulate_batch(self.model, P[lanes], U[:, :n], dt=self.dt, roads=self.roads,
@@ -206,7 +256,8 @@ class Evaluator:
             Y[res.steps_done < n] = 1e3  # a diverged run: a huge residual, never a crash
             Y *= _TO_REPORT_UNITS  # in place: this call's own array, tens of MB for a Jacobian batch
             for q, lane in enumerate(lanes):
-                signals[lane] = Y[q]
+                signals[todo[lane]] = Y[q]
+                self.run_cache.put(keys[todo[lane]], Y[q])
             self.vehicle_seconds += len(lanes) * n * self.dt
         if self.progress is not None:
             self.progress.update(len(runs))
