@@ -75,6 +75,11 @@ over three seeds on 2 processes (about 2.5 h on the 2-core VM of ``benchmarks/RE
 
     .venv/bin/python benchmarks/bench_discrepancy.py --family all --seeds 1,2,3 --jobs 2 --json > family.json
 
+``--wheel-loads``: each car weighed as well, its static wheel loads (truth, each read with a relative error of
+the inspection settings' ``wheel_loads.scale_accuracy``) given to the finder as ``susp diagnose --wheel-loads``
+does; the drives alone do not tell the car's overall force scale from the friction levels. A condition of its
+own, reported apart (``weighed`` in the JSON), not the family's figures as shipped.
+
 Parts of one run made apart, or cases re-run after a change, are summarised together with
 ``--merge a.json b.json ... [--json]`` (a later file's case replaces an earlier one; each case's leading
 dependence is scored against the family's labels as they are at the merge).
@@ -103,6 +108,7 @@ from truth_generators.independent_sim import (TruthCar, TruthFriction, TruthHidd
 from susp_sim_ros.io.drive import ImuSeries  # noqa: E402
 from susp_sim_ros.model.learned_force import SHAPES as LEARNED_SHAPES  # noqa: E402
 from susp_sim_ros.model.paper import IMU_SIGNALS  # noqa: E402
+from susp_sim_ros.analysis.inspection import load_config as inspection_settings  # noqa: E402
 
 MEASUREMENT_TERMS = ("sensor_bias", "time_offset", "steering_offset")
 
@@ -117,6 +123,8 @@ def _is_measurement(name: str) -> bool:
         pass
     return name in MEASUREMENT_TERMS
 ISO_CLASSES = "ABCDEFGH"
+#: relative sd of one weighed static wheel load (``--wheel-loads``): the inspection settings' value
+SCALE_ACCURACY = float(inspection_settings()["wheel_loads"]["scale_accuracy"])
 INTACT, REAR_EMPTY, FRONT_EMPTY = (1, 1, 1, 1), (1, 1, 0, 0), (0, 0, 1, 1)
 AMPLITUDE = TruthHidden(amplitude_extra_N=(12.0, 22.0))
 TARGETS = {"precision": 0.9, "recall": 0.9, "verdicts_right_fraction": 1.0, "coverage": 0.9,
@@ -218,8 +226,10 @@ def _family_spec(form: GeneratorForm, seed: int) -> dict:
                 leading=list(form.leading))
 
 
-def run_family_case(form: GeneratorForm, seed: int, noise: float, tmp: Path) -> dict:
-    """Write the form's six drives (``truth_generators.family.make_case``) and score the finder on them."""
+def run_family_case(form: GeneratorForm, seed: int, noise: float, tmp: Path, weighed: bool = False) -> dict:
+    """Write the form's six drives (``truth_generators.family.make_case``) and score the finder on them;
+    ``weighed``: the finder is given the truth car's static wheel loads as a scale reads them
+    (``susp diagnose --wheel-loads``, :func:`weighed_loads`)."""
     t0 = time.perf_counter()
     paths, desc = [], []
     for label, d in make_case(form, seed, noise):
@@ -228,8 +238,16 @@ def run_family_case(form: GeneratorForm, seed: int, noise: float, tmp: Path) -> 
         paths.append(p)
         desc.append({"drive": label, "gyro_bias_deg_s": json.loads(d.metadata["truth"])["sensor"]["gyro_bias_deg_s"]})
     spec = _family_spec(form, seed)
+    if weighed:
+        spec["wheel_loads_n"] = weighed_loads(form.car(seed), seed)
     return _score(f"{form.name}#{seed}", spec, noise, paths, desc, form.car(seed), form.friction, form.hidden,
                   time.perf_counter() - t0, t0)
+
+
+def weighed_loads(car: TruthCar, seed: int) -> list[float]:
+    """The car's static wheel loads FL, FR, RL, RR [N] as a wheel-load scale reads them, at the accuracy of
+    the inspection settings' ``wheel_loads.scale_accuracy`` (the same weighing ``bench_inspect`` gives)."""
+    return car.weighed_wheel_loads(SCALE_ACCURACY, seed)
 
 
 def run_case(name: str, spec: dict, noise: float, tmp: Path) -> dict:
@@ -293,7 +311,9 @@ def optional_right(optional: set, leading: Sequence[str], learned_deps: Sequence
 
 def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, car: TruthCar, fr: TruthFriction,
            hid: TruthHidden, t_gen: float, t0: float) -> dict:
-    f = DiscrepancyFinder(variant=spec["base"]).fit(paths)
+    loads = spec.get("wheel_loads_n")
+    f = DiscrepancyFinder(variant=spec["base"], wheel_loads_n=loads,
+                          scale_accuracy=SCALE_ACCURACY if loads else None).fit(paths)
     rep = f.report()
     named = [t["name"] for t in rep["terms"] if not _is_measurement(t["name"])]
     measurement = [t["name"] for t in rep["terms"] if _is_measurement(t["name"])]
@@ -356,6 +376,10 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         "heldout_after_joint_values_over_noise": ((f.heldout_ or {}).get("after_joint_values_deg_s", math.nan) / nf)
         if nf else None,
         "true_gyro_noise_deg_s": noise,
+        # the car weighed (--wheel-loads): the loads given, the truth's sprung mass and the calibrated one
+        "weighed": {"wheel_loads_n": loads, "truth_sprung_mass_kg": car.sprung_mass,
+                    "calibrated_sprung_mass_kg": next((e["value"] for e in rep.get("calibration", [])
+                                                       if e["param"] == "sprung_mass"), None)} if loads else None,
         "noise_floor_over_true": (nf / noise) if nf else None,
         "gyro_noise_floors_over_true": {s: v / noise for s, v in gyro_floors.items()},
         "noise_floors": floors,
@@ -582,6 +606,9 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1,
                     help="with --family: run the cases over this many processes (default 1; the results are the "
                          "same, the per-case seconds are not run times)")
+    ap.add_argument("--wheel-loads", action="store_true",
+                    help="with --family: each car weighed, its static wheel loads given to the finder as a scale "
+                         "reads them (susp diagnose --wheel-loads; the scale accuracy of config/inspection.yaml)")
     ap.add_argument("--merge", nargs="+", metavar="JSON", default=None,
                     help="re-summarise the cases of these --family --json outputs (parts of one run, or a run and "
                          "cases re-run after it: a later file's case replaces an earlier one) instead of running")
@@ -641,20 +668,20 @@ def _emit(out: dict, as_json: bool) -> bool:
     return True
 
 
-def _family_task(task: tuple[str, int, float]) -> dict:
-    """One family case in a worker process (``--jobs``): form name, seed, gyro noise [deg/s]."""
-    name, seed, noise = task
+def _family_task(task: tuple[str, int, float, bool]) -> dict:
+    """One family case in a worker process (``--jobs``): form name, seed, gyro noise [deg/s], weighed."""
+    name, seed, noise, weighed = task
     with tempfile.TemporaryDirectory(prefix="bench_family_") as td:
-        return run_family_case(FORMS_BY_NAME[name], seed, noise, Path(td))
+        return run_family_case(FORMS_BY_NAME[name], seed, noise, Path(td), weighed)
 
 
-def _run_family_cases(tasks: list[tuple[str, int, float]], jobs: int, t0: float) -> list[dict]:
+def _run_family_cases(tasks: list[tuple[str, int, float, bool]], jobs: int, t0: float) -> list[dict]:
     """The cases of ``tasks`` in order, over ``jobs`` processes (spawned: the parent has run no compiled
     kernel, and a fresh interpreter per worker keeps numba's threads out of a fork), progress on stderr."""
     def started(task):
-        name, seed, noise = task
+        name, seed, noise, weighed = task
         print(f"[{time.perf_counter() - t0:6.0f} s] {name} ({FORMS_BY_NAME[name].split}) seed {seed} at {noise} "
-              f"deg/s ...", file=sys.stderr, flush=True)
+              f"deg/s{', weighed' if weighed else ''} ...", file=sys.stderr, flush=True)
 
     if jobs <= 1:
         out = []
@@ -718,9 +745,9 @@ def _main_family(args) -> int:
             raise SystemExit(f"unknown forms {unknown}; known: {[f.name for f in forms()]}")
         chosen = [f for f in forms() if f.name in want]
     t0 = time.perf_counter()
-    tasks = [(form.name, seed, noise) for noise in noises for form in chosen for seed in seeds]
+    tasks = [(form.name, seed, noise, args.wheel_loads) for noise in noises for form in chosen for seed in seeds]
     results = _run_family_cases(tasks, args.jobs, t0)
-    out = _family_output(args.family, results, time.perf_counter() - t0)
+    out = _family_output(args.family, results, time.perf_counter() - t0, weighed=args.wheel_loads)
     if _emit(out, args.json):
         _print_family(out)
     return 0

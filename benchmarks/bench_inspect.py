@@ -281,8 +281,7 @@ def family_scores(rows: list[dict], states_cfg: dict) -> dict:
 def weighed_wheel_loads(drive, seed: int, accuracy: float) -> list[float]:
     """The truth car's static wheel loads FL, FR, RL, RR [N] (``TruthCar.static_wheel_loads`` of the truth
     metadata of ``drive``) as a wheel-load scale of relative accuracy ``accuracy`` (sd, per wheel) reads them."""
-    exact = ind.truth_car_of(drive).static_wheel_loads()
-    return (exact * (1.0 + accuracy * np.random.default_rng(seed + 77).standard_normal(4))).tolist()
+    return ind.truth_car_of(drive).weighed_wheel_loads(accuracy, seed)
 
 
 RIG_OILS = (0.0, 0.25, 0.5, 0.75, 1.0)   # a damper drained in quarter steps [-]

@@ -13,7 +13,7 @@ import pytest
 from susp_sim_ros.analysis.discrepancy.calibration import CalParam
 from susp_sim_ros.analysis.inspection import inspect_drives, load_config
 from susp_sim_ros.analysis.inspection.report import write_inspection_report
-from susp_sim_ros.analysis.inspection.estimate import sprung_mass_from_wheel_loads
+from susp_sim_ros.analysis.discrepancy.calibration import sprung_mass_from_wheel_loads
 from susp_sim_ros.errors import ConfigError
 from truth_generators import family
 from truth_generators.independent_sim import truth_car_of

@@ -87,6 +87,12 @@ class TruthCar:
         rear = 0.5 * self.sprung_mass * g * self.a / L + self.unsprung_mass[1] * g
         return np.array([front, front, rear, rear])
 
+    def weighed_wheel_loads(self, accuracy: float, seed: int) -> list[float]:
+        """:meth:`static_wheel_loads` [N] as a wheel-load scale of relative accuracy ``accuracy`` (sd, per
+        wheel) reads them, its errors drawn from ``seed``."""
+        rng = np.random.default_rng(seed + 77)
+        return (self.static_wheel_loads() * (1.0 + accuracy * rng.standard_normal(4))).tolist()
+
     def perturbed(self, rng, lo: float = 0.05, hi: float = 0.15, extended: bool = False) -> "TruthCar":
         """A car whose sprung mass, inertias, cornering stiffnesses, wheel rates and tyre stiffness differ
         by a random factor 1 +- U(lo, hi) each (random sign); ``factors`` records them. ``extended`` also

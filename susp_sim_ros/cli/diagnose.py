@@ -1,6 +1,7 @@
 """``susp diagnose``: the discrepancy finder over one or more recorded test drives.
 
     susp diagnose bags/*.mcap --variant dahl_only [--out results/diagnose] [--name NAME] [--json]
+        [--wheel-loads FL,FR,RL,RR]
 
 Locates where the measured IMU signals leave the base model's simulation by more than the sensor noise
 (estimated from the data, per signal), calibrates the base model's uncertain parameters within their
@@ -12,6 +13,11 @@ Markdown report into ``--out``. ``--json`` prints the interface object (interfac
 Every drive is read and checked first (readable, the input topics present with increasing times and
 values the model accepts, enough measured IMU samples): a bad drive is a named error (exit 2) before any
 fitting starts. ``--dry-run`` stops after that check.
+
+``--wheel-loads``: the car's static wheel loads [N] as weighed. Drives that record motion only do not tell
+the car's overall force scale (every mass and rate scaled by one factor moves the car the same, except
+the friction levels held in newtons), so a calibrated scale can stand in for a friction effect; the
+weighed sprung mass (the inspection settings' ``wheel_loads.scale_accuracy``) pins it.
 """
 from __future__ import annotations
 
@@ -21,10 +27,12 @@ from ..analysis.discrepancy import DiscrepancyFinder
 from ..analysis.discrepancy.calibration import outside_statement
 from ..analysis.discrepancy.data import cases_of_read
 from ..analysis.discrepancy.report import verdict, write_outputs
+from ..analysis.inspection import load_config as inspection_settings
 from ..errors import RecordingError, SuspInputError
 from ..io.drive import TestDrive, check_drive, read_drive
 from ..io.integrity import append_to_report
 from ..io.topic_map import add_topic_map_argument
+from .inspect import wheel_loads
 from ..model import load_vehicle
 from ..model.params import DEFAULT_VEHICLE
 
@@ -41,6 +49,9 @@ def add_arguments(p) -> None:
     p.add_argument("--no-heldout", action="store_true", help="skip leave-one-drive-out (faster)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.add_argument("--dry-run", action="store_true", help="read and check the drives only; no fitting")
+    p.add_argument("--wheel-loads", type=wheel_loads, default=None, metavar="FL,FR,RL,RR",
+                   help="the car's static wheel loads in N, as weighed (wheel-load scale): pins the sprung mass, "
+                        "which drives recording motion only do not tell apart from the friction levels")
     add_topic_map_argument(p)
 
 
@@ -72,6 +83,16 @@ def drive_summaries(read: list[tuple[str, TestDrive]]) -> list[dict]:
             for path, drive in read]
 
 
+def _weighed(loads: list[float] | None) -> dict:
+    """The finder's arguments for a weighed car: the loads [N] and the scale's accuracy (inspection settings)."""
+    if loads is None:
+        return {}
+    acc = inspection_settings().get("wheel_loads", {}).get("scale_accuracy")
+    if acc is None:
+        raise SuspInputError("--wheel-loads given but the inspection settings have no wheel_loads.scale_accuracy")
+    return {"wheel_loads_n": loads, "scale_accuracy": float(acc)}
+
+
 def run(args) -> dict:
     topic_map = getattr(args, "topic_map", None)
     read = check_drives(args.drives, topic_map)
@@ -83,7 +104,8 @@ def run(args) -> dict:
                                      for c in checked) + "\nchecked; nothing fitted (--dry-run)"}
     cands = [c.strip() for c in args.candidates.split(",") if c.strip()] if args.candidates else None
     f = DiscrepancyFinder(vehicle=args.config, variant=args.variant, candidates=cands,
-                          heldout=not args.no_heldout, progress=not args.no_progress)
+                          heldout=not args.no_heldout, progress=not args.no_progress,
+                          **_weighed(getattr(args, "wheel_loads", None)))
     f.fit(cases_of_read(read, wheelbase=load_vehicle(args.config).wheelbase))  # each drive read once
     base = Path(args.variant).stem
     name = args.name or f"diagnosed_{base}"
@@ -103,6 +125,11 @@ def run(args) -> dict:
                                                     f"{c['prior']:.4g} -> {c['value']:.4g} {c['unit']}"
                                                     for c in informed[:6]) + (" ..." if len(informed) > 6 else "")
                                    if informed else ""))
+    if rep.get("wheel_loads"):
+        w = rep["wheel_loads"]
+        lines.append(f"weighed: {w['total_mass_kg']:.0f} kg in all; sprung mass prior "
+                     f"{w['sprung_mass_prior_kg']:.0f} +- {w['sprung_mass_prior_sd_kg']:.1f} kg "
+                     f"(vehicle file {w['vehicle_file_sprung_mass_kg']:.0f} kg)")
     for c in rep["calibration"]:
         if c["outside_prior"]:
             lines.append(f"  finding: {outside_statement(c)}")

@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from ...errors import ConfigError
 from ...model import Model
 from ...model.layout import P_INDEX
 from ...model.params import AXLES, FrictionVariant, VehicleParams, load_settings
@@ -101,6 +102,45 @@ class CalParam:
         return lo, hi
 
 
+def sprung_mass_from_wheel_loads(cal: Sequence, wheel_loads_n: Sequence[float], gravity: float,
+                                 scale_accuracy: float) -> tuple[list, dict]:
+    """The calibration (or inspection nuisance) parameters ``cal`` with the sprung mass's prior taken from the
+    car's measured static wheel loads (FL, FR, RL, RR [N]; a wheel-load scale, or the static reading of an
+    EUSAMA tester):
+    ``sum(F) / g`` minus the unsprung masses (their priors), sd from the scale's relative accuracy per
+    wheel and the unsprung masses' sds. Why: a bump crossing seen by a body IMU tells the car's ratios
+    (spring rate and damping to mass) but hardly its overall scale, so a heavy car read against the
+    vehicle file's mass reads its dampers weak by about the mass ratio (issue 27, benchmarks/RESULTS.md), and
+    a calibration that scales every mass and rate by one factor makes the friction levels (held in newtons)
+    act stronger or weaker (issue 24); the scale pins it. Returns the parameters and the JSON entry."""
+    loads = np.asarray(wheel_loads_n, float)
+    if loads.shape != (4,) or not np.all(np.isfinite(loads)) or np.any(loads <= 0):
+        raise ConfigError(f"wheel loads: expected four positive static loads FL,FR,RL,RR in N, got "
+                          f"{list(wheel_loads_n)}")
+    by = {(p.field, p.axle): p for p in cal}
+    if ("sprung_mass", None) not in by:
+        raise ConfigError("wheel loads given but the sprung mass is not calibrated (inspection: "
+                          "config/inspection.yaml estimator.nuisance; diagnosis: `calibrate: true` on sprung_mass "
+                          "in the vehicle file)")
+    unsprung = [by.get(("unsprung_mass", a)) for a in (0, 1)]
+    mu = sum(2.0 * p.prior for p in unsprung if p is not None)
+    var_u = sum(4.0 * p.sd ** 2 for p in unsprung if p is not None)
+    total = float(loads.sum()) / gravity
+    sd = math.sqrt((scale_accuracy * float(np.sqrt(np.sum(loads ** 2))) / gravity) ** 2 + var_u)
+    m_s = total - mu
+    if not m_s > 2 * sd:
+        raise ConfigError(f"wheel loads {list(wheel_loads_n)} N give a total mass of {total:.0f} kg, no more than "
+                          f"the unsprung masses ({mu:.0f} kg): not this car's static loads in N")
+    old = by[("sprung_mass", None)]
+    new = dataclasses.replace(old, prior=m_s, lo=m_s - 2 * sd, hi=m_s + 2 * sd,
+                              reason=f"from the measured static wheel loads ({total:.0f} kg in all, the unsprung "
+                                     "masses' priors taken off)")
+    entry = {"measured_N": [float(v) for v in loads], "total_mass_kg": total, "sprung_mass_prior_kg": m_s,
+             "sprung_mass_prior_sd_kg": sd, "vehicle_file_sprung_mass_kg": old.prior,
+             "front_share": float(loads[:2].sum() / loads.sum())}
+    return [new if p is old else p for p in cal], entry
+
+
 def reveal_for(p: CalParam, state: str) -> str:
     """The measurement that pins calibration value ``p`` without the drives (what separates it from a
     physics term that explains the same residual): a damper table on the damper rig in the oil state of
@@ -113,6 +153,9 @@ def reveal_for(p: CalParam, state: str) -> str:
         return (f"the {oil} {p.where} damper (as in the {state} drives) on the damper rig: the friction ramp "
                 f"at {1000 * rig['damper.ramp_speed']:.0f} mm/s and sinusoids from {1000 * min(v):.0f} mm/s "
                 "(`susp rig damper`) show whether the damper itself is stronger than its measured curve")
+    if p.field == "sprung_mass":
+        return ("weighing the car: its static wheel loads on a wheel-load scale (`susp diagnose --wheel-loads "
+                "FL,FR,RL,RR`) pin the car's overall force scale, which drives recording motion only do not")
     return f"a measurement of {p.key}" + ("" if p.where == "all" else f" ({p.where})")
 
 

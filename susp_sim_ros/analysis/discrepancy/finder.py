@@ -50,7 +50,7 @@ from ...model.terms import get_term
 from ...progress import progress
 from .calibration import (STEP_OF_SD, CalParam, calibration_candidate, calibration_entries, calibration_params,
                           consider_params, consider_sensitivity, identifiability, reveal_for,
-                          vehicle_at)
+                          sprung_mass_from_wheel_loads, vehicle_at)
 from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PHYSICS, Candidate
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .data import SIGNAL_UNIT, as_cases
@@ -128,8 +128,15 @@ class DiscrepancyFinder:
 
     def __init__(self, *, vehicle: str = "passat_b8_like", variant: str = "full",
                  candidates: Sequence[str] | None = None, max_steps: int = 8, heldout: bool = True,
-                 progress: bool = False, calibrate: bool = True):
+                 progress: bool = False, calibrate: bool = True,
+                 wheel_loads_n: Sequence[float] | None = None, scale_accuracy: float | None = None):
+        """``wheel_loads_n``: the car's static wheel loads FL, FR, RL, RR [N] as weighed, with the scale's
+        relative accuracy per wheel ``scale_accuracy`` (sd, 1): the calibration's sprung-mass prior comes
+        from them (:func:`~.calibration.sprung_mass_from_wheel_loads`)."""
         self.vehicle, self.variant, self.calibrate = vehicle, variant, calibrate
+        if wheel_loads_n is not None and scale_accuracy is None:
+            raise SuspInputError("wheel loads given without the scale's accuracy (scale_accuracy)")
+        self.wheel_loads_n, self.scale_accuracy = wheel_loads_n, scale_accuracy
         self.candidates = tuple(candidates) if candidates is not None else \
             tuple(c.name for c in LIBRARY) + (force_shape.TERM,)
         unknown = [c for c in self.candidates if c not in BY_NAME and c != force_shape.TERM]
@@ -1414,6 +1421,12 @@ class DiscrepancyFinder:
         allidx = tuple(range(len(ev.cases)))
         meas = self._measurement_terms(ev)
         params = calibration_params(model.vehicle, model.variant) if self.calibrate else []
+        self.wheel_loads_ = None
+        if self.wheel_loads_n is not None and self.scale_accuracy is not None:  # both or neither (__init__)
+            if not self.calibrate:
+                raise SuspInputError("wheel loads given to a finder that does not calibrate (calibrate=False)")
+            params, self.wheel_loads_ = sprung_mass_from_wheel_loads(params, self.wheel_loads_n, model.vehicle.gravity,
+                                                                     self.scale_accuracy)
         self.calibration_params_ = params
         self.calibrated_vehicle_, self.calibrated_fields_, self.informed_ = model.vehicle, [], []
         if not params and not meas:

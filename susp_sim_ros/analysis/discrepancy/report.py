@@ -352,6 +352,8 @@ def interface_json(f) -> dict:
                                    "road_estimates": {x["drive"]: x["road_estimate"] for x in u
                                                       if "road_estimate" in x}}
     rep["force_shape"] = _clean(getattr(f, "force_shape_", []))
+    if getattr(f, "wheel_loads_", None) is not None:  # the car weighed: the sprung mass's prior
+        rep["wheel_loads"] = _clean(f.wheel_loads_)
     if getattr(f, "missing_force_", None) is not None:  # estimated when the outputs were written
         rep["missing_force"] = f.missing_force_
     return rep
@@ -669,8 +671,14 @@ def _md_calibration(f, rep: dict, paths: dict, name: str) -> list[str]:
     L: list[str] = []
     L += ["## Calibration of the base model", "",
           "Re-estimated within the documented priors (maximum a posteriori over all drives); not missing "
-          "physics. Not informed = the drives do not determine it: it stays at its prior.", "",
-          "| parameter | where | unit | prior | prior range | calibrated | 95 % interval | informed |",
+          "physics. Not informed = the drives do not determine it: it stays at its prior.", ""]
+    w = rep.get("wheel_loads")
+    if w:
+        L += [f"Weighed: static wheel loads {', '.join(f'{v:.0f}' for v in w['measured_N'])} N (FL, FR, RL, RR), "
+              f"{w['total_mass_kg']:.0f} kg in all; the sprung mass's prior is {w['sprung_mass_prior_kg']:.0f} "
+              f"+- {w['sprung_mass_prior_sd_kg']:.1f} kg (1 sd) instead of the vehicle file's "
+              f"{w['vehicle_file_sprung_mass_kg']:.0f} kg: the scale pins the car's overall force scale.", ""]
+    L += ["| parameter | where | unit | prior | prior range | calibrated | 95 % interval | informed |",
           "|---|---|---|---|---|---|---|---|"]
     wider = []
     for e in rep["calibration"]:

@@ -59,7 +59,7 @@ from ...model import Model
 from ...model.layout import DAMPER_GRID, N_GRID, P_H_INTACT, P_INDEX, U_INDEX
 from ...model.params import AXLE_CORNERS, CORNER_NAMES, load_settings, load_vehicle
 from ...model.road import RoadProfile
-from ..discrepancy.calibration import calibration_candidate, calibration_params
+from ..discrepancy.calibration import calibration_candidate, calibration_params, sprung_mass_from_wheel_loads
 from ..discrepancy.candidates import CALIBRATION, CandParam, Candidate
 from ..discrepancy.data import SIGNALS, DriveCase, load_cases, mark_quiet, select_signals
 from ..discrepancy.engine import Evaluator, Structure
@@ -622,42 +622,6 @@ def _curve_beyond_entries(st: Structure, x: np.ndarray, se: np.ndarray) -> list[
                     "prior_range": [p.neutral - 2 * sd, p.neutral + 2 * sd], "value": float(x[j]),
                     "ci95": [float(x[j] - 1.96 * se[j]), float(x[j] + 1.96 * se[j])]})
     return out
-
-
-def sprung_mass_from_wheel_loads(cal: Sequence, wheel_loads_n: Sequence[float], gravity: float,
-                                 scale_accuracy: float) -> tuple[list, dict]:
-    """The nuisance parameters ``cal`` with the sprung mass's prior taken from the car's measured static
-    wheel loads (FL, FR, RL, RR [N]; a wheel-load scale, or the static reading of an EUSAMA tester):
-    ``sum(F) / g`` minus the unsprung masses (their priors), sd from the scale's relative accuracy per
-    wheel and the unsprung masses' sds. Why: a bump crossing seen by a body IMU tells the car's ratios
-    (spring rate and damping to mass) but hardly its overall scale, so a heavy car read against the
-    vehicle file's mass reads its dampers weak by about the mass ratio (issue 27, benchmarks/RESULTS.md);
-    the scale pins it. Returns the parameters and the JSON entry."""
-    loads = np.asarray(wheel_loads_n, float)
-    if loads.shape != (4,) or not np.all(np.isfinite(loads)) or np.any(loads <= 0):
-        raise ConfigError(f"wheel loads: expected four positive static loads FL,FR,RL,RR in N, got "
-                          f"{list(wheel_loads_n)}")
-    by = {(p.field, p.axle): p for p in cal}
-    if ("sprung_mass", None) not in by:
-        raise ConfigError("wheel loads given but the sprung mass is no inspection nuisance "
-                          "(config/inspection.yaml estimator.nuisance)")
-    unsprung = [by.get(("unsprung_mass", a)) for a in (0, 1)]
-    mu = sum(2.0 * p.prior for p in unsprung if p is not None)
-    var_u = sum(4.0 * p.sd ** 2 for p in unsprung if p is not None)
-    total = float(loads.sum()) / gravity
-    sd = math.sqrt((scale_accuracy * float(np.sqrt(np.sum(loads ** 2))) / gravity) ** 2 + var_u)
-    m_s = total - mu
-    if not m_s > 2 * sd:
-        raise ConfigError(f"wheel loads {list(wheel_loads_n)} N give a total mass of {total:.0f} kg, no more than "
-                          f"the unsprung masses ({mu:.0f} kg): not this car's static loads in N")
-    old = by[("sprung_mass", None)]
-    new = dataclasses.replace(old, prior=m_s, lo=m_s - 2 * sd, hi=m_s + 2 * sd,
-                              reason=f"from the measured static wheel loads ({total:.0f} kg in all, the unsprung "
-                                     "masses' priors taken off)")
-    entry = {"measured_N": [float(v) for v in loads], "total_mass_kg": total, "sprung_mass_prior_kg": m_s,
-             "sprung_mass_prior_sd_kg": sd, "vehicle_file_sprung_mass_kg": old.prior,
-             "front_share": float(loads[:2].sum() / loads.sum())}
-    return [new if p is old else p for p in cal], entry
 
 
 def inspect_drives(paths: Sequence[str | Path], config: str | None = None, variant: str = "full",
