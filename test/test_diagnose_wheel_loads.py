@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder
-from susp_sim_ros.analysis.discrepancy.calibration import CalParam, reveal_for
+from susp_sim_ros.analysis.discrepancy.calibration import CalParam, reveal_for, with_scale_rival
 from susp_sim_ros.analysis.discrepancy.report import markdown
 from susp_sim_ros.analysis.inspection import load_config
 from susp_sim_ros.errors import SuspInputError
@@ -84,3 +84,32 @@ def test_the_cli_rejects_malformed_loads_with_exit_2(tmp_path):
                         "--wheel-loads", "4800,4750,-3300,3300"], capture_output=True, text=True)
     assert r.returncode == 2 and "--wheel-loads" in r.stderr and "FL,FR,RL,RR" in r.stderr
     assert np.isfinite(ACCURACY) and 0 < ACCURACY < 0.05
+
+
+def _entry(name: str) -> dict:
+    return {"name": name, "competes_with": ["damper_measured_empty:rear"], "reveal_with": "the damper rig",
+            "why": "explains the same residual."}
+
+
+def _calibration(value: float) -> list[dict]:
+    return [{"param": "sprung_mass", "where": "all", "prior": 1400.0, "prior_range": [1300.0, 1600.0],
+             "value": value, "informed": True}]
+
+
+def test_a_term_competing_beside_a_moved_car_scale_names_the_scale_and_weighing():
+    """amplitude/rms_power_separate #3 as shipped: the calibration scaled the car down (sprung mass 1000 kg
+    against the file's 1400, -5.3 prior sd) and the amplitude friction was listed competing with damper values
+    only; the scale is a rival of any term whose force is in newtons, and weighing the car tells it."""
+    physics = {"friction_amplitude", "unlisted_force"}
+    entries = [_entry("friction_amplitude"), {"name": "time_offset", "competes_with": ["b:all"],
+                                              "reveal_with": "a timing test"}]
+    out = with_scale_rival(entries, _calibration(1000.0), 1.0, False, physics)
+    amp = out[0]
+    assert amp["competes_with"] == ["damper_measured_empty:rear", "sprung_mass:all"]
+    assert "weighing the car" in amp["reveal_with"] and amp["reveal_with"].endswith("the damper rig")
+    assert "1000 kg" in amp["why"] and "-5.3 prior sd" in amp["why"]
+    assert out[1] == entries[1]                                      # the measurement chain as it was
+    assert entries[0]["competes_with"] == ["damper_measured_empty:rear"]   # the input untouched
+    # a scale within one prior sd of its prior, or a weighed car: nothing added
+    assert with_scale_rival(entries, _calibration(1450.0), 1.0, False, physics) == entries
+    assert with_scale_rival(entries, _calibration(1000.0), 1.0, True, physics) == entries

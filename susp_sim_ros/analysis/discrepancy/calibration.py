@@ -141,6 +141,37 @@ def sprung_mass_from_wheel_loads(cal: Sequence, wheel_loads_n: Sequence[float], 
     return [new if p is old else p for p in cal], entry
 
 
+def with_scale_rival(entries: list[dict], calibration: Sequence[dict], shift_sd: float, weighed: bool,
+                     physics: set[str]) -> list[dict]:
+    """The competing entries (``not_identifiable``) of the physics terms ``physics`` with the car's overall
+    force scale added as a rival where the calibration moved it: the sprung mass calibrated more than
+    ``shift_sd`` prior sd (range = +-2 sd) from its prior, the car not ``weighed``. Drives that record motion only
+    do not tell the scale: every mass, inertia and rate scaled by one factor moves the car the same, while a
+    term's force has its size in newtons, so a scale moved down makes a term (and the friction levels held)
+    act stronger (benchmarks/RESULTS.md, 2026-12-06 probe). Weighing the car separates them. Other entries
+    (the measurement chain's) are returned as they are."""
+    m = next((e for e in calibration if e["param"] == "sprung_mass" and e.get("informed")), None)
+    if weighed or m is None:
+        return entries
+    sd = (m["prior_range"][1] - m["prior_range"][0]) / 4.0
+    z = (m["value"] - m["prior"]) / sd if sd > 0 else 0.0
+    if abs(z) <= shift_sd:
+        return entries
+    rival = "sprung_mass:all"
+    why = (f" The car's overall force scale moved with it: sprung mass calibrated at {m['value']:.0f} kg, "
+           f"{z:+.1f} prior sd from the vehicle file's {m['prior']:.0f} kg (every mass and rate moves with it, "
+           "while the term's force is in newtons).")
+    out = []
+    for e in entries:
+        if e["name"] in physics and rival not in e.get("competes_with", []):
+            scale = CalParam("sprung_mass", "mass.sprung", "all", None, "kg", m["prior"], *m["prior_range"], "")
+            e = {**e, "competes_with": [*e.get("competes_with", []), rival],
+                 "reveal_with": f"{reveal_for(scale, 'recorded')}; {e['reveal_with']}",
+                 "why": e.get("why", "") + why}
+        out.append(e)
+    return out
+
+
 def reveal_for(p: CalParam, state: str) -> str:
     """The measurement that pins calibration value ``p`` without the drives (what separates it from a
     physics term that explains the same residual): a damper table on the damper rig in the oil state of

@@ -50,7 +50,7 @@ from ...model.terms import get_term
 from ...progress import progress
 from .calibration import (STEP_OF_SD, CalParam, calibration_candidate, calibration_entries, calibration_params,
                           consider_params, consider_sensitivity, identifiability, reveal_for,
-                          sprung_mass_from_wheel_loads, vehicle_at)
+                          sprung_mass_from_wheel_loads, vehicle_at, with_scale_rival)
 from .candidates import BY_NAME, CALIBRATION, LIBRARY, MEASUREMENT, PHYSICS, Candidate
 from .data import GYRO, SIGNALS, DriveCase, has_road_input, load_cases, mark_quiet, primary_signals, select_signals
 from .data import SIGNAL_UNIT, as_cases
@@ -244,7 +244,10 @@ class DiscrepancyFinder:
         else:  # every round dropped something (cannot outlast the structure's terms): the last judgement
             _, competing = self._judge_measurement_terms()
             self.effects_ = self.term_effects_()
-        self.competing_: list[dict] = competing + shift_competing + effect_competing
+        physics = {c.name for c in LIBRARY if c.kind == PHYSICS} | {force_shape.TERM}
+        self.competing_: list[dict] = with_scale_rival(competing + shift_competing + effect_competing,
+                                                       getattr(self, "calibration_", []), SHIFT_SD,
+                                                       getattr(self, "wheel_loads_", None) is not None, physics)
         return self
 
     def _prepare(self, drives, bar) -> Evaluator:
