@@ -164,7 +164,8 @@ def with_scale_rival(entries: list[dict], calibration: Sequence[dict], shift_sd:
     out = []
     for e in entries:
         if e["name"] in physics and rival not in e.get("competes_with", []):
-            scale = CalParam("sprung_mass", "mass.sprung", "all", None, "kg", m["prior"], *m["prior_range"], "")
+            lo, hi = m["prior_range"]
+            scale = CalParam("sprung_mass", "mass.sprung", "all", None, "kg", m["prior"], lo, hi, "")
             e = {**e, "competes_with": [*e.get("competes_with", []), rival],
                  "reveal_with": f"{reveal_for(scale, 'recorded')}; {e['reveal_with']}",
                  "why": e.get("why", "") + why}
