@@ -108,7 +108,7 @@ from truth_generators.independent_sim import (TruthCar, TruthFriction, TruthHidd
 from susp_sim_ros.io.drive import ImuSeries  # noqa: E402
 from susp_sim_ros.model.learned_force import SHAPES as LEARNED_SHAPES  # noqa: E402
 from susp_sim_ros.model.paper import IMU_SIGNALS  # noqa: E402
-from susp_sim_ros.analysis.inspection import load_config as inspection_settings  # noqa: E402
+from susp_sim_ros.analysis.inspection import scale_accuracy  # noqa: E402
 
 MEASUREMENT_TERMS = ("sensor_bias", "time_offset", "steering_offset")
 
@@ -124,7 +124,7 @@ def _is_measurement(name: str) -> bool:
     return name in MEASUREMENT_TERMS
 ISO_CLASSES = "ABCDEFGH"
 #: relative sd of one weighed static wheel load (``--wheel-loads``): the inspection settings' value
-SCALE_ACCURACY = float(inspection_settings()["wheel_loads"]["scale_accuracy"])
+SCALE_ACCURACY = scale_accuracy()
 INTACT, REAR_EMPTY, FRONT_EMPTY = (1, 1, 1, 1), (1, 1, 0, 0), (0, 0, 1, 1)
 AMPLITUDE = TruthHidden(amplitude_extra_N=(12.0, 22.0))
 TARGETS = {"precision": 0.9, "recall": 0.9, "verdicts_right_fraction": 1.0, "coverage": 0.9,
@@ -229,7 +229,7 @@ def _family_spec(form: GeneratorForm, seed: int) -> dict:
 def run_family_case(form: GeneratorForm, seed: int, noise: float, tmp: Path, weighed: bool = False) -> dict:
     """Write the form's six drives (``truth_generators.family.make_case``) and score the finder on them;
     ``weighed``: the finder is given the truth car's static wheel loads as a scale reads them
-    (``susp diagnose --wheel-loads``, :func:`weighed_loads`)."""
+    (``susp diagnose --wheel-loads``; ``TruthCar.weighed_wheel_loads``, the same weighing ``bench_inspect`` gives)."""
     t0 = time.perf_counter()
     paths, desc = [], []
     for label, d in make_case(form, seed, noise):
@@ -239,15 +239,9 @@ def run_family_case(form: GeneratorForm, seed: int, noise: float, tmp: Path, wei
         desc.append({"drive": label, "gyro_bias_deg_s": json.loads(d.metadata["truth"])["sensor"]["gyro_bias_deg_s"]})
     spec = _family_spec(form, seed)
     if weighed:
-        spec["wheel_loads_n"] = weighed_loads(form.car(seed), seed)
+        spec["wheel_loads_n"] = form.car(seed).weighed_wheel_loads(SCALE_ACCURACY, seed)
     return _score(f"{form.name}#{seed}", spec, noise, paths, desc, form.car(seed), form.friction, form.hidden,
                   time.perf_counter() - t0, t0)
-
-
-def weighed_loads(car: TruthCar, seed: int) -> list[float]:
-    """The car's static wheel loads FL, FR, RL, RR [N] as a wheel-load scale reads them, at the accuracy of
-    the inspection settings' ``wheel_loads.scale_accuracy`` (the same weighing ``bench_inspect`` gives)."""
-    return car.weighed_wheel_loads(SCALE_ACCURACY, seed)
 
 
 def run_case(name: str, spec: dict, noise: float, tmp: Path) -> dict:

@@ -69,6 +69,8 @@ def test_a_weighed_car_calibrates_its_sprung_mass_at_the_scale(heavy_car_drives)
 def test_wheel_loads_need_the_scale_accuracy_and_a_calibration():
     with pytest.raises(SuspInputError, match="accuracy"):
         DiscrepancyFinder(wheel_loads_n=[4800.0, 4800.0, 3300.0, 3300.0])
+    with pytest.raises(SuspInputError, match="does not calibrate"):
+        DiscrepancyFinder(wheel_loads_n=[4800.0, 4800.0, 3300.0, 3300.0], scale_accuracy=0.01, calibrate=False)
 
 
 def test_a_competing_sprung_mass_is_revealed_by_weighing_the_car():
@@ -100,7 +102,7 @@ def test_a_term_competing_beside_a_moved_car_scale_names_the_scale_and_weighing(
     """amplitude/rms_power_separate #3 as shipped: the calibration scaled the car down (sprung mass 1000 kg
     against the file's 1400, -5.3 prior sd) and the amplitude friction was listed competing with damper values
     only; the scale is a rival of any term whose force is in newtons, and weighing the car tells it."""
-    physics = {"friction_amplitude", "unlisted_force"}
+    physics = {"friction_amplitude", "unlisted_force"}.__contains__
     entries = [_entry("friction_amplitude"), {"name": "time_offset", "competes_with": ["b:all"],
                                               "reveal_with": "a timing test"}]
     out = with_scale_rival(entries, _calibration(1000.0), 1.0, False, physics)

@@ -27,7 +27,7 @@ from ..analysis.discrepancy import DiscrepancyFinder
 from ..analysis.discrepancy.calibration import outside_statement
 from ..analysis.discrepancy.data import cases_of_read
 from ..analysis.discrepancy.report import verdict, write_outputs
-from ..analysis.inspection import load_config as inspection_settings
+from ..analysis.inspection import scale_accuracy
 from ..errors import RecordingError, SuspInputError
 from ..io.drive import TestDrive, check_drive, read_drive
 from ..io.integrity import append_to_report
@@ -85,12 +85,7 @@ def drive_summaries(read: list[tuple[str, TestDrive]]) -> list[dict]:
 
 def _weighed(loads: list[float] | None) -> dict:
     """The finder's arguments for a weighed car: the loads [N] and the scale's accuracy (inspection settings)."""
-    if loads is None:
-        return {}
-    acc = inspection_settings().get("wheel_loads", {}).get("scale_accuracy")
-    if acc is None:
-        raise SuspInputError("--wheel-loads given but the inspection settings have no wheel_loads.scale_accuracy")
-    return {"wheel_loads_n": loads, "scale_accuracy": float(acc)}
+    return {} if loads is None else {"wheel_loads_n": loads, "scale_accuracy": scale_accuracy()}
 
 
 def run(args) -> dict:

@@ -36,7 +36,7 @@ import copy
 import dataclasses
 import math
 from dataclasses import dataclass
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -142,8 +142,8 @@ def sprung_mass_from_wheel_loads(cal: Sequence, wheel_loads_n: Sequence[float], 
 
 
 def with_scale_rival(entries: list[dict], calibration: Sequence[dict], shift_sd: float, weighed: bool,
-                     physics: set[str]) -> list[dict]:
-    """The competing entries (``not_identifiable``) of the physics terms ``physics`` with the car's overall
+                     is_physics: Callable[[str], bool]) -> list[dict]:
+    """The competing entries (``not_identifiable``) of physics terms (``is_physics``) with the car's overall
     force scale added as a rival where the calibration moved it: the sprung mass calibrated more than
     ``shift_sd`` prior sd (range = +-2 sd) from its prior, the car not ``weighed``. Drives that record motion only
     do not tell the scale: every mass, inertia and rate scaled by one factor moves the car the same, while a
@@ -153,24 +153,18 @@ def with_scale_rival(entries: list[dict], calibration: Sequence[dict], shift_sd:
     m = next((e for e in calibration if e["param"] == "sprung_mass" and e.get("informed")), None)
     if weighed or m is None:
         return entries
-    sd = (m["prior_range"][1] - m["prior_range"][0]) / 4.0
-    z = (m["value"] - m["prior"]) / sd if sd > 0 else 0.0
+    lo, hi = m["prior_range"]
+    scale = CalParam("sprung_mass", "mass.sprung", "all", None, "kg", m["prior"], lo, hi, "")
+    z = (m["value"] - scale.prior) / scale.sd
     if abs(z) <= shift_sd:
         return entries
-    rival = "sprung_mass:all"
+    rival, reveal = "sprung_mass:all", reveal_for(scale, "recorded")
     why = (f" The car's overall force scale moved with it: sprung mass calibrated at {m['value']:.0f} kg, "
-           f"{z:+.1f} prior sd from the vehicle file's {m['prior']:.0f} kg (every mass and rate moves with it, "
+           f"{z:+.1f} prior sd from the vehicle file's {scale.prior:.0f} kg (every mass and rate moves with it, "
            "while the term's force is in newtons).")
-    out = []
-    for e in entries:
-        if e["name"] in physics and rival not in e.get("competes_with", []):
-            lo, hi = m["prior_range"]
-            scale = CalParam("sprung_mass", "mass.sprung", "all", None, "kg", m["prior"], lo, hi, "")
-            e = {**e, "competes_with": [*e.get("competes_with", []), rival],
-                 "reveal_with": f"{reveal_for(scale, 'recorded')}; {e['reveal_with']}",
-                 "why": e.get("why", "") + why}
-        out.append(e)
-    return out
+    return [{**e, "competes_with": [*e.get("competes_with", []), rival], "reveal_with": f"{reveal}; {e['reveal_with']}",
+             "why": e.get("why", "") + why}
+            if is_physics(e["name"]) and rival not in e.get("competes_with", []) else e for e in entries]
 
 
 def reveal_for(p: CalParam, state: str) -> str:

@@ -61,7 +61,7 @@ from .engine import Evaluator, Structure
 from .fit import (FitResult, Option, bic, debias, fit_structure, learn_residual_correlation, n_effective,
                   prior_rows, raw_residuals, screen)
 from .locate import base_outputs, locate, noise_floor
-from .report import interface_json
+from .report import interface_json, is_physics
 from .road_estimate import GYRO_VERTICAL, estimate_road, road_usability
 from .unmeasured import detect_unmeasured_road
 
@@ -136,6 +136,8 @@ class DiscrepancyFinder:
         self.vehicle, self.variant, self.calibrate = vehicle, variant, calibrate
         if wheel_loads_n is not None and scale_accuracy is None:
             raise SuspInputError("wheel loads given without the scale's accuracy (scale_accuracy)")
+        if wheel_loads_n is not None and not calibrate:
+            raise SuspInputError("wheel loads given to a finder that does not calibrate (calibrate=False)")
         self.wheel_loads_n, self.scale_accuracy = wheel_loads_n, scale_accuracy
         self.candidates = tuple(candidates) if candidates is not None else \
             tuple(c.name for c in LIBRARY) + (force_shape.TERM,)
@@ -244,10 +246,9 @@ class DiscrepancyFinder:
         else:  # every round dropped something (cannot outlast the structure's terms): the last judgement
             _, competing = self._judge_measurement_terms()
             self.effects_ = self.term_effects_()
-        physics = {c.name for c in LIBRARY if c.kind == PHYSICS} | {force_shape.TERM}
         self.competing_: list[dict] = with_scale_rival(competing + shift_competing + effect_competing,
                                                        getattr(self, "calibration_", []), SHIFT_SD,
-                                                       getattr(self, "wheel_loads_", None) is not None, physics)
+                                                       getattr(self, "wheel_loads_", None) is not None, is_physics)
         return self
 
     def _prepare(self, drives, bar) -> Evaluator:
@@ -1426,8 +1427,6 @@ class DiscrepancyFinder:
         params = calibration_params(model.vehicle, model.variant) if self.calibrate else []
         self.wheel_loads_ = None
         if self.wheel_loads_n is not None and self.scale_accuracy is not None:  # both or neither (__init__)
-            if not self.calibrate:
-                raise SuspInputError("wheel loads given to a finder that does not calibrate (calibrate=False)")
             params, self.wheel_loads_ = sprung_mass_from_wheel_loads(params, self.wheel_loads_n, model.vehicle.gravity,
                                                                      self.scale_accuracy)
         self.calibration_params_ = params

@@ -165,7 +165,7 @@ def verdict(f) -> tuple[str, str]:
     (issue 24, item 5): a larger remainder without named physics is ``unexplained_residual``, however much
     of the base model's misfit the calibration explained."""
     before, after = _remaining(f)
-    phys = [n for n in f.result_.structure.names if _is_physics(n)]
+    phys = [n for n in f.result_.structure.names if is_physics(n)]
     significant = bool(f.windows_)
     excess_before = max(before ** 2 - 1.0, 0.0)
     excess_after = max(after ** 2 - 1.0, 0.0)
@@ -180,7 +180,7 @@ def verdict(f) -> tuple[str, str]:
     if at_level:
         level += (f"; the force the model lacks {force_shape.WORDS[at_level[0]['feature']]}, but what remains is "
                   f"within that level: not an input finding")
-    rival = [c for c in getattr(f, "competing_", []) if _is_physics(c["name"])]
+    rival = [c for c in getattr(f, "competing_", []) if is_physics(c["name"])]
     undecided = "; ".join((f"{c['name']} and {', '.join(c['competes_with'])} explain the same residual "
                            if c["competes_with"] else f"{c['name']}'s values are told by one drive alone ")
                           + f"(reveal with {c['reveal_with']})" for c in rival)
@@ -261,7 +261,7 @@ def input_weighed_words(reading: dict) -> str:
             f"{100 * float(reading['input_silent_heldout_gain']):.0f} % of their excess: physics, not an input")
 
 
-def _is_physics(name: str) -> bool:
+def is_physics(name: str) -> bool:
     """Whether term ``name`` is physics: a listed physics candidate or the learned force."""
     return name == force_shape.TERM or (name in BY_NAME and BY_NAME[name].kind == PHYSICS)
 

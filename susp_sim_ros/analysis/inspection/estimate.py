@@ -624,6 +624,16 @@ def _curve_beyond_entries(st: Structure, x: np.ndarray, se: np.ndarray) -> list[
     return out
 
 
+def scale_accuracy(cfg: dict | None = None) -> float:
+    """The relative sd of one weighed static wheel load (settings ``wheel_loads.scale_accuracy``; the
+    inspection's and the diagnosis's ``--wheel-loads``)."""
+    cfg = load_config() if cfg is None else cfg
+    acc = cfg.get("wheel_loads", {}).get("scale_accuracy")
+    if acc is None:
+        raise ConfigError("wheel loads given but the inspection settings have no wheel_loads.scale_accuracy")
+    return float(acc)
+
+
 def inspect_drives(paths: Sequence[str | Path], config: str | None = None, variant: str = "full",
                    cfg: dict | None = None, topic_map=None,
                    wheel_loads_n: Sequence[float] | None = None, oil_law: OilLaw | None = None) -> Inspection:
@@ -642,10 +652,8 @@ def inspect_drives(paths: Sequence[str | Path], config: str | None = None, varia
     cal = nuisance_params(model, est["nuisance"], est.get("nuisance_range_scale"))
     loads_entry: dict | None = None
     if wheel_loads_n is not None:
-        acc = cfg.get("wheel_loads", {}).get("scale_accuracy")
-        if acc is None:
-            raise ConfigError("wheel loads given but the inspection settings have no wheel_loads.scale_accuracy")
-        cal, loads_entry = sprung_mass_from_wheel_loads(cal, wheel_loads_n, model.vehicle.gravity, float(acc))
+        cal, loads_entry = sprung_mass_from_wheel_loads(cal, wheel_loads_n, model.vehicle.gravity,
+                                                        scale_accuracy(cfg))
     ident = oil_identifiability(ev, cal, cfg)
     groups = _oil_groups(ident)
     st, fit, cov = _fit_oil(model, ev, cal, groups, est)
