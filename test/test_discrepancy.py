@@ -141,6 +141,32 @@ def test_a_run_asked_for_again_is_not_simulated_again(bump_rear_amp, monkeypatch
     assert lanes == [1, 1, 1, 1, 1]
 
 
+def test_the_run_cache_is_one_budget_for_the_process(bump_rear_amp):
+    """Evaluators share one byte budget (a test session or a study holds many; a budget each multiplied the
+    memory), each sees only its own runs, and an evaluator that is gone leaves nothing behind."""
+    import gc
+    from susp_sim_ros.analysis.discrepancy import engine
+    st = Structure(["friction_amplitude"])
+    one = Evaluator(extended_model("passat_b8_like", "dahl_only"), [bump_rear_amp])
+    run = one.simulate(st, st.neutral()[None])[0, 0]
+    shared = engine.RunCache(3 * run.nbytes)
+    one.run_cache = engine.OwnedRuns(shared, one)
+    other = Evaluator(one.model, [bump_rear_amp])
+    other.run_cache = engine.OwnedRuns(shared, other)
+    for ev in (one, other):
+        for level in (1.0, 2.0):
+            ev.simulate(st, np.r_[level, st.neutral()[1:]][None])
+    assert shared.bytes <= 3 * run.nbytes and len(shared._items) == 3
+    at_one, at_other = one.vehicle_seconds, other.vehicle_seconds
+    other.simulate(st, np.r_[2.0, st.neutral()[1:]][None])  # other's own: a hit
+    one.simulate(st, np.r_[1.0, st.neutral()[1:]][None])  # the oldest of all: dropped, simulated again
+    assert other.vehicle_seconds == at_other and one.vehicle_seconds > at_one
+    assert other.run_cache.hits == 1 and one.run_cache.hits == 0
+    del other, ev  # the loop variable held it too
+    gc.collect()
+    assert len(shared._items) == 1 and shared.bytes == run.nbytes  # other's runs forgotten
+
+
 def test_jacobian_from_a_known_residual_is_the_same(bump_rear_amp):
     """fit_structure simulates the Jacobian only at accepted points, from the residual it has: the same
     numbers as simulating residual and Jacobian in one batch."""

@@ -8,7 +8,9 @@ applied on the way.
 """
 from __future__ import annotations
 
+import itertools
 import math
+import weakref
 
 from collections import OrderedDict
 from collections.abc import Sequence
@@ -23,8 +25,9 @@ from .data import SIGNAL_OF_OUTPUT, SIGNAL_OUTPUT, SIGNALS, DriveCase
 RATES = ("ROLL_RATE", "PITCH_RATE", "YAW_RATE")
 MIN_QUIET_BIAS = 20  # quiet lead-in samples for a standstill-style bias estimate
 RUN_QUANTUM_S = 0.5  # a run's length is rounded up to this, so drives of similar length share a batch
-#: bytes of simulated signals kept for runs asked for again in a later call (a calibration returning to a point it
-#: tried, a Jacobian about the point just evaluated); about 1600 six-drive runs of the bundled drives
+#: bytes of simulated signals kept, in all of a process's evaluators together, for runs asked for again in a later
+#: call (a calibration returning to a point it tried, a Jacobian about the point just evaluated); about 1600
+#: six-drive runs of the bundled drives
 RUN_CACHE_BYTES = 512 * 2**20
 _TO_REPORT_UNITS = np.array([SIGNAL_OF_OUTPUT[s][1] for s in SIGNALS])
 
@@ -115,8 +118,8 @@ class RunCache:
 
     Keyed by everything a run depends on within one :class:`Evaluator` (drive, steering offset, kernel
     parameter bytes, steps): the kernel gives a vehicle the same bits in any lane of any batch, so a hit is
-    the run itself. Items are read-only views of their batch's output; a hit is copied out of its batch,
-    so that an item kept long does not keep a whole Jacobian batch alive."""
+    the run itself. An item is the cache's own read-only copy, so that :attr:`bytes` is the memory it
+    holds (a view would keep its whole batch alive)."""
 
     def __init__(self, max_bytes: int):
         self.max_bytes, self.bytes = int(max_bytes), 0
@@ -128,20 +131,46 @@ class RunCache:
         if y is None:
             return None
         self.hits += 1
-        if y.base is not None:  # first reuse: its own memory
-            y = y.copy()
-            y.flags.writeable = False
-            self._items[key] = y
         self._items.move_to_end(key)
         return y
 
     def put(self, key: tuple, y: np.ndarray) -> None:
+        y = np.array(y, copy=True)
         y.flags.writeable = False
         old = self._items.pop(key, None)
         self.bytes += y.nbytes - (old.nbytes if old is not None else 0)
         self._items[key] = y
         while self.bytes > self.max_bytes and self._items:
             self.bytes -= self._items.popitem(last=False)[1].nbytes
+
+    def drop_owner(self, owner: int) -> None:
+        """Forget the runs of one owner (keys starting with ``owner``: an :class:`Evaluator` that is gone)."""
+        for key in [k for k in self._items if k[0] == owner]:
+            self.bytes -= self._items.pop(key).nbytes
+
+
+#: the one run cache of the process: every :class:`Evaluator` keeps its runs here under one byte budget (a test
+#: session or a study holds many evaluators; a budget each would multiply the memory)
+SHARED_RUNS = RunCache(RUN_CACHE_BYTES)
+
+
+class OwnedRuns:
+    """One :class:`Evaluator`'s runs in a shared :class:`RunCache` (its keys prefixed by its owner number),
+    forgotten when the evaluator is gone."""
+
+    _owners = itertools.count()
+
+    def __init__(self, cache: RunCache, evaluator: object):
+        self.cache, self.owner, self.hits = cache, next(self._owners), 0
+        weakref.finalize(evaluator, cache.drop_owner, self.owner)
+
+    def get(self, key: tuple) -> np.ndarray | None:
+        y = self.cache.get((self.owner, *key))
+        self.hits += y is not None
+        return y
+
+    def put(self, key: tuple, y: np.ndarray) -> None:
+        self.cache.put((self.owner, *key), y)
 
 
 class Evaluator:
@@ -172,8 +201,8 @@ class Evaluator:
         self.dt = self.cases[0].dt
         self.vehicle_seconds = 0.0
         self.progress = progress
-        #: runs already simulated (:meth:`simulate`)
-        self.run_cache = RunCache(RUN_CACHE_BYTES)
+        #: runs already simulated (:meth:`simulate`), in the process's one budget
+        self.run_cache: RunCache | OwnedRuns = OwnedRuns(SHARED_RUNS, self)
         # residual weights (n_grid, n_sig): 1 / noise sigma of each drive's signal once known
         self.weights = [np.ones_like(c.y_meas) for c in self.cases]
         #: per drive, the correlation samples (samples per independent one) of each signal's residual after the
@@ -217,7 +246,8 @@ class Evaluator:
         to the longest drive's end with ``to_end`` (the raw samples outside the comparison window: noise
         floors). Drives of one length run in one batch; items are read-only views of
         the batch outputs (no copies), one item shared by the same runs. A run simulated in an earlier
-        call comes from :attr:`run_cache` and is not counted again (progress, :attr:`vehicle_seconds`)."""
+        call comes from :attr:`run_cache` (the process's one budget, which keeps its own copy) and is not
+        counted again (progress, :attr:`vehicle_seconds`)."""
         idx = list(range(len(self.cases))) if idx is None else list(idx)
         X = np.atleast_2d(X)
         M, R = X.shape[0], len(idx)
@@ -255,6 +285,7 @@ class Evaluator:
             Y = res.values
             Y[res.steps_done < n] = 1e3  # a diverged run: a huge residual, never a crash
             Y *= _TO_REPORT_UNITS  # in place: this call's own array, tens of MB for a Jacobian batch
+            Y.flags.writeable = False  # its items may be shared by the same runs
             for q, lane in enumerate(lanes):
                 signals[todo[lane]] = Y[q]
                 self.run_cache.put(keys[todo[lane]], Y[q])
