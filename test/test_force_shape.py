@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -61,12 +62,13 @@ def test_features_are_what_their_names_say():
     np.testing.assert_allclose(get["roll_deflection"], (D - other) / sh["deflection_ref"])
     gap = sh["free_play"]
     np.testing.assert_allclose(get["roll_free_play"], np.clip(D - other, -gap, gap) / sh["deflection_ref"])
-    g = 0.5 * float(np.abs(D).max())   # springs met beyond a gap of bump, of rebound: nothing within it
-    contact = {f: feature_series(f, D, V, FX, FY, DT, shape={"contact_gap": g})
-               for f in ("bump_contact", "rebound_contact")}
+    # springs met beyond a gap of bump, of rebound (each its own): nothing within it
+    g, gr = 0.5 * float(np.abs(D).max()), 0.3 * float(np.abs(D).max())
+    gaps = {"contact_gap": g, "rebound_gap": gr}
+    contact = {f: feature_series(f, D, V, FX, FY, DT, shape=gaps) for f in ("bump_contact", "rebound_contact")}
     np.testing.assert_allclose(contact["bump_contact"], np.maximum(D - g, 0.0) / sh["deflection_ref"])
-    np.testing.assert_allclose(contact["rebound_contact"], np.minimum(D + g, 0.0) / sh["deflection_ref"])
-    assert np.any(D > g) and np.any(D < -g) and np.any(np.abs(D) < g)
+    np.testing.assert_allclose(contact["rebound_contact"], np.minimum(D + gr, 0.0) / sh["deflection_ref"])
+    assert np.any(D > g) and np.any((D < -gr) & (D > -g)) and np.any(np.abs(D) < gr)
     np.testing.assert_allclose(get["bump_contact"], np.maximum(D - sh["contact_gap"], 0.0) / sh["deflection_ref"])
     z = get["sign_velocity"]
     assert np.all(np.abs(z) <= 1.0 + 1e-12)
@@ -89,16 +91,20 @@ def test_features_are_what_their_names_say():
     # a creep: viscous below the creep velocity, its peak 1 at it, fading above; no friction element in it
     vc = sh["creep_velocity"]
     np.testing.assert_allclose(get["creep_damping"], V / vc * np.exp(1.0 - np.abs(V) / vc))
-    # a damping met beyond the contact gap of bump, of rebound: the deflection velocity times the depth beyond it,
-    # none within it, a force of the damper's oil
-    for name, depth in (("bump_damping", np.maximum(D - g, 0.0)), ("rebound_damping", np.maximum(-D - g, 0.0)),
-                        ("zone_damping", np.maximum(np.abs(D) - g, 0.0))):
+    # a damping met beyond the contact gap of bump, the rebound gap, both (a soft zone between them, off centre
+    # where the gaps differ): the deflection velocity times the depth beyond it, none within it, a force of the
+    # damper's oil
+    for name, depth in (("bump_damping", np.maximum(D - g, 0.0)), ("rebound_damping", np.maximum(-D - gr, 0.0)),
+                        ("zone_damping", np.maximum(D - g, 0.0) + np.maximum(-D - gr, 0.0))):
         want = u * depth / sh["deflection_ref"]
-        got = feature_series(name, D, V, FX, FY, DT, shape={"contact_gap": g})
+        got = feature_series(name, D, V, FX, FY, DT, shape=gaps)
         np.testing.assert_allclose(got, want)
-        assert np.any(got != 0.0) and np.all(got[np.abs(D) <= g] == 0.0)
-        np.testing.assert_allclose(feature_series(name, D, V, FX, FY, DT, shape={"contact_gap": g}, oil=oil),
-                                   want * oil)
+        assert np.any(got != 0.0) and np.all(got[(D <= g) & (D >= -gr)] == 0.0)
+        np.testing.assert_allclose(feature_series(name, D, V, FX, FY, DT, shape=gaps, oil=oil), want * oil)
+    # one gap for both senses: the zone's feature is the one of a zone centred on static, to the bit
+    np.testing.assert_array_equal(feature_series("zone_damping", D, V, FX, FY, DT, shape={"contact_gap": g,
+                                                                                           "rebound_gap": g}),
+                                  u * np.maximum(np.abs(D) - g, 0.0) / sh["deflection_ref"])
 
 
 def test_a_relaxing_spring_is_a_dashpot_when_slow_and_a_spring_when_fast():
@@ -476,6 +482,35 @@ def test_a_contact_at_static_starts_the_fit_at_gap_zero_with_a_step_of_its_range
     assert "beyond 15 mm of rebound" in fs.Selection({("rebound_contact", "front"): 0.9},
                                                      [fs.Column("rebound_contact", "front", 0.02)], np.array([90.0]),
                                                      np.array([1.0]), 24).description(shapes={"contact_gap": 0.015})
+
+
+def test_the_gaps_of_bump_and_rebound_are_fitted_apart_only_where_the_settings_say():
+    """``fit.rebound_gap``: off as shipped, a learned term's dependences met in bump and in rebound share one
+    fitted gap, written to both gaps' parameters (the term as it was before it had two); on, each sense is fitted
+    at its own gap from the value the regression picked (a stop or a soft zone laid out for another ride height),
+    and a zone's one gap starts both ends."""
+    cfg = fs.settings()
+    assert cfg["fit.rebound_gap"] is False   # off until the whole truth-generator family ran with it
+    cols = [fs.Column("bump_damping", "rear", 0.02), fs.Column("rebound_damping", "rear", 0.0)]
+    sel = fs.Selection({c.key: 0.9 for c in cols}, cols, np.array([60.0, 40.0]), np.array([0.6, 0.4]), 24)
+    where = {"contact_gap": slice(0, 1), "rebound_gap": slice(1, 2)}
+    model = SimpleNamespace(term_param_slice=lambda term, name: where.get(name, slice(2, 4)))
+    for apart, names in ((False, ["contact_gap"]), (True, ["contact_gap", "rebound_gap"])):
+        cand = fs.learned_candidate(sel, cfg | {"fit.rebound_gap": apart})
+        shapes = [p for p in cand.params if p.shape]
+        assert [p.name for p in shapes] == names
+        assert [p.neutral for p in shapes] == [0.02, 0.0][:len(names)]   # each from the regression's pick
+        x = np.array([60.0, 40.0, 0.016, 0.006][:2 + len(names)])
+        P = np.zeros((1, 4))
+        cand.apply(P, P.copy(), x, model)
+        assert (P[0, 0], P[0, 1]) == ((0.016, 0.016) if not apart else (0.016, 0.006))
+        written = cand.term_params(x, None)
+        assert written["rebound_gap"]["rear"] == P[0, 1] and written["contact_gap"]["rear"] == 0.016
+        assert cand.axle_of[-len(names):] == ("rear",) * len(names)
+    zone = fs.Selection({("zone_damping", "rear"): 0.9}, [fs.Column("zone_damping", "rear", 0.02)],
+                        np.array([80.0]), np.array([1.0]), 24)
+    shapes = [p for p in fs.learned_candidate(zone, cfg | {"fit.rebound_gap": True}).params if p.shape]
+    assert [(p.name, p.neutral) for p in shapes] == [("contact_gap", 0.02), ("rebound_gap", 0.02)]
 
 
 def test_a_learned_knee_ranges_over_its_physics_and_sizes_no_effect():
@@ -1034,7 +1069,9 @@ def test_a_zone_damping_is_offered_to_the_regression_only_where_the_settings_say
     sel = fs.Selection({("zone_damping", "rear"): 1.0}, [fs.Column("zone_damping", "rear", 0.01)],
                        np.array([80.0]), np.array([1.0]), 24)
     words = sel.description(shapes={"contact_gap": 0.012})
-    assert "a damping met beyond 12 mm of static in bump and in rebound" in words and "rear more damping" in words
+    assert "a damping met beyond 12 mm of bump and 12 mm of rebound" in words and "rear more damping" in words
+    words = sel.description(shapes={"contact_gap": 0.016, "rebound_gap": 0.006})   # a zone off centre
+    assert "a damping met beyond 16 mm of bump and 6 mm of rebound" in words
     D = np.linspace(-0.05, 0.05, 41)[:, None] * np.ones((1, 4))
     V = np.full_like(D, 0.1)
     z = np.zeros_like(D)
@@ -1098,16 +1135,22 @@ def test_a_learned_term_holds_one_value_of_each_shape_when_it_is_read_again():
         assert [s for g, s in held if g == f] == [0.0149]
     assert [s for g, s in held if g == "velocity_beyond_knee"] == \
         [s for g, s in fs.library(cfg) if g == "velocity_beyond_knee"]   # a shape the term lacks: every value
-    assert fs.HELD_SHAPES == {"knee_velocity", "free_play", "relaxation_time", "contact_gap"}
-    model = SimpleNamespace(term_param_slice=lambda term, name: slice(4, 8) if name == "c_bump_damping" else
-                            slice(0, 1))
-    col = fs._column_candidate(fs.Column("bump_damping", "rear", 0.0149), 20.0, 5000.0)
-    P = np.zeros((2, 8))
-    P[:, 6:8] = 60.0   # the term's fitted rear coefficient
-    col.apply(P, P.copy(), np.array([20.0]), model)
-    np.testing.assert_array_equal(P[:, 6:8], 80.0)
-    np.testing.assert_array_equal(P[:, 4:6], 0.0)
-    assert P[0, 0] == 0.0149
+    assert fs.HELD_SHAPES == {"knee_velocity", "free_play", "relaxation_time", "contact_gap", "rebound_gap"}
+    apart = fs.library(cfg | {"fit.rebound_gap": True}, {"contact_gap": 0.0149, "rebound_gap": 0.006})
+    for f, gap in (("bump_contact", 0.0149), ("bump_damping", 0.0149), ("rebound_contact", 0.006),
+                   ("rebound_damping", 0.006)):
+        assert [s for g, s in apart if g == f] == [gap]   # the gaps held apart: each sense at its own
+    where = {"c_bump_damping": slice(4, 8), "contact_gap": slice(0, 1), "rebound_gap": slice(1, 2)}
+    model = SimpleNamespace(term_param_slice=lambda term, name: where.get(name, slice(2, 3)))
+    for rebound_gap_apart, rebound_gap in ((False, 0.0149), (True, 0.0)):
+        col = fs._column_candidate(fs.Column("bump_damping", "rear", 0.0149), 20.0, 5000.0,
+                                   cfg | {"fit.rebound_gap": rebound_gap_apart})
+        P = np.zeros((2, 8))
+        P[:, 6:8] = 60.0   # the term's fitted rear coefficient
+        col.apply(P, P.copy(), np.array([20.0]), model)
+        np.testing.assert_array_equal(P[:, 6:8], 80.0)
+        np.testing.assert_array_equal(P[:, 4:6], 0.0)
+        assert P[0, 0] == 0.0149 and P[0, 1] == rebound_gap   # one gap for both senses unless held apart
 
 
 def test_a_learned_term_is_extended_by_the_dependences_the_residual_it_leaves_adds():

@@ -47,8 +47,9 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
 ``bump_contact``            max(d - g, 0) / d_ref: a spring met beyond a gap ``g`` of bump (a jounce
                             bumper, coils coming to block; with ``g`` 0 a spring stiffer in bump than in
                             rebound)
-``rebound_contact``         min(d + g, 0) / d_ref: a spring met beyond a gap ``g`` of rebound (a
-                            rebound or top-out spring)
+``rebound_contact``         min(d + g_r, 0) / d_ref: a spring met beyond a gap ``g_r`` of rebound (a
+                            rebound or top-out spring; ``g_r`` the rebound gap, the contact gap ``g``
+                            unless the fit holds the two apart)
 ``compression``             z d / d_ref: friction whose level grows with the compression and falls in
                             rebound (beside ``sign_velocity`` a level F0 + F1 d: Coulomb friction in a
                             strut's rod guide and seal is proportional to their normal force, and that
@@ -71,7 +72,7 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             force of the damper's oil, so scaled with its oil level like the valve; offered to
                             the regression only where ``config/force_shape.yaml`` ``library.position_damping``
                             says so
-``rebound_damping``         oil (v / v_ref) max(-d - g, 0) / d_ref: the same beyond the gap of rebound (a
+``rebound_damping``         oil (v / v_ref) max(-d - g_r, 0) / d_ref: the same beyond the rebound gap (a
                             hydraulic rebound stop)
 ``deflection_squared``      (d / d_ref)^2: a spring whose rate grows linearly through the whole stroke (rate
                             k + 2 c d / d_ref^2), its force of one sense in bump and rebound: the second term of
@@ -79,10 +80,12 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             n (n + 1) / 2 F0 (d / h)^2, a linkage whose motion ratio changes with travel);
                             offered to the regression only where ``config/force_shape.yaml``
                             ``library.deflection_squared`` says so
-``zone_damping``            oil (v / v_ref) max(|d| - g, 0) / d_ref: a damping met beyond the gap on either side
-                            of static, one coefficient for both ends of a soft zone (a position-sensitive
-                            damper, whose bypass grooves open a soft zone around its layout height and close
-                            beyond it in bump and in rebound: Dixon, The Shock Absorber Handbook, 2007, ch. 9);
+``zone_damping``            oil (v / v_ref) (max(d - g, 0) + max(-d - g_r, 0)) / d_ref: a damping met beyond the
+                            gap of bump and the rebound gap, one coefficient for both ends of a soft zone (a
+                            position-sensitive damper, whose bypass grooves open a soft zone around its layout
+                            height and close beyond it in bump and in rebound: Dixon, The Shock Absorber
+                            Handbook, 2007, ch. 9; the zone off centre of static where the car sits lower or
+                            higher than the height it was laid out for);
                             the sum of ``bump_damping`` and ``rebound_damping`` at one coefficient, offered to
                             the regression only where ``config/force_shape.yaml`` ``library.zone_damping`` says so
 ==========================  =======================================================================
@@ -130,9 +133,10 @@ LAW_SHAPE_FEATURES = (WEAKENING, CREEP)
 LEVEL_GROWTH = "compression"
 #: the shape parameters after the coefficients, in this order
 SHAPES = ("deflection_ref", "velocity_ref", "force_ref", "knee_velocity", "free_play", "presliding", "memory",
-          "stribeck_velocity", "relaxation_time", "contact_gap", "rebound_ratio", "creep_velocity")
+          "stribeck_velocity", "relaxation_time", "contact_gap", "rebound_ratio", "creep_velocity", "rebound_gap")
 _O_SHAPE = 4 * N_FEATURES
-_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS, _TAU, _CGAP, _RR, _VC = (_O_SHAPE + 4 * k for k in range(len(SHAPES)))
+_DREF, _VREF, _FREF, _KNEE, _GAP, _XP, _MEM, _VS, _TAU, _CGAP, _RR, _VC, _RGAP = (
+    _O_SHAPE + 4 * k for k in range(len(SHAPES)))
 PRESLIDING, STRIBECK_VELOCITY, REBOUND_RATIO, CREEP_VELOCITY = SHAPES[5], SHAPES[7], SHAPES[10], SHAPES[11]
 #: the damper's own forces of the oil, whose law in rebound the rebound ratio scales
 DAMPER_OIL = ("velocity_squared", "velocity_beyond_knee")
@@ -142,7 +146,7 @@ _C_OIL = C_INDEX["OIL"]
 
 
 @njit(cache=True, inline="always")
-def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref, knee, gap, vs, cgap, rr, vc):
+def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref, knee, gap, vs, cgap, rr, vc, rgap):
     """Feature ``k`` of :data:`FEATURES` at one corner (module docstring)."""
     x = d / dref
     u = v / vref
@@ -177,7 +181,7 @@ def corner_feature(k, d, d_other, v, fx, fy, oil, z, amp, rel, dref, vref, fref,
         return _law_shape_feature(k, v, z, vs, vc)
     if k == 16:
         return z * x
-    return _gap_or_relaxing_feature(k, d, u, oil, rel, dref, cgap)
+    return _gap_or_relaxing_feature(k, d, u, oil, rel, dref, cgap, rgap)
 
 
 @njit(cache=True, inline="always")
@@ -189,22 +193,22 @@ def _law_shape_feature(k, v, z, vs, vc):
 
 
 @njit(cache=True, inline="always")
-def _gap_or_relaxing_feature(k, d, u, oil, rel, dref, cgap):
+def _gap_or_relaxing_feature(k, d, u, oil, rel, dref, cgap, rgap):
     """Features 13-15 and 18-21 of :data:`FEATURES` (a relaxing spring, springs and dampings met beyond a
     contact gap, the spring of one sense in bump and rebound)."""
     if k == 20:
         return (d / dref) * (d / dref)
     if k == 21:
-        return oil * u * max(abs(d) - cgap, 0.0) / dref
+        return oil * u * (max(d - cgap, 0.0) + max(-d - rgap, 0.0)) / dref
     if k == 13:
         return rel / dref
     if k == 14:
         return max(d - cgap, 0.0) / dref
     if k == 15:
-        return min(d + cgap, 0.0) / dref
+        return min(d + rgap, 0.0) / dref
     if k == 18:
         return oil * u * max(d - cgap, 0.0) / dref
-    return oil * u * max(-d - cgap, 0.0) / dref
+    return oil * u * max(-d - rgap, 0.0) / dref
 
 
 @njit(cache=True, inline="always")
@@ -218,7 +222,7 @@ def learned_force_force(p, po, s, so, i, c):
     z = s[so + _Z + i]
     sgn = (1.0 if v > 0.0 else 0.0) - (1.0 if v < 0.0 else 0.0)
     roll = d - s[so + _DEF + o]
-    gap, cgap = p[po + _GAP + i], p[po + _CGAP + i]
+    gap, cgap, rgap = p[po + _GAP + i], p[po + _CGAP + i], p[po + _RGAP + i]
     q = po + i
     # the damper's oil level, times the rebound ratio in rebound: the scale of its orifice and valve forces
     damper = c[i, _C_OIL] * (1.0 + (p[po + _RR + i] - 1.0) * (1.0 if v < 0.0 else 0.0))
@@ -230,9 +234,9 @@ def learned_force_force(p, po, s, so, i, c):
             + p[q + 68] * (v / p[po + _VC + i]) * math.exp(1.0 - abs(v) / p[po + _VC + i])
             + p[q + 40] * roll / dref + p[q + 44] * min(max(roll, -gap), gap) / dref
             + p[q + 52] * s[so + _REL + i] / dref
-            + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + cgap, 0.0)) / dref
-            + c[i, _C_OIL] * u * (p[q + 72] * max(d - cgap, 0.0) + p[q + 76] * max(-d - cgap, 0.0)
-                                  + p[q + 84] * max(abs(d) - cgap, 0.0)) / dref
+            + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + rgap, 0.0)) / dref
+            + c[i, _C_OIL] * u * (p[q + 72] * max(d - cgap, 0.0) + p[q + 76] * max(-d - rgap, 0.0)
+                                  + p[q + 84] * (max(d - cgap, 0.0) + max(-d - rgap, 0.0))) / dref
             + p[q + 80] * x * x)
 
 
@@ -262,7 +266,7 @@ def learned_force_update(p, po, s, so, i, c, dx):
 
 @njit(cache=True)
 def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, memory, vs, tau, cgap, rr, vc,
-            out):
+            rgap, out):
     n = D.shape[0]
     z = np.zeros(4)
     amp = np.zeros(4)
@@ -271,7 +275,7 @@ def _series(D, V, FX, FY, OIL, dt, k, dref, vref, fref, knee, gap, presliding, m
         for i in range(4):
             o = i + 1 if i % 2 == 0 else i - 1
             out[t, i] = corner_feature(k, D[t, i], D[t, o], V[t, i], FX[t, i], FY[t, i], OIL[i], z[i], amp[i],
-                                       rel[i], dref, vref, fref, knee, gap, vs, cgap, rr, vc)
+                                       rel[i], dref, vref, fref, knee, gap, vs, cgap, rr, vc, rgap)
         if t + 1 < n:
             for i in range(4):
                 z[i], _, amp[i], rel[i] = advance_states(z[i], D[t, i], amp[i], rel[i], D[t + 1, i] - D[t, i],
@@ -293,7 +297,7 @@ def feature_series(name: str, deflection: np.ndarray, velocity: np.ndarray, fx: 
     _series(D, V, FX, FY, OIL, float(dt), FEATURES.index(name), float(sh["deflection_ref"]), float(sh["velocity_ref"]),
             float(sh["force_ref"]), float(sh["knee_velocity"]), float(sh["free_play"]), float(sh["presliding"]),
             float(sh["memory"]), float(sh["stribeck_velocity"]), float(sh["relaxation_time"]), float(sh["contact_gap"]),
-            float(sh["rebound_ratio"]), float(sh["creep_velocity"]), out)
+            float(sh["rebound_ratio"]), float(sh["creep_velocity"]), float(sh["rebound_gap"]), out)
     return out
 
 
@@ -337,13 +341,15 @@ LEARNED_FORCE = register_term(PhysicsTerm(
                   "by 1/e (Stribeck velocity)", 0.01, 1e-4, 1.0),
         TermParam("relaxation_time", "s", "relaxation time of relaxing_deflection's spring (its Maxwell element's "
                   "damping over its rate)", 0.07, 1e-3, 10.0),
-        TermParam("contact_gap", "m", "deflection from static beyond which bump_contact and bump_damping (in bump), "
-                  "rebound_contact and rebound_damping (in rebound) and zone_damping (in either) act", 0.02, 0.0,
-                  0.2),
+        TermParam("contact_gap", "m", "deflection of bump from static beyond which bump_contact, bump_damping and "
+                  "zone_damping's bump side act", 0.02, 0.0, 0.2),
         TermParam("rebound_ratio", "1", "force of velocity_squared and velocity_beyond_knee in rebound over the force "
                   "at the same speed in compression (1: a symmetric law)", 1.0, 0.0, 10.0),
         TermParam("creep_velocity", "m/s", "sliding velocity of creep_damping's peak (viscous below it, fading above)",
-                  0.001, 1e-5, 1.0)),
+                  0.001, 1e-5, 1.0),
+        TermParam("rebound_gap", "m", "deflection of rebound from static beyond which rebound_contact, rebound_damping "
+                  "and zone_damping's rebound side act (the contact gap's value where the finder does not fit it "
+                  "apart: config/force_shape.yaml fit.rebound_gap)", 0.02, 0.0, 0.2)),
     n_states=4, force=learned_force_force, update=learned_force_update,
     gains=tuple(f"c_{f}" for f in FEATURES)))
 

@@ -105,8 +105,8 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
                          "holds oil (a hydraulic compression stop, a position-sensitive damper)",
          "rebound_damping": "a damping met beyond {gap_mm:.0f} mm of rebound, growing with the depth, as far as the "
                             "damper holds oil (a hydraulic rebound stop, a position-sensitive damper)",
-         "zone_damping": "a damping met beyond {gap_mm:.0f} mm of static in bump and in rebound, growing with the "
-                         "depth, as far as the damper holds oil (a position-sensitive damper: a soft zone around "
+         "zone_damping": "a damping met beyond {gap_mm:.0f} mm of bump and {rgap_mm:.0f} mm of rebound, growing with "
+                         "the depth, as far as the damper holds oil (a position-sensitive damper: a soft zone around "
                          "static)",
          "deflection_squared": "a spring whose rate grows through the whole stroke, its force of one sense in bump "
                                "and rebound (a gas charge's or air spring's law beyond its static rate, a "
@@ -176,12 +176,17 @@ def law_key(key: tuple[str, str]) -> tuple[str, str]:
 _SHAPE_OF = {"velocity_beyond_knee": "knee_velocity", "roll_free_play": "free_play",
              "relaxing_deflection": "relaxation_time", "bump_contact": "contact_gap", "rebound_contact": "contact_gap",
              "bump_damping": "contact_gap", "rebound_damping": "contact_gap", "zone_damping": "contact_gap"}
+#: the gap of the features met in rebound, where the fit holds it apart from the contact gap (``fit.rebound_gap``)
+REBOUND_GAP = "rebound_gap"
+#: the features met beyond the rebound gap (a zone's rebound side too: :func:`shapes_of`)
+REBOUND_GAPPED = ("rebound_contact", "rebound_damping")
 #: the shapes a learned term holds one value of (for every feature that has it): held at their fitted values when
 #: the term is extended (:func:`extended`)
-HELD_SHAPES = frozenset(_SHAPE_OF.values())
+HELD_SHAPES = frozenset(_SHAPE_OF.values()) | {REBOUND_GAP}
 #: the config entry of each such shape parameter's range in the learned term's fit
 _SHAPE_RANGE = {"knee_velocity": "fit.knee_velocity_range_m_s", "free_play": "fit.free_play_range_m",
-                "relaxation_time": "fit.relaxation_time_range_s", "contact_gap": "fit.contact_gap_range_m"}
+                "relaxation_time": "fit.relaxation_time_range_s", "contact_gap": "fit.contact_gap_range_m",
+                REBOUND_GAP: "fit.contact_gap_range_m"}
 #: the config entry of the values each such feature is offered at in the regression
 _SHAPE_VALUES = {"velocity_beyond_knee": "library.knee_velocities_m_s", "roll_free_play": "library.free_plays_m",
                  "relaxing_deflection": "library.relaxation_times_s", "bump_contact": "library.contact_gaps_m",
@@ -207,6 +212,25 @@ def learned_in(variant) -> bool:
 def settings(path=None) -> dict:
     """``config/force_shape.yaml`` as ``{"section.key": value}``."""
     return load_settings("force_shape.yaml", path)
+
+
+def shape_of(feature: str, cfg: dict) -> str | None:
+    """The shape parameter a feature is offered and fitted at: its own (:data:`_SHAPE_OF`), the rebound gap for a
+    feature met in rebound where ``fit.rebound_gap`` holds the two gaps apart; None for a feature without one."""
+    if feature in REBOUND_GAPPED and bool(cfg["fit.rebound_gap"]):
+        return REBOUND_GAP
+    return _SHAPE_OF.get(feature)
+
+
+def shapes_of(feature: str, cfg: dict) -> tuple[str, ...]:
+    """The learned term's parameters a value of the shape of ``feature`` (:func:`shape_of`) is written to: the
+    contact gap to the rebound gap too unless ``fit.rebound_gap`` holds them apart (one gap for both senses, as
+    the term had before it had two), and a zone's one gap to both where it does (a column offers a zone
+    centred on static; the fit then moves its ends apart)."""
+    name = shape_of(feature, cfg)
+    if name == "contact_gap" and (feature == ZONE_DAMPING or not bool(cfg["fit.rebound_gap"])):
+        return name, REBOUND_GAP
+    return () if name is None else (name,)
 
 
 @dataclass(frozen=True)
@@ -246,8 +270,8 @@ def library(cfg: dict, shapes: dict | None = None) -> list[tuple[str, float | No
             continue
         if f == ZONE_DAMPING and not bool(cfg["library.zone_damping"]):
             continue
-        if _SHAPE_OF.get(f) in shapes:
-            out.append((f, float(shapes[_SHAPE_OF[f]])))
+        if shape_of(f, cfg) in shapes:
+            out.append((f, float(shapes[shape_of(f, cfg)])))
         elif f in _SHAPE_VALUES:
             out += [(f, float(v)) for v in cfg[_SHAPE_VALUES[f]]]
         else:
@@ -360,9 +384,10 @@ class Selection:
         for feature in self.dependences:
             ks = [k for k in np.argsort(-self.share) if self.stable[k].feature == feature]
             c = self.stable[ks[0]]
-            shape = _SHAPE_OF.get(feature)
+            shape = REBOUND_GAP if feature in REBOUND_GAPPED and REBOUND_GAP in shapes else _SHAPE_OF.get(feature)
             value = float(shapes[shape]) if shape in shapes else c.shape or 0.0
-            w = WORDS[feature].format(knee=value, gap_mm=1e3 * value, tau=value)
+            rebound = float(shapes.get(REBOUND_GAP, value)) if feature == ZONE_DAMPING else value
+            w = WORDS[feature].format(knee=value, gap_mm=1e3 * value, rgap_mm=1e3 * rebound, tau=value)
             if feature in DAMPER_OIL and REBOUND_RATIO in shapes:
                 w += f", in rebound {float(shapes[REBOUND_RATIO]):.1f}x what it gives in compression"
             more, less = SENSE[feature]
@@ -648,7 +673,7 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design, cfg: dict 
     whole = bool(cfg["fit.law_members_whole_family"])
     k = next(j for j, c in enumerate(sel.stable) if c.key == key)
     others = [c for j, c in enumerate(sel.stable) if j != k]
-    held = {_SHAPE_OF[c.feature]: c.shape for c in others if c.shape is not None}
+    held = {shape_of(c.feature, cfg): c.shape for c in others if c.shape is not None}
     have = {c.key for c in sel.stable}
     out: list[Selection] = []
     for f in FEATURES:
@@ -656,7 +681,7 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design, cfg: dict 
         if member in have or (member not in sel.frequency and not whole) or law_key(member) != law_key(key):
             continue
         offered = [c for c in design.columns if c.key == member
-                   and (c.shape is None or _SHAPE_OF[f] not in held or c.shape == held[_SHAPE_OF[f]])]
+                   and (c.shape is None or shape_of(f, cfg) not in held or c.shape == held[shape_of(f, cfg)])]
         best = None
         for c in offered:
             cols = sel.stable[:k] + [c] + sel.stable[k + 1:]
@@ -719,6 +744,18 @@ def _law_representatives(freq: dict, law_freq: dict, stable_keys: list, min_freq
     return reps
 
 
+def _fitted_shapes(sel: Selection, cfg: dict) -> dict[str, float]:
+    """The shape values a learned term of ``sel`` fits (``{shape: start}``), each from the value the regression
+    picked for the first stable dependence that has it; with the gaps held apart a zone's one gap starts both."""
+    shapes: dict[str, float] = {}
+    for c in sel.stable:
+        if c.shape is not None:
+            slots = shapes_of(c.feature, cfg)   # its own shape first
+            for name in slots if bool(cfg["fit.rebound_gap"]) else slots[:1]:
+                shapes.setdefault(name, c.shape)
+    return shapes
+
+
 def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool = True) -> Candidate:
     """The learned term as a finder candidate: one coefficient [N] per stable (feature, axle), neutral 0,
     and the knee / free play it selected as a free shape value (neutral: the selected value; range: the
@@ -757,17 +794,14 @@ def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool
                                 f"progressive part, its force at d_ref"))
         axle_of.append(c.axle)
     law = law + bending
-    shapes: dict[str, float] = {}
-    for c in sel.stable:
-        if c.shape is not None:
-            shapes.setdefault(_SHAPE_OF[c.feature], c.shape)
+    shapes = _fitted_shapes(sel, cfg)
     for name, value in shapes.items():
         p = LEARNED_FORCE.params[LEARNED_FORCE.param_index(name)]
         lo, hi = (float(v) for v in cfg[_SHAPE_RANGE[name]])
         step = value / 5 if value > 0 else (hi - lo) / 50   # a contact at static (gap 0): a step of its range
         params.append(CandParam(name, p.unit, value, lo, hi, step, p.meaning + " (one value for both axles)",
                                 shape=True))
-        users = {c.axle for c in sel.stable if c.shape is not None and _SHAPE_OF.get(c.feature) == name}
+        users = {c.axle for c in sel.stable if c.shape is not None and name in shapes_of(c.feature, cfg)}
         axle_of.append(users.pop() if len(users) == 1 else None)
     for name, (lo, hi, on) in law_shapes.items():
         p = LEARNED_FORCE.params[LEARNED_FORCE.param_index(name)]
@@ -776,6 +810,9 @@ def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool
                                 p.meaning + " (one value for both axles)", shape=True))
         axle_of.append(on[0] if len(on) == 1 else None)
     coefs = list(sel.stable) + law
+    # a fitted gap is written to both gaps' parameters unless the fit holds them apart (shapes_of)
+    apart = bool(cfg["fit.rebound_gap"])
+    slots = {name: (name, REBOUND_GAP) if name == "contact_gap" and not apart else (name,) for name in shapes}
 
     def apply(P, P0, x, model):
         for j, c in enumerate(coefs):
@@ -783,7 +820,8 @@ def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool
             a = sl.start + 2 * AXLES.index(c.axle)
             P[:, a:a + 2] = x[j]
         for j, name in enumerate(shapes, start=len(coefs)):
-            P[:, model.term_param_slice(TERM, name)] = x[j]
+            for slot in slots[name]:
+                P[:, model.term_param_slice(TERM, slot)] = x[j]
 
     def term_params(x, vp):
         vals: dict[str, dict] = {}
@@ -792,7 +830,8 @@ def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool
             e[c.axle] += float(x[j])
         out = {k: axle_map(v["front"], v["rear"]) for k, v in vals.items()}
         for j, name in enumerate(shapes, start=len(coefs)):
-            out[name] = axle_map(x[j], x[j])
+            for slot in slots[name]:
+                out[slot] = axle_map(x[j], x[j])
         return out
 
     return Candidate(TERM, PHYSICS, sel.description(), tuple(params), apply, tuple(axle_of),
@@ -872,12 +911,12 @@ def damper_law(sel: Selection, cfg: dict) -> dict[str, tuple[float, float, list[
     return {REBOUND_RATIO: (lo, hi, axles)}
 
 
-def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
+def _column_candidate(col: Column, step: float, bound: float, cfg: dict) -> Candidate:
     """One library column as a one-parameter candidate (its coefficient [N], in the learned term or, for
     an input feature, in the input term, added to what the structure holds there: a learned term's fitted
     coefficient when the structure has one, else none); the shape value is set only while the coefficient
     acts, so the columns of one feature's knees do not overwrite each other."""
-    shape_name = _SHAPE_OF.get(col.feature)
+    slots = shapes_of(col.feature, cfg)
     term = INPUT_TERM if col.feature in INPUT_FEATURES else TERM
 
     def apply(P, P0, x, model):
@@ -886,8 +925,9 @@ def _column_candidate(col: Column, step: float, bound: float) -> Candidate:
         sl = model.term_param_slice(term, f"c_{col.feature}")
         a = sl.start + 2 * AXLES.index(col.axle)
         P[:, a:a + 2] += x[0]   # on top of a learned term's own coefficient where the structure has one
-        if shape_name is not None and col.shape is not None:
-            P[:, model.term_param_slice(TERM, shape_name)] = col.shape
+        if col.shape is not None:
+            for slot in slots:
+                P[:, model.term_param_slice(TERM, slot)] = col.shape
 
     return Candidate(f"{term}[{col.feature}:{col.axle}:{col.shape}]", PHYSICS, WORDS[col.feature],
                      (CandParam("coef", "N", 0.0, -bound, bound, step),), apply, (col.axle,))
@@ -909,7 +949,7 @@ def design_for(f, st0, x0: np.ndarray, idx, cfg: dict | None = None, shapes: dic
     entries = library(cfg, shapes)
     cols = columns_of(entries)
     bound = float(cfg["fit.coefficient_bound_N"])
-    lib = [_column_candidate(c, float(cfg["library.step_N"]), bound) for c in cols]
+    lib = [_column_candidate(c, float(cfg["library.step_N"]), bound, cfg) for c in cols]
     ev = f.evaluator_
     st = st0.with_(*lib)
     x = st.embed(st0, x0)
