@@ -222,15 +222,20 @@ def shape_of(feature: str, cfg: dict) -> str | None:
     return _SHAPE_OF.get(feature)
 
 
-def shapes_of(feature: str, cfg: dict) -> tuple[str, ...]:
-    """The learned term's parameters a value of the shape of ``feature`` (:func:`shape_of`) is written to: the
-    contact gap to the rebound gap too unless ``fit.rebound_gap`` holds them apart (one gap for both senses, as
-    the term had before it had two), and a zone's one gap to both where it does (a column offers a zone
-    centred on static; the fit then moves its ends apart)."""
-    name = shape_of(feature, cfg)
-    if name == "contact_gap" and (feature == ZONE_DAMPING or not bool(cfg["fit.rebound_gap"])):
+def _slots(name: str | None, cfg: dict, zone: bool = False) -> tuple[str, ...]:
+    """The learned term's parameters a value of shape ``name`` is written to: the contact gap to the rebound gap
+    too unless ``fit.rebound_gap`` holds them apart (one gap for both senses, as the term had before it had two),
+    and a ``zone``'s one gap to both where it does (a column offers a zone centred on static; the fit then moves
+    its ends apart)."""
+    if name == "contact_gap" and (zone or not bool(cfg["fit.rebound_gap"])):
         return name, REBOUND_GAP
     return () if name is None else (name,)
+
+
+def shapes_of(feature: str, cfg: dict) -> tuple[str, ...]:
+    """The learned term's parameters a value of the shape of ``feature`` (:func:`shape_of`) is written to
+    (:func:`_slots`)."""
+    return _slots(shape_of(feature, cfg), cfg, feature == ZONE_DAMPING)
 
 
 @dataclass(frozen=True)
@@ -270,8 +275,9 @@ def library(cfg: dict, shapes: dict | None = None) -> list[tuple[str, float | No
             continue
         if f == ZONE_DAMPING and not bool(cfg["library.zone_damping"]):
             continue
-        if shape_of(f, cfg) in shapes:
-            out.append((f, float(shapes[shape_of(f, cfg)])))
+        shape = shape_of(f, cfg)
+        if shape in shapes:
+            out.append((f, float(shapes[shape])))
         elif f in _SHAPE_VALUES:
             out += [(f, float(v)) for v in cfg[_SHAPE_VALUES[f]]]
         else:
@@ -680,8 +686,9 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design, cfg: dict 
         member = (f, key[1])
         if member in have or (member not in sel.frequency and not whole) or law_key(member) != law_key(key):
             continue
+        shape = shape_of(f, cfg)
         offered = [c for c in design.columns if c.key == member
-                   and (c.shape is None or shape_of(f, cfg) not in held or c.shape == held[shape_of(f, cfg)])]
+                   and (c.shape is None or shape not in held or c.shape == held[shape])]
         best = None
         for c in offered:
             cols = sel.stable[:k] + [c] + sel.stable[k + 1:]
@@ -810,9 +817,7 @@ def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool
                                 p.meaning + " (one value for both axles)", shape=True))
         axle_of.append(on[0] if len(on) == 1 else None)
     coefs = list(sel.stable) + law
-    # a fitted gap is written to both gaps' parameters unless the fit holds them apart (shapes_of)
-    apart = bool(cfg["fit.rebound_gap"])
-    slots = {name: (name, REBOUND_GAP) if name == "contact_gap" and not apart else (name,) for name in shapes}
+    slots = {name: _slots(name, cfg) for name in shapes}   # a gap to both gaps' parameters unless held apart
 
     def apply(P, P0, x, model):
         for j, c in enumerate(coefs):
