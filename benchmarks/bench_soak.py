@@ -66,12 +66,15 @@ def ros_env() -> dict[str, str]:
 
 
 def start_node(record_path: str | Path, params: dict | None = None, env: dict | None = None,
-               log=None) -> subprocess.Popen:
-    """``susp_sim_node`` in a subprocess recording to ``record_path`` (``params``: more -p overrides)."""
+               log=None, remap: dict[str, str] | None = None) -> subprocess.Popen:
+    """``susp_sim_node`` in a subprocess recording to ``record_path`` (``params``: more -p overrides;
+    ``remap``: topic remappings ``{from: to}``, -r)."""
     args = [sys.executable, "-c", "import sys; from susp_sim_ros.ros.node import main; sys.exit(main())",
             "--ros-args", "-p", f"record_path:={record_path}"]
     for k, v in (params or {}).items():
         args += ["-p", f"{k}:={v}"]
+    for a, b in (remap or {}).items():
+        args += ["-r", f"{a}:={b}"]
     return subprocess.Popen(args, env=env or ros_env(), stdout=log or sys.stderr, stderr=subprocess.STDOUT)
 
 

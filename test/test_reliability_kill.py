@@ -1,9 +1,16 @@
 """Kill safety: susp_sim_node recording a drive (node in a subprocess, wall time, inputs at 100 Hz published
-from this process) is SIGKILLed at 20 random moments (two nodes at a time, each killed uniformly in 0..1.5 s after its
-recording file appeared; ``record_flush_interval_s`` 0.1 so that kills also land next to chunk writes). Every file must
-be readable as it is, by rosbags (``AnyReader``) and by our reader, with the same messages up to its last
-complete chunk, lose at most the flush interval (plus a tick) before the kill, and ``susp recover`` must
-turn it into a finalised file (summary and indexes) that rosbags reads completely, message for message.
+from this process) is SIGKILLed at 20 random moments (two nodes at a time, each killed uniformly in 0..1.5 s after
+both recording files appeared; ``record_flush_interval_s`` 0.1 so that kills also land next to chunk writes). Every
+file must be readable as it is, by rosbags (``AnyReader``) and by our reader, with the same messages up to its last
+complete chunk, lose at most the flush interval (plus a tick) of what the node had published before the kill,
+and ``susp recover`` must turn it into a finalised file (summary and indexes) that rosbags reads completely,
+message for message.
+
+What was published is what this process received: each node's ``/sim/imu/data`` is remapped to a topic of
+its own, and the newest stamp received from it is the newest sample it made. The lag behind the wall clock
+at the kill is printed, not bounded: a host that stalls the node's process puts it behind real time, and
+samples never made are no loss of the recorder's (CI, 2026-12-06: 0.40 s behind once in 80 kills; here at most
+0.21 s with both cores kept busy by two other processes).
 """
 from __future__ import annotations
 
@@ -22,6 +29,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 RUNS = 20
 FLUSH_S = 0.1
+TICK_NS = 10_000_000  # the node's publish period (publish_rate_hz 100)
 
 
 def _bench():
@@ -57,10 +65,28 @@ def test_node_killed_at_20_random_moments_leaves_readable_recordings(tmp_path):
     env = bench.ros_env()
     seed = int(os.environ.get("SUSP_KILL_SEED", random.randrange(1 << 30)))
     rng = random.Random(seed)
+    from sensor_msgs.msg import Imu
+
+    from susp_sim_ros.ros.qos import OUTPUT_QOS
+    from susp_sim_ros.runtime.sim_core import SIM_IMU
     probe = bench.Probe(100.0, realtime=False)
+    published: dict[int, tuple[int, int]] = {}  # node slot -> (first, newest) /sim/imu/data stamp received [ns]
+
+    def listen(k: int):
+        def on_imu(msg) -> None:
+            t = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+            first, newest = published.get(k, (t, t))
+            published[k] = (min(first, t), max(newest, t))
+        return on_imu
+    slots = [f"/kill_probe/node{k}/imu" for k in range(2)]
+    for k, topic in enumerate(slots):
+        probe.node.create_subscription(Imu, topic, listen(k), OUTPUT_QOS)
     probe.start_publishing()
     figures = []
+    measured, behind, losses = 0, [0.0], [0.0]
+
     def check(k: int, path: Path, delay: float, t_kill: int) -> None:
+        nonlocal measured
         i = f"kill {k} at {delay:.3f} s, SUSP_KILL_SEED={seed}"  # every message says how to run it again
         ours = read_recording(path)
         assert not ours.corrupt and not ours.finalised, (i, ours.error)
@@ -71,8 +97,14 @@ def test_node_killed_at_20_random_moments_leaves_readable_recordings(tmp_path):
         theirs = _rosbags_messages(path)  # the killed file opens as it is
         assert sorted(theirs) == sorted(mine), i
         imu = [t for tp, t, _ in mine if tp == "/sim/imu/data"]
-        if imu:  # everything up to the last chunk written before the kill (flush interval + a tick)
-            assert (t_kill - imu[-1]) * 1e-9 < FLUSH_S + 0.2, (i, (t_kill - imu[-1]) * 1e-9)
+        if imu:
+            behind.append((t_kill - imu[-1]) * 1e-9)
+        if k % 2 in published:  # everything up to the last chunk written before the kill (flush interval + a tick)
+            first, newest = published[k % 2]
+            lost = (newest - (imu[-1] if imu else first - TICK_NS)) * 1e-9
+            assert lost < FLUSH_S + 0.2, (i, f"{lost:.3f} s of published samples not in the file")
+            measured += 1
+            losses.append(lost)
         fixed = path.with_name(path.stem + ".recovered.mcap")
         res = recover(path, fixed)
         assert res["messages"] == len(mine) and res["was_truncated"] and not res["was_corrupt"]
@@ -84,8 +116,10 @@ def test_node_killed_at_20_random_moments_leaves_readable_recordings(tmp_path):
     try:
         for r in range(RUNS // 2):  # two nodes at a time, killed at independent random moments
             paths = [tmp_path / f"killed_{2 * r + k:02d}.mcap" for k in range(2)]
+            published.clear()
             procs = [bench.start_node(p, {"record_flush_interval_s": FLUSH_S, "realtime_priority": 0},
-                                      env=env, log=subprocess.DEVNULL) for p in paths]
+                                      env=env, log=subprocess.DEVNULL, remap={SIM_IMU: slots[k]})
+                     for k, p in enumerate(paths)]
             end = time.monotonic() + 60
             while not all(p.exists() for p in paths):
                 assert all(pr.poll() is None for pr in procs) and time.monotonic() < end, "no recording started"
@@ -97,8 +131,10 @@ def test_node_killed_at_20_random_moments_leaves_readable_recordings(tmp_path):
                 time.sleep(max(0.0, t_start + delays[k] - time.monotonic()))
                 kills[k] = time.time_ns()
                 os.kill(procs[k].pid, signal.SIGKILL)
-            for k, pr in enumerate(procs):
+            for pr in procs:
                 assert pr.wait(timeout=10) == -signal.SIGKILL
+            time.sleep(0.2)  # samples sent before the kill are still on their way to this process
+            for k in range(2):
                 check(2 * r + k, paths[k], delays[k], kills[k])
     finally:
         probe.close()
@@ -108,5 +144,8 @@ def test_node_killed_at_20_random_moments_leaves_readable_recordings(tmp_path):
     print(f"\nkill safety (seed {seed}): {len(figures)} SIGKILLs at {[f[0] for f in figures]} s after the file "
           f"appeared; messages per killed file min {n.min()} / median {int(np.median(n))} / max {n.max()}; "
           f"torn tails {torn}; every file read by rosbags and our reader alike and "
-          f"recovered to a finalised file")
+          f"recovered to a finalised file; loss measured against the published samples on {measured} "
+          f"(max {max(losses):.3f} s lost); "
+          f"newest sample behind the wall clock at the kill: max {max(behind):.3f} s")
     assert len(figures) == RUNS and n.max() > 100
+    assert measured >= RUNS // 2, f"the published samples of only {measured} killed nodes reached this process"
