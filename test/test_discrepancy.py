@@ -85,6 +85,35 @@ def test_runs_are_simulated_once_and_only_as_far_as_they_are_compared(bump_rear_
     np.testing.assert_array_equal(e_cut, ev.case_residual(0, whole, -0.05, False))
 
 
+def test_drives_of_two_lengths_share_a_kernel_call_with_the_same_bits(bump_rear_amp, monkeypatch):
+    """Runs of two lengths run as one kernel call at the longer length when one thread's share of that
+    is smaller (:func:`~engine.kernel_calls`: two threads, a run each); a run simulated beyond its length
+    keeps the bits of its first steps, and its item ends at its own length."""
+    from susp_sim_ros.analysis.discrepancy import engine
+    from susp_sim_ros.analysis.discrepancy.engine import kernel_calls
+    n = np.array([5000, 8000] * 3)
+    assert [(sorted(lanes), k) for lanes, k in kernel_calls(n, 16, 2)] == [(list(range(6)), 8000)]
+    assert [k for _, k in kernel_calls(n, 16, 1)] == [5000, 8000]  # one thread: 39000 steps apart, 48000 together
+    assert [k for _, k in kernel_calls(np.r_[np.full(64, 2000), np.full(64, 8000)], 16, 2)] == [2000, 8000]
+    sine = _case("sine_steer", "rear_empty", AMPLITUDE)
+    model = extended_model("passat_b8_like", "dahl_only")
+    st = Structure(["friction_amplitude"])
+    real = engine.simulate_batch
+    out, calls = {}, {}
+    for threads in (1, 2):
+        seen = calls[threads] = []
+        monkeypatch.setattr(engine, "get_num_threads", lambda t=threads: t)
+        monkeypatch.setattr(engine, "simulate_batch", lambda model, P, U, seen=seen, **kw: seen.append(U.shape[1])
+                            or real(model, P, U, **kw))
+        ev = Evaluator(model, [bump_rear_amp, sine])
+        out[threads] = ev.simulate(st, st.neutral()[None])
+    assert ev.n_compared[0] != ev.n_compared[1]
+    assert sorted(calls[1]) == sorted(ev.n_compared) and calls[2] == [max(ev.n_compared)]
+    for r in range(2):
+        assert len(out[2][0, r]) == ev.n_compared[r]
+        np.testing.assert_array_equal(out[2][0, r], out[1][0, r])
+
+
 def test_runs_under_one_steering_offset_share_their_inputs(bump_rear_amp, monkeypatch):
     """A batch under steering offsets (a Jacobian column of another parameter) copies the inputs once per
     (drive, offset), not once per run, and gives each run the bits it has simulated alone."""

@@ -67,6 +67,35 @@ def test_batch_blocks_equal_single_runs_and_a_diverging_vehicle_stops_alone(mode
         np.testing.assert_array_equal(res.state[b], single.state)
 
 
+def test_a_small_batch_is_shared_among_the_threads_with_the_same_numbers(model_full):
+    """Fewer vehicles than the threads' blocks (a diagnosis evaluates six drives at a time) are shared
+    evenly among the threads (:func:`batch_block`) instead of one block on one thread; each vehicle still
+    equals its own single run bit for bit, on one thread or two."""
+    import numba
+
+    from susp_sim_ros.model.vehicle import batch_block, batch_cost
+    assert [batch_block(n, 16, 2) for n in (1, 6, 7, 31, 32, 100)] == [1, 3, 4, 16, 16, 16]
+    assert batch_block(6, 16, 1) == 6 and batch_block(3, 16, 8) == 1
+    assert batch_cost(6, 100, 16, 2) == 300  # two blocks of three, one per thread
+    assert batch_cost(40, 100, 16, 2) == 3200  # three blocks of 16: two on one thread
+    man = bump_crossing()
+    U = man.to_inputs(DT)[:2000]
+    rng = np.random.default_rng(5)
+    P = np.stack([model_full.params(tuple(rng.uniform(0.0, 1.0, 4))) for _ in range(7)])
+    singles = [simulate(model_full, U, dt=DT, road=man.road, P=P[b].copy(), decim=10,
+                        outputs=["ROLL_RATE", "DEFL_FL"]).y for b in range(len(P))]
+    before = numba.get_num_threads()
+    try:
+        for threads in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
+            numba.set_num_threads(threads)
+            res = simulate_batch(model_full, P, U, dt=DT, roads=[man.road], decim=10,
+                                 outputs=["ROLL_RATE", "DEFL_FL"])
+            for b in range(len(P)):
+                np.testing.assert_array_equal(res.values[b], singles[b])
+    finally:
+        numba.set_num_threads(before)
+
+
 def test_batch_mixes_drives_and_roads(model_full):
     bump, sine = bump_crossing(), sine_steer(duration=bump_crossing().duration)
     n = min(bump.n_steps(DT), sine.n_steps(DT))

@@ -669,14 +669,14 @@ def run_one(p, s, U, rs, rzl, rzr, rn, mode, dt, decim, sel, Y):
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done):
-    """Run vehicles ``b`` in parallel, in blocks of :data:`LANES`: parameters ``P[b]``, state ``S[b]``
-    (in place), inputs ``U[u_row[b]]``, road ``road_row[b]``, outputs to ``Y[b]``, steps done to
-    ``done[b]``."""
-    n_blocks = (P.shape[0] + LANES - 1) // LANES
+def run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done, block):
+    """Run vehicles ``b`` in parallel, in blocks of ``block`` (at most :data:`LANES`): parameters
+    ``P[b]``, state ``S[b]`` (in place), inputs ``U[u_row[b]]``, road ``road_row[b]``, outputs to
+    ``Y[b]``, steps done to ``done[b]``."""
+    n_blocks = (P.shape[0] + block - 1) // block
     for blk in prange(n_blocks):
-        b0 = blk * LANES
-        _run_block(P, S, b0, min(LANES, P.shape[0] - b0), U, u_row, RS, RZL, RZR, RN, road_row, mode, dt,
+        b0 = blk * block
+        _run_block(P, S, b0, min(block, P.shape[0] - b0), U, u_row, RS, RZL, RZR, RN, road_row, mode, dt,
                    decim, sel, Y, done)
 
 

@@ -15,6 +15,7 @@ from collections.abc import Iterable, Sequence
 from types import ModuleType
 
 import numpy as np
+from numba import get_num_threads
 
 from ..errors import SuspInputError
 from .friction_scaling import velocity_scaling_array
@@ -316,6 +317,25 @@ def simulate(model: Model, U: np.ndarray, *, dt: float, road: RoadProfile | None
     return Response(t, Y, labels, int(done), U.shape[0], S)
 
 
+def batch_block(n_vehicles: int, lanes: int, threads: int) -> int:
+    """Vehicles stepped side by side in one block of a batch of ``n_vehicles`` (the kernel runs its
+    blocks in parallel, one per thread): ``lanes`` (the kernel's :data:`LANES`) when there are enough
+    vehicles to give every thread its blocks, else the vehicles shared evenly among the threads (a
+    diagnosis evaluates six drives at a time: one block of six kept one of two cores busy). A vehicle's
+    numbers do not depend on its block."""
+    if n_vehicles >= lanes * threads:
+        return lanes
+    return max(1, -(-n_vehicles // max(1, threads)))
+
+
+def batch_cost(n_vehicles: int, n_steps: int, lanes: int, threads: int) -> int:
+    """Vehicle-steps one thread runs for a batch (its time, nearly): blocks of :func:`batch_block`,
+    shared among ``threads``."""
+    block = batch_block(n_vehicles, lanes, threads)
+    n_blocks = -(-n_vehicles // block)
+    return -(-n_blocks // max(1, threads)) * block * n_steps
+
+
 def simulate_batch(model: Model, P: np.ndarray, U: np.ndarray | Sequence[np.ndarray], *, dt: float,
                    roads: Sequence[RoadProfile | None] = (None,), u_row: np.ndarray | None = None,
                    road_row: np.ndarray | None = None, decim: int = 1,
@@ -353,7 +373,8 @@ def simulate_batch(model: Model, P: np.ndarray, U: np.ndarray | Sequence[np.ndar
     Y = np.zeros((B, U.shape[1] // decim, len(sel)))
     done = np.zeros(B, np.int64)
     kernel = model.kernel if bool(np.any(P[:, P_SEMI_ACTIVE] > 0.5)) else model.kernel_passive
-    kernel.run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done)
+    kernel.run_batch(P, S, U, u_row, RS, RZL, RZR, RN, road_row, mode, dt, decim, sel, Y, done,
+                     batch_block(B, kernel.LANES, get_num_threads()))
     t = dt * decim * np.arange(1, Y.shape[1] + 1)
     return Response(t, Y, labels, done, U.shape[1], S)
 

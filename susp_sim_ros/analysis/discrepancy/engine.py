@@ -16,8 +16,10 @@ from collections import OrderedDict
 from collections.abc import Sequence
 
 import numpy as np
+from numba import get_num_threads
 
 from ...model import Model, simulate_batch
+from ...model.vehicle import batch_cost
 from ...model.layout import U_INDEX
 from .candidates import BY_NAME, Candidate, neutral_base
 from .data import SIGNAL_OF_OUTPUT, SIGNAL_OUTPUT, SIGNALS, DriveCase
@@ -30,6 +32,20 @@ RUN_QUANTUM_S = 0.5  # a run's length is rounded up to this, so drives of simila
 #: six-drive runs of the bundled drives
 RUN_CACHE_BYTES = 512 * 2**20
 _TO_REPORT_UNITS = np.array([SIGNAL_OF_OUTPUT[s][1] for s in SIGNALS])
+
+
+def kernel_calls(n_run: np.ndarray, lanes: int, threads: int) -> list[tuple[np.ndarray, int]]:
+    """Which runs share one kernel call, and for how many steps: the runs of one length together, or
+    all of them at the longest length when one thread's share of that is smaller
+    (:func:`~susp_sim_ros.model.vehicle.batch_cost`): six drives of two lengths run as two calls of three
+    vehicles keep each thread busy for both lengths one after the other, as one call of six for the
+    longer length only. A run simulated beyond its length keeps the bits of its first steps (the
+    kernel is causal and gives a vehicle the same bits in any lane of any block); only they are kept."""
+    groups = [(np.nonzero(n_run == n)[0], int(n)) for n in np.unique(n_run)]
+    together = batch_cost(len(n_run), int(n_run.max()), lanes, threads) if len(n_run) else 0
+    if len(groups) > 1 and together < sum(batch_cost(len(g), n, lanes, threads) for g, n in groups):
+        return [(np.arange(len(n_run)), int(n_run.max()))]
+    return groups
 
 
 class Structure:
@@ -278,17 +294,16 @@ class Evaluator:
                              np.int64)
             U = self.U[[d for d, _ in rows]]  # fancy indexing: a copy
             U[:, :, U_INDEX["SWA"]] -= np.array([s for _, s in rows])[:, None]
-        for n in np.unique(n_run):
-            lanes = np.nonzero(n_run == n)[0]
+        for lanes, n in kernel_calls(n_run, self.model.kernel.LANES, get_num_threads()):
             res = simulate_batch(self.model, P[lanes], U[:, :n], dt=self.dt, roads=self.roads,
                                  u_row=u_row[lanes], road_row=drive[lanes], outputs=SIGNAL_OUTPUT)
             Y = res.values
-            Y[res.steps_done < n] = 1e3  # a diverged run: a huge residual, never a crash
+            Y[res.steps_done < n_run[lanes]] = 1e3  # a diverged run: a huge residual, never a crash
             Y *= _TO_REPORT_UNITS  # in place: this call's own array, tens of MB for a Jacobian batch
             Y.flags.writeable = False  # its items may be shared by the same runs
             for q, lane in enumerate(lanes):
-                signals[todo[lane]] = Y[q]
-                self.run_cache.put(keys[todo[lane]], Y[q])
+                signals[todo[lane]] = Y[q, :n_run[lane]]
+                self.run_cache.put(keys[todo[lane]], signals[todo[lane]])
             self.vehicle_seconds += len(lanes) * n * self.dt
         if self.progress is not None:
             self.progress.update(len(runs))
