@@ -783,7 +783,8 @@ def merge_family(outputs: Sequence[tuple[str, dict]]) -> dict:
     order: the parts of one run made side by side, or a run and the cases re-run after it), re-summarised
     per split; a later file's case replaces an earlier one of the same name and noise, and each case's
     leading dependence is scored against the family's labels as they are now (:func:`_leading_rescored`).
-    Raises ValueError naming the file that is no family output."""
+    ``weighed`` as in the outputs. Raises ValueError naming the file that is no family output, or whose
+    cars were weighed (``--wheel-loads``) where the first file's were not, or the other way round."""
     cases: dict[tuple[str, float], dict] = {}
     for name, obj in outputs:
         if not isinstance(obj, dict) or not isinstance(obj.get("family"), str) or not isinstance(obj.get("cases"),
@@ -795,10 +796,15 @@ def merge_family(outputs: Sequence[tuple[str, dict]]) -> dict:
             if missing:
                 raise ValueError(f"{name}: a case without {', '.join(map(repr, missing))}: not a family case")
             cases[(r["case"], r["noise_deg_s"])] = _leading_rescored(r)
+    weighed = [bool(obj.get("weighed", False)) for _, obj in outputs]   # older outputs: not weighed
+    if len(set(weighed)) > 1:
+        k = weighed.index(not weighed[0])
+        raise ValueError(f"{outputs[k][0]}: the cars {'weighed' if weighed[k] else 'not weighed'} (--wheel-loads), "
+                         f"unlike in {outputs[0][0]}: a summary is of one condition")
     families = sorted({obj["family"] for _, obj in outputs})
     return _family_output(families[0] if len(families) == 1 else "all", list(cases.values()),
                           sum(float(obj.get("elapsed_s", 0.0)) for _, obj in outputs),
-                          merged_from=[name for name, _ in outputs])
+                          merged_from=[name for name, _ in outputs], weighed=bool(weighed and weighed[0]))
 
 
 def _main_merge(args) -> int:

@@ -74,6 +74,19 @@ def test_merge_takes_the_later_run_of_a_case_and_re_summarises():
     assert s["verdicts_right"] == 1
 
 
+def test_merge_keeps_the_weighing_and_refuses_to_mix_it():
+    """Runs with the cars weighed (--wheel-loads) are a condition of their own: merged, they stay marked;
+    a weighed run and one that was not are never one summary, and the error names the file."""
+    plain = _run([_case("structure/a", "none", 1.1)])
+    weighed = {**_run([_case("viscous/x", "viscous", 1.1)]), "weighed": True}
+    assert BENCH.merge_family([("a.json", weighed), ("b.json", dict(weighed))])["weighed"] is True
+    assert BENCH.merge_family([("a.json", plain)])["weighed"] is False
+    with pytest.raises(ValueError, match=r"^b\.json: the cars weighed .*unlike in a\.json"):
+        BENCH.merge_family([("a.json", plain), ("b.json", weighed)])
+    with pytest.raises(ValueError, match=r"^b\.json: the cars not weighed"):
+        BENCH.merge_family([("a.json", weighed), ("b.json", plain)])
+
+
 def test_merge_scores_the_leading_dependence_against_the_labels_as_they_are_now():
     """A right leading dependence amended after a run (a form that predates the feature reading its physics)
     counts at the merge; the labels the case ran with are kept beside them."""
