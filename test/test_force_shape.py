@@ -1153,6 +1153,30 @@ def test_a_learned_term_holds_one_value_of_each_shape_when_it_is_read_again():
         assert P[0, 0] == 0.0149 and P[0, 1] == rebound_gap   # one gap for both senses unless held apart
 
 
+def test_a_law_found_on_one_axle_is_offered_on_the_other_at_its_shape():
+    """:func:`force_shape.other_axle`: a selection that holds a law-family dependence on one axle (a valve
+    above a knee at the rear) gains the same feature on the other axle at the same shape, both fitted by
+    least squares to the target (here both axles carry it); a dependence of no law family is not mirrored,
+    one on both axles already gives nothing to offer; off as shipped."""
+    d = _design(seed=4, noise=0.5)
+    keys = [(c.key, c.shape) for c in d.columns]
+    rear = d.columns[keys.index((("velocity_beyond_knee", "rear"), 0.2))]
+    front = d.columns[keys.index((("velocity_beyond_knee", "front"), 0.2))]
+    y = 2.0 * d.X[:, d.columns.index(rear)] + 1.2 * d.X[:, d.columns.index(front)] + \
+        np.random.default_rng(6).normal(0.0, 0.5, len(d.y))
+    design = fs.Design(d.X, y, d.groups, d.columns)
+    sel = fs.Selection({rear.key: 0.7, front.key: 0.5}, [rear], np.array([2.3]), np.array([1.0]), 24)
+    alt = fs.other_axle(sel, design)
+    assert alt is not None and alt.stable == [rear, front]
+    np.testing.assert_allclose(alt.coef, [2.0, 1.2], atol=0.05)
+    assert alt.axles == ["front", "rear"] and alt.frequency == sel.frequency
+    assert fs.other_axle(alt, design) is None   # on both axles already
+    lawless = next(c for c in d.columns if c.feature not in fs.LAW_OF and c.axle == "rear")
+    assert fs.other_axle(fs.Selection({lawless.key: 0.9}, [lawless], np.array([1.0]), np.array([1.0]), 24),
+                         design) is None
+    assert fs.settings()["fit.other_axle_competes"] is False
+
+
 def test_a_learned_term_is_extended_by_the_dependences_the_residual_it_leaves_adds():
     """:func:`force_shape.extended`: the term's dependences as fitted, and the stable ones the regression of
     the residual it leaves adds (a position-sensitive damper read first at the front in bump, then in rebound):

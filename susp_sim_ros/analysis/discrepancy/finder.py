@@ -1050,8 +1050,11 @@ class DiscrepancyFinder:
         if not sel.stable or sel.listed_rivals():
             return None   # nothing stable, or listed terms stand for every dependence: they compete already
         fit = self._learned_fit(ev, cur, sel)
-        if force_shape.settings()["fit.law_members_compete"]:
+        cfg = force_shape.settings()
+        if cfg["fit.law_members_compete"]:
             fit, sel = self._law_members_compete(ev, cur, fit, sel)
+        if cfg["fit.other_axle_competes"]:
+            fit, sel = self._other_axle_competes(ev, cur, fit, sel)
         self.learned_selection_ = sel
         return Option((force_shape.TERM,), math.nan, math.nan, np.zeros(0)), fit
 
@@ -1103,6 +1106,31 @@ class DiscrepancyFinder:
                 "first": {"bic": fit.bic, "rms_x_noise": math.sqrt(fit.rss / fit.n)}, "tried": tried,
                 "kept": [f"{c.feature}:{c.axle}" for c in best_sel.stable]}
         return best, best_sel
+
+    def _other_axle_competes(self, ev: Evaluator, cur: FitResult, fit: FitResult,
+                             sel: force_shape.Selection) -> tuple[FitResult, force_shape.Selection]:
+        """The learned trial's fit ``fit`` of ``sel`` against the same term with its law-family dependences
+        also on the other axle (:func:`.force_shape.other_axle`), fitted as the first; that one is the trial
+        when the criterion prefers it and it also predicts the drives held out one at a time better
+        (:meth:`_held_out_sums`), as in :meth:`_law_members_compete` (``fit.other_axle_competes`` in
+        ``config/force_shape.yaml``). Recorded in ``force_shape_`` (``other_axle``) where it was offered."""
+        alt = force_shape.other_axle(sel, self.shape_design_)
+        if alt is None:
+            return fit, sel
+        f = self._learned_fit(ev, cur, alt)
+        have = {c.key for c in sel.stable}
+        entry = {"added": [f"{c.feature}:{c.axle}" for c in alt.stable if c.key not in have],
+                 "first": {"bic": fit.bic, "rms_x_noise": math.sqrt(fit.rss / fit.n)},
+                 "bic": f.bic, "rms_x_noise": math.sqrt(f.rss / f.n), "kept": False}
+        if f.bic < fit.bic:
+            held = self._held_out_sums(ev, fit, f)
+            if held is not None:
+                entry.update(heldout_sq_first=held[0], heldout_sq=held[1])
+            if held is None or held[1] < held[0]:
+                fit, sel = f, alt
+                entry["kept"] = True
+        self.force_shape_[-1]["other_axle"] = entry
+        return fit, sel
 
     def _learned_words(self, name: str) -> dict:
         """A learned term's dependences and description for its ``accepted`` entry (none for another term)."""

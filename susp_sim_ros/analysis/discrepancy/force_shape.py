@@ -707,6 +707,39 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design, cfg: dict 
     return out
 
 
+def other_axle(sel: Selection, design: Design) -> Selection | None:
+    """``sel`` with each stable dependence of a law family (:data:`LAW_OF`) also on the other axle, at the
+    shape it holds (else, of the shapes offered there, the one that fits best together with the other
+    columns), for the fit to decide: the two axles' dampers, stops and springs are most often of one design,
+    and the resamples may split their votes between axles that both carry a force. The coefficients are
+    the least-squares fit of all the columns to ``design``'s target, the shares from it. None when every
+    such dependence is on both axles already, or when listed terms stand for every dependence of the result
+    (they compete already)."""
+    have = {c.key for c in sel.stable}
+    cols = list(sel.stable)
+    for c in sel.stable:
+        if law_key(c.key)[0] not in LAW_FAMILIES or c.axle not in AXLES:
+            continue
+        key = (c.feature, next(a for a in AXLES if a != c.axle))
+        offered = [d for d in design.columns if d.key == key]
+        if key in have or not offered:
+            continue
+        same = [d for d in offered if d.shape == c.shape]
+
+        def rss(d: Column) -> float:
+            A = design.X[:, [design.columns.index(x) for x in cols + [d]]]
+            coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+            return float(np.sum((design.y - A @ coef) ** 2))
+        cols.append(same[0] if same else min(offered, key=rss))
+        have.add(key)
+    if len(cols) == len(sel.stable):
+        return None
+    A = design.X[:, [design.columns.index(x) for x in cols]]
+    coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+    alt = Selection(sel.frequency, cols, coef, _shares(A, coef), sel.resamples, sel.law_frequency, sel.by_law)
+    return None if alt.listed_rivals() else alt
+
+
 def spring_on_axle(design: Design, axle: str, resamples: int) -> Selection | None:
     """A spring of ``axle`` for the fit to test where the recorded road leads the missing force on that axle
     only and no reading of the states is stable (``fit.spring_where_road_leads_one_axle``): the spring-family
