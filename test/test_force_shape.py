@@ -1157,7 +1157,8 @@ def test_a_law_found_on_one_axle_is_offered_on_the_other_at_its_shape():
     """:func:`force_shape.other_axle`: a selection that holds a law-family dependence on one axle (a valve
     above a knee at the rear) gains the same feature on the other axle at the same shape, both fitted by
     least squares to the target (here both axles carry it); a dependence of no law family is not mirrored,
-    one on both axles already gives nothing to offer; off as shipped."""
+    one on both axles already, or one that would carry less than ``selection.min_share``, gives nothing to
+    offer; off as shipped."""
     d = _design(seed=4, noise=0.5)
     keys = [(c.key, c.shape) for c in d.columns]
     rear = d.columns[keys.index((("velocity_beyond_knee", "rear"), 0.2))]
@@ -1171,6 +1172,8 @@ def test_a_law_found_on_one_axle_is_offered_on_the_other_at_its_shape():
     np.testing.assert_allclose(alt.coef, [2.0, 1.2], atol=0.05)
     assert alt.axles == ["front", "rear"] and alt.frequency == sel.frequency
     assert fs.other_axle(alt, design) is None   # on both axles already
+    faint = fs.Design(d.X, y - 1.15 * d.X[:, d.columns.index(front)], d.groups, d.columns)   # 0.05 at the front
+    assert fs.other_axle(sel, faint) is None   # below selection.min_share: no front term
     lawless = next(c for c in d.columns if c.feature not in fs.LAW_OF and c.axle == "rear")
     assert fs.other_axle(fs.Selection({lawless.key: 0.9}, [lawless], np.array([1.0]), np.array([1.0]), 24),
                          design) is None

@@ -707,14 +707,16 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design, cfg: dict 
     return out
 
 
-def other_axle(sel: Selection, design: Design) -> Selection | None:
+def other_axle(sel: Selection, design: Design, cfg: dict | None = None) -> Selection | None:
     """``sel`` with each stable dependence of a law family (:data:`LAW_OF`) also on the other axle, at the
     shape it holds (else, of the shapes offered there, the one that fits best together with the other
     columns), for the fit to decide: the two axles' dampers, stops and springs are most often of one design,
     and the resamples may split their votes between axles that both carry a force. The coefficients are
-    the least-squares fit of all the columns to ``design``'s target, the shares from it. None when every
-    such dependence is on both axles already, or when listed terms stand for every dependence of the result
-    (they compete already)."""
+    the least-squares fit of all the columns to ``design``'s target, the shares from it; an added column
+    that carries less than ``selection.min_share`` of the force is left out, as in :func:`select` (a
+    rear jounce bumper's 2 % at the front is no front bumper). None when nothing is added, or when listed
+    terms stand for every dependence of the result (they compete already)."""
+    cfg = settings() if cfg is None else cfg
     have = {c.key for c in sel.stable}
     cols = list(sel.stable)
     for c in sel.stable:
@@ -735,6 +737,12 @@ def other_axle(sel: Selection, design: Design) -> Selection | None:
     if len(cols) == len(sel.stable):
         return None
     A = design.X[:, [design.columns.index(x) for x in cols]]
+    coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+    keep = np.arange(len(cols)) < len(sel.stable)
+    keep |= _shares(A, coef) >= float(cfg["selection.min_share"])
+    if not keep[len(sel.stable):].any():
+        return None
+    cols, A = [c for c, k in zip(cols, keep) if k], A[:, keep]
     coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
     alt = Selection(sel.frequency, cols, coef, _shares(A, coef), sel.resamples, sel.law_frequency, sel.by_law)
     return None if alt.listed_rivals() else alt
