@@ -42,8 +42,8 @@ def kernel_calls(n_run: np.ndarray, lanes: int, threads: int) -> list[tuple[np.n
     longer length only. A run simulated beyond its length keeps the bits of its first steps (the
     kernel is causal and gives a vehicle the same bits in any lane of any block); only they are kept."""
     groups = [(np.nonzero(n_run == n)[0], int(n)) for n in np.unique(n_run)]
-    together = batch_cost(len(n_run), int(n_run.max()), lanes, threads) if len(n_run) else 0
-    if len(groups) > 1 and together < sum(batch_cost(len(g), n, lanes, threads) for g, n in groups):
+    if len(groups) > 1 and batch_cost(len(n_run), int(n_run.max()), lanes, threads) < \
+            sum(batch_cost(len(g), n, lanes, threads) for g, n in groups):
         return [(np.arange(len(n_run)), int(n_run.max()))]
     return groups
 

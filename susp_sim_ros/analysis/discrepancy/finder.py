@@ -1094,12 +1094,11 @@ class DiscrepancyFinder:
                 member = next(c for c in alt.stable if c.key not in start)
                 entry = {"replaced": f"{key[0]}:{key[1]}", "member": f"{member.feature}:{member.axle}",
                          "bic": f.bic, "rms_x_noise": math.sqrt(f.rss / f.n)}
-                if f.bic < best.bic:
-                    held = self._held_out_sums(ev, best, f)
-                    if held is not None:
-                        entry.update(heldout_sq_best_so_far=held[0], heldout_sq=held[1])
-                    if held is None or held[1] < held[0]:
-                        best, best_sel = f, alt
+                better, held = self._preferred(ev, best, f)
+                if held is not None:
+                    entry.update(heldout_sq_best_so_far=held[0], heldout_sq=held[1])
+                if better:
+                    best, best_sel = f, alt
                 tried.append(entry)
         if tried:
             self.force_shape_[-1]["law_members"] = {
@@ -1122,15 +1121,23 @@ class DiscrepancyFinder:
         entry = {"added": [f"{c.feature}:{c.axle}" for c in alt.stable if c.key not in have],
                  "first": {"bic": fit.bic, "rms_x_noise": math.sqrt(fit.rss / fit.n)},
                  "bic": f.bic, "rms_x_noise": math.sqrt(f.rss / f.n), "kept": False}
-        if f.bic < fit.bic:
-            held = self._held_out_sums(ev, fit, f)
-            if held is not None:
-                entry.update(heldout_sq_first=held[0], heldout_sq=held[1])
-            if held is None or held[1] < held[0]:
-                fit, sel = f, alt
-                entry["kept"] = True
+        better, held = self._preferred(ev, fit, f)
+        if held is not None:
+            entry.update(heldout_sq_first=held[0], heldout_sq=held[1])
+        if better:
+            fit, sel = f, alt
+            entry["kept"] = True
         self.force_shape_[-1]["other_axle"] = entry
         return fit, sel
+
+    def _preferred(self, ev: Evaluator, best: FitResult, f: FitResult) -> tuple[bool, tuple[float, float] | None]:
+        """Whether the learned trial's fit ``f`` replaces ``best``: a lower criterion and, where drives can be
+        held out, a smaller sum over the drives held out one at a time (:meth:`_held_out_sums`, returned for
+        the record; None when not computed)."""
+        if f.bic >= best.bic:
+            return False, None
+        held = self._held_out_sums(ev, best, f)
+        return held is None or held[1] < held[0], held
 
     def _learned_words(self, name: str) -> dict:
         """A learned term's dependences and description for its ``accepted`` entry (none for another term)."""

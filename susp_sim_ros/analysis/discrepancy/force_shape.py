@@ -692,9 +692,7 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design, cfg: dict 
         best = None
         for c in offered:
             cols = sel.stable[:k] + [c] + sel.stable[k + 1:]
-            A = design.X[:, [design.columns.index(x) for x in cols]]
-            coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
-            rss = float(np.sum((design.y - A @ coef) ** 2))
+            A, coef, rss = _fit_columns(design, cols)
             if best is None or rss < best[0]:
                 best = (rss, cols, A, coef)
         if best is None:
@@ -705,6 +703,14 @@ def law_members(sel: Selection, key: tuple[str, str], design: Design, cfg: dict 
         if not alt.listed_rivals():   # listed terms standing for every dependence compete already
             out.append(alt)
     return out
+
+
+def _fit_columns(design: Design, cols: list[Column]) -> tuple[np.ndarray, np.ndarray, float]:
+    """``cols`` of ``design`` fitted to its target by least squares: their matrix, the coefficients and the
+    residual sum of squares."""
+    A = design.X[:, [design.columns.index(x) for x in cols]]
+    coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+    return A, coef, float(np.sum((design.y - A @ coef) ** 2))
 
 
 def other_axle(sel: Selection, design: Design, cfg: dict | None = None) -> Selection | None:
@@ -727,23 +733,18 @@ def other_axle(sel: Selection, design: Design, cfg: dict | None = None) -> Selec
         if key in have or not offered:
             continue
         same = [d for d in offered if d.shape == c.shape]
-
-        def rss(d: Column) -> float:
-            A = design.X[:, [design.columns.index(x) for x in cols + [d]]]
-            coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
-            return float(np.sum((design.y - A @ coef) ** 2))
-        cols.append(same[0] if same else min(offered, key=rss))
+        cols.append(same[0] if same else min(offered, key=lambda d: _fit_columns(design, cols + [d])[2]))
         have.add(key)
     if len(cols) == len(sel.stable):
         return None
-    A = design.X[:, [design.columns.index(x) for x in cols]]
-    coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+    A, coef, _ = _fit_columns(design, cols)
     keep = np.arange(len(cols)) < len(sel.stable)
     keep |= _shares(A, coef) >= float(cfg["selection.min_share"])
     if not keep[len(sel.stable):].any():
         return None
-    cols, A = [c for c, k in zip(cols, keep) if k], A[:, keep]
-    coef, *_ = np.linalg.lstsq(A, design.y, rcond=None)
+    if not keep.all():
+        cols = [c for c, k in zip(cols, keep) if k]
+        A, coef, _ = _fit_columns(design, cols)
     alt = Selection(sel.frequency, cols, coef, _shares(A, coef), sel.resamples, sel.law_frequency, sel.by_law)
     return None if alt.listed_rivals() else alt
 
