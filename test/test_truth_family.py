@@ -285,7 +285,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
                    "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
                    "gas/isothermal_charge_front", "gas/unequal_axle_charges", "unlisted/rising_rate_linkage",
-                   "unlisted/bypass_zone_rear"}
+                   "unlisted/bypass_zone_rear", "unlisted/bypass_zone_front"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -319,15 +319,16 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-11:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+    assert doc["held_out"][-12:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
                                      "unlisted/bump_stop_exponential_front",
                                      "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
                                      "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
                                      "gas/isothermal_charge_front", "gas/unequal_axle_charges",
-                                     "unlisted/rising_rate_linkage", "unlisted/bypass_zone_rear"]
-    assert "added 2026-12-02 (issue 26)" in text
+                                     "unlisted/rising_rate_linkage", "unlisted/bypass_zone_rear",
+                                     "unlisted/bypass_zone_front"]
+    assert "added 2026-12-02 (issue 26)" in text and "added 2026-12-06 (issue 26)" in text
     assert "added 2026-12-01 (issues 24 and 26)" in text and "added 2026-12-01 (issue 24)" in text
-    assert doc["held_out"][-23:-11] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert doc["held_out"][-24:-12] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -806,6 +807,27 @@ def test_the_bypass_zone_form_damps_the_rear_beyond_an_off_centre_soft_zone_with
     assert not np.any(family.case_truth(form, 1, "bump_rear_empty").hidden)   # no oil, no damping
     psd = family.FORMS["unlisted/position_sensitive_damper"]
     assert psd.hidden.hydraulic_stop_rebound_gap_m is None
+
+
+def test_the_front_bypass_zone_form_damps_beyond_a_zone_off_centre_towards_rebound_quadratically():
+    """``unlisted/bypass_zone_front`` (held out, added 2026-12-06): a damping at the front corners beyond a soft zone
+    from 15 mm of rebound to 7 mm of bump, growing with the square of the depth over 25 mm (1500 N s/m), in proportion
+    to the deflection velocity there; nothing inside the zone, nothing at the rear, none in an oil-empty damper."""
+    form = family.FORMS["unlisted/bypass_zone_front"]
+    assert form.split == "held_out" and form.expect == ("unlisted_force",) and form.leading == family.DAMPING_LAW
+    intact = family.case_truth(form, 1, "bump_intact")
+    d = intact.deflection
+    v = np.gradient(d, intact.t, axis=0)
+    e = np.where(d > 0.0, np.maximum(d - 0.007, 0.0), np.maximum(-d - 0.015, 0.0))
+    expected = 1500.0 * np.minimum((e / 0.025) ** 2, 1.0) * v
+    assert not np.any(intact.hidden[:, 2:])
+    assert np.all(intact.hidden[(d > -0.015) & (d < 0.007)] == 0.0)
+    for i in (0, 1):
+        for side in (d[:, i] > 0.012, d[:, i] < -0.020):   # both ends of the zone are reached and damped
+            assert side.any() and np.abs(intact.hidden[side, i]).max() > 20.0, i
+            assert np.corrcoef(intact.hidden[side, i], expected[side, i])[0, 1] > 0.99, i
+    assert not np.any(family.case_truth(form, 1, "bump_front_empty").hidden)   # no oil, no damping
+    assert np.abs(family.case_truth(form, 1, "bump_rear_empty").hidden[:, :2]).max() > 20.0
 
 
 def test_the_creep_friction_form_builds_with_the_sliding_velocity_by_its_algebraic_law():

@@ -454,6 +454,21 @@ def _forms() -> dict[str, GeneratorForm]:
                                          hydraulic_stop_rebound_gap_m=0.006, hydraulic_stop_length_m=0.03,
                                          hydraulic_stop_both_ways=True),
                       leading=DAMPING_LAW, **unl),
+        # added 2026-12-06 (issue 26), held out from the start, before any run of the finder on it and before the
+        # learned term's three switches of 2026-12-02..06 (a damping met beyond a gap on either side, a gap of
+        # rebound of its own, the other axle offered) run over the family: the physics of unlisted/bypass_zone_rear
+        # (seen) on the other axle, its zone off centre to the other side, another taper law (quadratic), length
+        # and size
+        GeneratorForm("unlisted/bypass_zone_front", description="position-sensitive front dampers whose soft zone "
+                      "lies off centre of static towards rebound (a loaded car sits below the height the bypass "
+                      "grooves were laid out for): from 15 mm of rebound to 7 mm of bump; beyond it a damping "
+                      "c_p min((e / 0.025)^2, 1) v, e = d - 0.007 in bump and -d - 0.015 in rebound, c_p 1500 N s/m "
+                      "(full 25 mm beyond either end), in both directions of motion, times the damper's oil weight; "
+                      "rear dampers without",
+                      hidden=TruthHidden(hydraulic_stop_damping_N_s_m=(1500.0, 0.0), hydraulic_stop_gap_m=0.007,
+                                         hydraulic_stop_rebound_gap_m=0.015, hydraulic_stop_length_m=0.025,
+                                         hydraulic_stop_both_ways=True, hydraulic_stop_exponent=2.0),
+                      leading=DAMPING_LAW, **unl),
     ]
     return {f.name: f for f in fs}
 
