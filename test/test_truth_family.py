@@ -785,24 +785,39 @@ def test_the_position_sensitive_damper_form_damps_beyond_its_soft_zone_on_both_s
     assert not np.any(rear_empty.hidden[:, 2:]) and np.abs(rear_empty.hidden[:, :2]).max() > 50.0
 
 
+def _assert_zone_damping(name: str, corners: tuple[int, int], bump_gap: float, rebound_gap: float, length: float,
+                         exponent: float, c: float, reached: tuple[float, float], least: float) -> ind.TruthResult:
+    """Assert that held-out form ``name`` hides a damping at ``corners`` only, beyond a soft zone from ``rebound_gap``
+    of rebound to ``bump_gap`` of bump (m), growing as (depth / ``length``) ** ``exponent`` to ``c`` (N s/m) in
+    proportion to the deflection velocity, nothing inside the zone; both ends are reached (deflections beyond
+    ``reached`` = (bump, rebound), m) and damped by more than ``least`` (N). Returns the intact drive's truth."""
+    form = family.FORMS[name]
+    assert form.split == "held_out" and form.expect == ("unlisted_force",) and form.leading == family.DAMPING_LAW
+    intact = family.case_truth(form, 1, "bump_intact")
+    d = intact.deflection
+    v = np.gradient(d, intact.t, axis=0)
+    e = np.where(d > 0.0, np.maximum(d - bump_gap, 0.0), np.maximum(-d - rebound_gap, 0.0))
+    expected = c * np.minimum((e / length) ** exponent, 1.0) * v
+    others = [i for i in range(4) if i not in corners]
+    assert not np.any(intact.hidden[:, others])
+    assert np.all(intact.hidden[(d > -rebound_gap) & (d < bump_gap)] == 0.0)
+    for i in corners:
+        for side in (d[:, i] > reached[0], d[:, i] < -reached[1]):   # both ends of the zone are reached and damped
+            assert side.any() and np.abs(intact.hidden[side, i]).max() > least, i
+            assert np.corrcoef(intact.hidden[side, i], expected[side, i])[0, 1] > 0.99, i
+    return intact
+
+
 def test_the_bypass_zone_form_damps_the_rear_beyond_an_off_centre_soft_zone_with_oil():
     """``unlisted/bypass_zone_rear`` (held out): a damping at the rear corners beyond a soft zone from 6 mm of
     rebound to 16 mm of bump, growing linearly with the depth over 30 mm (1800 N s/m), in proportion to the
     deflection velocity there; nothing inside the zone, nothing at the front, none in an oil-empty damper. The
     symmetric zone of the position-sensitive form is the same code, unchanged (its gap on both sides)."""
     form = family.FORMS["unlisted/bypass_zone_rear"]
-    assert form.split == "held_out" and form.expect == ("unlisted_force",) and form.leading == family.DAMPING_LAW
-    intact = family.case_truth(form, 1, "bump_intact")
+    intact = _assert_zone_damping("unlisted/bypass_zone_rear", (2, 3), 0.016, 0.006, 0.03, 1.0, 1800.0,
+                                  (0.020, 0.010), 50.0)
     d = intact.deflection
-    v = np.gradient(d, intact.t, axis=0)
-    e = np.where(d > 0.0, np.maximum(d - 0.016, 0.0), np.maximum(-d - 0.006, 0.0))
-    expected = 1800.0 * np.minimum(e / 0.03, 1.0) * v
-    assert not np.any(intact.hidden[:, :2])
-    assert np.all(intact.hidden[(d > -0.006) & (d < 0.016)] == 0.0)
     for i in (2, 3):
-        for side in (d[:, i] > 0.020, d[:, i] < -0.010):   # both ends of the zone are reached and damped
-            assert side.any() and np.abs(intact.hidden[side, i]).max() > 50.0, i
-            assert np.corrcoef(intact.hidden[side, i], expected[side, i])[0, 1] > 0.99, i
         assert np.any(intact.hidden[(d[:, i] < -0.007) & (d[:, i] > -0.012), i])   # the rebound end is not at -16 mm
     assert not np.any(family.case_truth(form, 1, "bump_rear_empty").hidden)   # no oil, no damping
     psd = family.FORMS["unlisted/position_sensitive_damper"]
@@ -814,18 +829,7 @@ def test_the_front_bypass_zone_form_damps_beyond_a_zone_off_centre_towards_rebou
     from 15 mm of rebound to 7 mm of bump, growing with the square of the depth over 25 mm (1500 N s/m), in proportion
     to the deflection velocity there; nothing inside the zone, nothing at the rear, none in an oil-empty damper."""
     form = family.FORMS["unlisted/bypass_zone_front"]
-    assert form.split == "held_out" and form.expect == ("unlisted_force",) and form.leading == family.DAMPING_LAW
-    intact = family.case_truth(form, 1, "bump_intact")
-    d = intact.deflection
-    v = np.gradient(d, intact.t, axis=0)
-    e = np.where(d > 0.0, np.maximum(d - 0.007, 0.0), np.maximum(-d - 0.015, 0.0))
-    expected = 1500.0 * np.minimum((e / 0.025) ** 2, 1.0) * v
-    assert not np.any(intact.hidden[:, 2:])
-    assert np.all(intact.hidden[(d > -0.015) & (d < 0.007)] == 0.0)
-    for i in (0, 1):
-        for side in (d[:, i] > 0.012, d[:, i] < -0.020):   # both ends of the zone are reached and damped
-            assert side.any() and np.abs(intact.hidden[side, i]).max() > 20.0, i
-            assert np.corrcoef(intact.hidden[side, i], expected[side, i])[0, 1] > 0.99, i
+    _assert_zone_damping("unlisted/bypass_zone_front", (0, 1), 0.007, 0.015, 0.025, 2.0, 1500.0, (0.012, 0.020), 20.0)
     assert not np.any(family.case_truth(form, 1, "bump_front_empty").hidden)   # no oil, no damping
     assert np.abs(family.case_truth(form, 1, "bump_rear_empty").hidden[:, :2]).max() > 20.0
 
