@@ -997,7 +997,8 @@ def test_a_learned_friction_is_described_with_its_fitted_law():
     """The description of a learned friction gives its fitted law in numbers: per axle its sliding level and its
     level at rest (sliding plus weakening), the Stribeck velocity, the creep's force at its creep velocity and the
     presliding travel, so that a contact that creeps (a level at rest near none) reads apart from one that sticks;
-    without a fitted law (the regression's description) none of it."""
+    a level at rest below the sliding one on every axle is said to be the law of a damping that saturates too
+    (the rig test that tells them apart named); without a fitted law (the regression's description) none of it."""
     sel = fs.select(_design(truth={("sign_velocity", "front"): 3.0, ("sign_velocity", "rear"): 3.0}))
     assert {c.feature for c in sel.stable} == {"sign_velocity"}
     fitted = {"sign_velocity_front": 53.2, "sign_velocity_rear": 40.1, "velocity_weakening_front": -51.3,
@@ -1010,6 +1011,11 @@ def test_a_learned_friction_is_described_with_its_fitted_law():
     sticking = {k: v for k, v in fitted.items() if "creep" not in k} | {"velocity_weakening_front": 20.0}
     words = sel.description(np.array([fitted[c.coefficient] for c in sel.stable]), sticking)
     assert "front 53 N sliding and 73 N at rest" in words and "creeping" not in words
+    assert "damping that saturates" not in words   # a level at rest above the sliding one: a contact that sticks
+    rising = {k: v for k, v in fitted.items() if "creep" not in k}
+    words = sel.description(np.array([fitted[c.coefficient] for c in sel.stable]), rising)
+    assert "grows with the sliding velocity over about 13 mm/s as a damping that saturates there does" in words
+    assert "a damper rig at 1-50 mm/s tells them apart" in words
     assert "the friction's law" not in sel.description()
     spring = fs.select(_design(truth={("deflection", "rear"): 3.0}))
     assert "the friction's law" not in spring.description(None, fitted)

@@ -442,6 +442,16 @@ def _friction_law_words(sel: Selection, values: dict) -> str:
     xp = num(PRESLIDING)
     if xp is not None:
         out.append(f"presliding travel {1e6 * xp:.0f} um")
+    rising = [weak < 0.0 for a in AXLES
+              if num(Column("sign_velocity", a).coefficient) is not None
+              and (weak := num(Column(WEAKENING, a).coefficient)) is not None]
+    if rising and all(rising) and vs is not None:
+        # a level that builds with the sliding velocity is a velocity-saturating force, which a damping valve
+        # that blows off or a bleed gives alike (Dixon, The Shock Absorber Handbook, 2007, ch. 5): say so
+        out.append(f"its level at rest below the sliding one, so the force grows with the sliding velocity over "
+                   f"about {1e3 * vs:.0f} mm/s as a damping that saturates there does (a valve's blow-off); a "
+                   f"damper rig at 1-50 mm/s tells them apart (a friction holds at each reversal, a damping "
+                   f"starts from none)")
     return f"the friction's law as fitted: {', '.join(out)}" if out else ""
 
 
