@@ -485,12 +485,12 @@ def test_a_contact_at_static_starts_the_fit_at_gap_zero_with_a_step_of_its_range
 
 
 def test_the_gaps_of_bump_and_rebound_are_fitted_apart_only_where_the_settings_say():
-    """``fit.rebound_gap``: off as shipped, a learned term's dependences met in bump and in rebound share one
-    fitted gap, written to both gaps' parameters (the term as it was before it had two); on, each sense is fitted
-    at its own gap from the value the regression picked (a stop or a soft zone laid out for another ride height),
-    and a zone's one gap starts both ends."""
+    """``fit.rebound_gap`` (on as shipped since 2026-12-06): off, a learned term's dependences met in bump and in
+    rebound share one fitted gap, written to both gaps' parameters (the term as it was before it had two); on, each
+    sense is fitted at its own gap from the value the regression picked (a stop or a soft zone laid out for another
+    ride height), and a zone's one gap starts both ends."""
     cfg = fs.settings()
-    assert cfg["fit.rebound_gap"] is False   # off until the whole truth-generator family ran with it
+    assert cfg["fit.rebound_gap"] is True   # on since the whole truth-generator family ran with it
     cols = [fs.Column("bump_damping", "rear", 0.02), fs.Column("rebound_damping", "rear", 0.0)]
     sel = fs.Selection({c.key: 0.9 for c in cols}, cols, np.array([60.0, 40.0]), np.array([0.6, 0.4]), 24)
     where = {"contact_gap": slice(0, 1), "rebound_gap": slice(1, 2)}
@@ -1061,12 +1061,12 @@ def test_an_even_spring_is_offered_to_the_regression_only_where_the_settings_say
 
 
 def test_a_zone_damping_is_offered_to_the_regression_only_where_the_settings_say():
-    """``library.zone_damping``: off as shipped, the regression's library has no damping beyond a gap on either side
-    of static; on, one entry at every offered contact gap, in the damping law family, described with its gap on
-    both sides; it is the sum of the bump and rebound dampings at one coefficient."""
+    """``library.zone_damping`` (on as shipped since 2026-12-06): off, the regression's library has no damping beyond
+    a gap on either side of static; on, one entry at every offered contact gap, in the damping law family, described
+    with its gap on both sides; it is the sum of the bump and rebound dampings at one coefficient."""
     cfg = fs.settings()
-    assert cfg["library.zone_damping"] is False   # off until its blind form and the whole family ran with it
-    off = fs.library(cfg)
+    assert cfg["library.zone_damping"] is True   # on since its blind forms and the whole family ran with it
+    off = fs.library(dict(cfg) | {"library.zone_damping": False})
     assert "zone_damping" not in {f for f, _ in off}
     on = fs.library(dict(cfg) | {"library.zone_damping": True})
     gaps = [float(v) for v in cfg["library.contact_gaps_m"]]
@@ -1106,7 +1106,9 @@ def test_a_damping_beyond_a_gap_is_offered_to_the_regression_only_where_the_sett
     words = sel.description(shapes={"contact_gap": 0.012})
     assert "a damping met beyond 12 mm of rebound" in words and "front more damping" in words
     assert "front axle only" in words
-    assert [p.name for p in fs.learned_candidate(sel, cfg).params] == ["rebound_damping_front", "contact_gap"]
+    assert [p.name for p in fs.learned_candidate(sel, cfg).params] == ["rebound_damping_front", "rebound_gap"]
+    one_gap = dict(cfg) | {"fit.rebound_gap": False}   # one gap for both senses: the contact gap
+    assert [p.name for p in fs.learned_candidate(sel, one_gap).params] == ["rebound_damping_front", "contact_gap"]
 
 
 def test_a_learned_creep_in_the_kernel_is_its_feature_on_the_run():
@@ -1183,7 +1185,7 @@ def test_a_law_found_on_one_axle_is_offered_on_the_other_at_its_shape():
     lawless = next(c for c in d.columns if c.feature not in fs.LAW_OF and c.axle == "rear")
     assert fs.other_axle(fs.Selection({lawless.key: 0.9}, [lawless], np.array([1.0]), np.array([1.0]), 24),
                          design) is None
-    assert fs.settings()["fit.other_axle_competes"] is False
+    assert fs.settings()["fit.other_axle_competes"] is True   # on since the whole family ran with it (2026-12-06)
 
 
 def test_a_learned_term_is_extended_by_the_dependences_the_residual_it_leaves_adds():
