@@ -1138,7 +1138,7 @@ def test_a_learned_term_holds_one_value_of_each_shape_when_it_is_read_again():
     read as a change of its fitted coefficient."""
     from types import SimpleNamespace
     cfg = dict(fs.settings()) | {"library.position_damping": True}
-    held = fs.library(cfg, {"contact_gap": 0.0149})
+    held = fs.library(cfg | {"fit.rebound_gap": False}, {"contact_gap": 0.0149})   # one gap for both senses
     for f in ("bump_contact", "rebound_contact", "bump_damping", "rebound_damping"):
         assert [s for g, s in held if g == f] == [0.0149]
     assert [s for g, s in held if g == "velocity_beyond_knee"] == \
