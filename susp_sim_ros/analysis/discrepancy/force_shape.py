@@ -427,10 +427,12 @@ def _friction_law_words(sel: Selection, values: dict) -> str:
 
     out = []
     levels = []
+    rising = []   # per axle with a plain level: its level at rest below the sliding one
     for a in AXLES:
         level, weak = num(Column("sign_velocity", a).coefficient), num(Column(WEAKENING, a).coefficient)
         if level is not None and weak is not None:
             levels.append(f"{a} {level:.0f} N sliding and {level + weak:.0f} N at rest")
+            rising.append(weak < 0.0)
     vs = num(STRIBECK_VELOCITY)
     if levels:
         out.append(", ".join(levels) + (f" (Stribeck velocity {1e3 * vs:.1f} mm/s)" if vs is not None else ""))
@@ -442,9 +444,6 @@ def _friction_law_words(sel: Selection, values: dict) -> str:
     xp = num(PRESLIDING)
     if xp is not None:
         out.append(f"presliding travel {1e6 * xp:.0f} um")
-    rising = [weak < 0.0 for a in AXLES
-              if num(Column("sign_velocity", a).coefficient) is not None
-              and (weak := num(Column(WEAKENING, a).coefficient)) is not None]
     if rising and all(rising) and vs is not None:
         # a level that builds with the sliding velocity is a velocity-saturating force, which a damping valve
         # that blows off or a bleed gives alike (Dixon, The Shock Absorber Handbook, 2007, ch. 5): say so
