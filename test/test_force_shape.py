@@ -16,6 +16,7 @@ from hypothesis import given, settings, strategies as st
 from susp_sim_ros.analysis.discrepancy import force_shape as fs
 from susp_sim_ros.model import Model, load_variant, load_vehicle, simulate
 from susp_sim_ros.model.extra_terms import DAMPER_GAS_PRELOAD, EXTRA_VISCOUS_DAMPING
+from susp_sim_ros.model.layout import P_INDEX
 from susp_sim_ros.model.learned_force import FEATURES, LEARNED_FORCE, feature_series, shape_defaults
 from susp_sim_ros.model.maneuvers import build_maneuver
 from susp_sim_ros.model.params import TermSetting
@@ -1084,6 +1085,50 @@ def test_a_zone_damping_is_offered_to_the_regression_only_where_the_settings_say
     both = [feature_series(f, D, V, z, z, DT, shape={"contact_gap": 0.012}) for f in
             ("bump_damping", "rebound_damping", "zone_damping")]
     np.testing.assert_allclose(both[2], both[0] + both[1])
+
+
+def test_a_zone_with_one_end_beyond_the_drives_reach_is_worded_as_the_stop_they_saw():
+    """A learned zone damping whose rebound end lies beyond the deepest rebound the drives reach on its axle is, as
+    far as they tell, a stop in bump (its rebound side is zero in every drive) and is worded so, with the reach and
+    the drive that would tell; the bump end beyond the deepest bump, a stop in rebound; both ends reached, a zone.
+    The reach is the deepest of the axle's two corners over every drive (:func:`drives_reach`)."""
+    sel = fs.Selection({("zone_damping", "rear"): 1.0}, [fs.Column("zone_damping", "rear", 0.02)],
+                       np.array([150.0]), np.array([1.0]), 24)
+    shapes = {"contact_gap": 0.020, "rebound_gap": 0.053}
+    zone = "a damping met beyond 20 mm of bump and 53 mm of rebound"
+    assert zone in sel.description(shapes=shapes)   # no reach given: the zone as fitted
+    # the rear's rebound reaches 38 mm, the front's 60 mm: only the rear's reach counts for a rear zone
+    words = sel.description(shapes=shapes, reach={"front": (0.03, 0.060), "rear": (0.045, 0.038)})
+    assert zone not in words and "a damping met beyond 20 mm of bump" in words
+    assert "rebound end, 53.0 mm, lies beyond the deepest rebound the drives reach with oil in the damper (38.0 mm)" \
+        in words
+    assert "a stop in bump" in words and "rear more damping 100 %" in words
+    words = sel.description(shapes={"contact_gap": 0.050, "rebound_gap": 0.010}, reach={"rear": (0.045, 0.038)})
+    assert "a damping met beyond 10 mm of rebound" in words and "a stop in rebound" in words
+    assert "deepest bump the drives reach with oil in the damper (45.0 mm)" in words
+    assert zone in sel.description(shapes=shapes, reach={"rear": (0.045, 0.060)})   # both ends reached
+
+    class Evaluator:   # the deflections of two drives, FL FR RL RR: the rear's deepest rebound on RR in drive 2,
+        # whose rear dampers hold no oil
+        def simulate_outputs(self, st, x, r, names):
+            assert names == ["DEFL_FL", "DEFL_FR", "DEFL_RL", "DEFL_RR"]
+            return np.array([[[0.010, -0.020, 0.030, -0.005], [0.004, 0.002, 0.001, 0.0]],
+                             [[0.001, 0.003, -0.002, -0.041], [0.0, 0.0, 0.002, 0.001]]][r])
+
+        def rows(self, st, x):
+            P = np.zeros((2, P_INDEX["OIL"] + 4))
+            P[:, P_INDEX["OIL"]:P_INDEX["OIL"] + 4] = [[1.0, 1.0, 0.6, 0.6], [1.0, 1.0, 0.0, 0.0]]
+            return P
+
+    class Finder:
+        evaluator_, cases_ = Evaluator(), [None, None]
+
+    class Fit:
+        structure, x = None, np.zeros(0)
+
+    assert fs.drives_reach(Finder(), Fit()) == {"front": (0.010, 0.020), "rear": (0.030, 0.041)}
+    # with oil: the rear's rebound of the oil-empty drive 2 does not count, nor its bump (2 mm, below drive 1's)
+    assert fs.drives_reach(Finder(), Fit(), with_oil=True) == {"front": (0.010, 0.020), "rear": (0.030, 0.005)}
 
 
 def test_a_damping_beyond_a_gap_is_offered_to_the_regression_only_where_the_settings_say():

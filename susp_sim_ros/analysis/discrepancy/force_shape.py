@@ -67,7 +67,8 @@ import numpy as np
 from ...model.input_force import INPUT_FEATURES, INPUT_FORCE, INPUT_KIND
 from ...model.learned_force import DAMPER_OIL, FEATURES, FRICTION_LIKE, LAW_SHAPE_FEATURES, LEARNED_FORCE, \
     LEVEL_GROWTH, PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING, CREEP, CREEP_VELOCITY, shape_defaults
-from ...model.params import AXLE_CORNERS, load_settings
+from ...model.layout import P_INDEX
+from ...model.params import AXLE_CORNERS, CORNER_NAMES, load_settings
 from .candidates import PHYSICS, CandParam, Candidate, axle_map
 from .fit import debias, fd_jacobian
 
@@ -116,6 +117,20 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
          **{f"rotation_{t}{k}": f"follows the wheel's rotation, harmonic {k}, {part} part (an input, not a state)"
             for t, part in (("sin", "sine"), ("cos", "cosine")) for k in (1, 2)}}
 
+
+#: a zone whose one end lies beyond the drives' reach (:func:`drives_reach`) is, as far as the drives tell, a damping
+#: met beyond its other end only: a stop (Dixon, The Shock Absorber Handbook, 2007, ch. 9 on hydraulic stops)
+ZONE_ONE_END = {
+    "bump": "a damping met beyond {gap_mm:.0f} mm of bump, growing with the depth, as far as the damper holds oil; "
+            "its rebound end, {rgap_mm:.1f} mm, lies beyond the deepest rebound the drives reach with oil in the "
+            "damper ({reach_mm:.1f} mm), so as far as these drives tell it is a stop in bump (a hydraulic compression "
+            "stop, a position-sensitive damper's bump end); a drive deeper in rebound tells whether a soft zone "
+            "ends there",
+    "rebound": "a damping met beyond {rgap_mm:.0f} mm of rebound, growing with the depth, as far as the damper "
+               "holds oil; its bump end, {gap_mm:.1f} mm, lies beyond the deepest bump the drives reach with oil in "
+               "the damper ({reach_mm:.1f} mm), so as far as these drives tell it is a stop in rebound (a hydraulic "
+               "rebound stop, a position-sensitive damper's rebound end); a drive deeper in bump tells whether a "
+               "soft zone ends there"}
 
 #: the dampings of the vocabulary: the damping law family's members (:data:`LAW_OF`)
 DAMPINGS = ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping", "rebound_damping",
@@ -377,12 +392,15 @@ class Selection:
         rivals = [LISTED_FOR.get(c.feature) for c in self.stable]
         return [] if any(r is None for r in rivals) else sorted(set(r for r in rivals if r))
 
-    def description(self, coef: np.ndarray | None = None, shapes: dict | None = None) -> str:
+    def description(self, coef: np.ndarray | None = None, shapes: dict | None = None,
+                    reach: dict[str, tuple[float, float]] | None = None) -> str:
         """One sentence in words, strongest dependence first, each with its axles, sense (from ``coef``,
         the fitted coefficients in :attr:`stable` order, when given; else the regression's) and share; a
         knee or free play at its fitted value in ``shapes`` (``{"knee_velocity": m/s, "free_play": m}``)
         when given, else at the value the regression selected; a damper force's rebound ratio and a friction's
-        fitted law (levels sliding and at rest, creep, presliding travel) when ``shapes`` has them."""
+        fitted law (levels sliding and at rest, creep, presliding travel) when ``shapes`` has them. ``reach``
+        (:func:`drives_reach`): a zone damping with one end beyond the drives' reach on each of its axles is
+        worded as the stop the drives saw (:data:`ZONE_ONE_END`)."""
         coef = self.coef if coef is None else np.asarray(coef, float)
         shapes = shapes or {}
         parts = []
@@ -394,6 +412,9 @@ class Selection:
             value = float(shapes[shape]) if shape in shapes else c.shape or 0.0
             rebound = float(shapes.get(REBOUND_GAP, value)) if feature == ZONE_DAMPING else value
             w = WORDS[feature].format(knee=value, gap_mm=1e3 * value, rgap_mm=1e3 * rebound, tau=value)
+            if feature == ZONE_DAMPING and reach:
+                w = _zone_words(w, value, rebound, [reach[self.stable[k].axle] for k in ks if self.stable[k].axle
+                                                    in reach])
             if feature in DAMPER_OIL and REBOUND_RATIO in shapes:
                 w += f", in rebound {float(shapes[REBOUND_RATIO]):.1f}x what it gives in compression"
             more, less = SENSE[feature]
@@ -410,6 +431,39 @@ class Selection:
         axles = self.axles
         return f"A force the model lacks: {'; '.join(parts)}; " \
                f"{f'{axles[0]} axle only' if len(axles) == 1 else 'both axles'}."
+
+
+def _zone_words(words: str, gap: float, rebound_gap: float, reach: list[tuple[float, float]]) -> str:
+    """A zone damping's ``words`` or, when one of its ends (``gap`` of bump, ``rebound_gap`` of rebound [m])
+    lies beyond the deepest bump or rebound ``reach`` (per axle it acts on, :func:`drives_reach`) on every
+    one of its axles, the stop the drives saw (:data:`ZONE_ONE_END`: the other end's side of the force is
+    zero in every drive, so nothing in them tells a zone from a stop)."""
+    if not reach:
+        return words
+    bump, rebound = max(b for b, _ in reach), max(r for _, r in reach)
+    if rebound_gap > rebound and gap < bump:
+        return ZONE_ONE_END["bump"].format(gap_mm=1e3 * gap, rgap_mm=1e3 * rebound_gap, reach_mm=1e3 * rebound)
+    if gap > bump and rebound_gap < rebound:
+        return ZONE_ONE_END["rebound"].format(gap_mm=1e3 * gap, rgap_mm=1e3 * rebound_gap, reach_mm=1e3 * bump)
+    return words
+
+
+def drives_reach(f, fit, with_oil: bool = False) -> dict[str, tuple[float, float]]:
+    """Per axle the deepest bump and the deepest rebound [m, both >= 0] the model of ``fit`` (a
+    :class:`~.fit.FitResult`) reaches in the drives of the fitted finder ``f``: its simulated deflections
+    from static, either corner of the axle; ``with_oil``: only in drives where that corner's damper holds oil
+    (a force of the damper's oil, :data:`~susp_sim_ros.model.learned_force.FEATURES`, acts in no other). How
+    far the drives tell what a force met beyond a gap does."""
+    names = [f"DEFL_{w}" for w in CORNER_NAMES]
+    ev = f.evaluator_
+    oil = ev.rows(fit.structure, fit.x)[:, P_INDEX["OIL"]:P_INDEX["OIL"] + len(CORNER_NAMES)] if with_oil else None
+    bump, rebound = np.zeros(len(CORNER_NAMES)), np.zeros(len(CORNER_NAMES))
+    for r in range(len(f.cases_)):
+        d = ev.simulate_outputs(fit.structure, fit.x, r, names)
+        met = np.ones(len(CORNER_NAMES), bool) if oil is None else oil[r] > 0.0
+        bump = np.where(met, np.maximum(bump, d.max(axis=0)), bump)
+        rebound = np.where(met, np.maximum(rebound, -d.min(axis=0)), rebound)
+    return {a: (float(bump[list(ij)].max()), float(rebound[list(ij)].max())) for a, ij in AXLE_CORNERS.items()}
 
 
 def _friction_law_words(sel: Selection, values: dict) -> str:

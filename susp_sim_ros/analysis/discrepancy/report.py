@@ -85,30 +85,38 @@ def term_entries(f) -> list[dict]:
         effect = getattr(f, "effects_", {}).get(name)
         if effect is not None:
             ev["effect"] = effect.as_json()
-        ev["statement"] = statement(cand, params, ev, f)
         sel = getattr(f, "learned_selection_", None) if name == force_shape.TERM else None
+        described = None if name != force_shape.TERM else (
+            cand.meaning if sel is None else _learned_description(f, res, sel, x, params))
+        ev["statement"] = statement(cand, params, ev, f, described)
         selected = sel.axles if sel is not None else ()
         entry = {"name": name, "where": _where(cand, x, lo[a:b], hi[a:b], selected) if cand.n_params else "all",
                  "params": params, "ci95": ci, "evidence": ev}
         if effect is not None:  # interface.md: the term's effect as a whole (issue 24, item 3)
             entry["effect"] = ev["effect"]
-        if name == force_shape.TERM:  # interface.md: what the learned force depends on, in words
+        if described is not None:  # interface.md: what the learned force depends on, in words
             entry["dependences"] = ev.get("dependences", [])
-            # the sense of each dependence from the fitted coefficients (the joint fit may flip a sign)
-            entry["description"] = (sel.description(x[:len(sel.stable)], params) if sel is not None
-                                    else cand.meaning)
-            ev["description"] = entry["description"]
+            entry["description"] = ev["description"] = described
         out.append(entry)
     return out
 
 
-def statement(cand: Candidate, params: dict, ev: dict, f) -> str:
-    """Plain words: what was left out, where, how sure."""
+def _learned_description(f, res, sel: force_shape.Selection, x: np.ndarray, params: dict) -> str:
+    """The learned term's words at its fitted values: the sense of each dependence from the fitted
+    coefficients (the joint fit may flip a sign), its shapes as fitted, and a zone damping against the reach
+    of the drives as run with it, with oil in the damper (:func:`~.force_shape.drives_reach`, simulated only
+    for a zone)."""
+    reach = force_shape.drives_reach(f, res, with_oil=True) if force_shape.ZONE_DAMPING in sel.dependences else None
+    return sel.description(x[:len(sel.stable)], params, reach)
+
+
+def statement(cand: Candidate, params: dict, ev: dict, f, meaning: str | None = None) -> str:
+    """Plain words: what was left out (``meaning``, else the candidate's), where, how sure."""
     per_b = ev.get("per_drive_rmse_before", {})
     per_a = ev.get("per_drive_rmse_after", {})
     gain = {d: per_b[d] - per_a.get(d, per_b[d]) for d in per_b}
     best = max(gain, key=lambda d: gain[d]) if gain else None
-    s = f"{cand.meaning}"
+    s = f"{cand.meaning if meaning is None else meaning}"
     if "explained_fraction_of_excess" in ev:
         s += (f"; explains {100 * ev['explained_fraction_of_excess']:.0f} % of the residual variance above "
               f"the noise floor left at its step")
