@@ -1013,6 +1013,9 @@ def test_a_learned_friction_is_described_with_its_fitted_law():
     words = sel.description(np.array([fitted[c.coefficient] for c in sel.stable]), sticking)
     assert "front 53 N sliding and 73 N at rest" in words and "creeping" not in words
     assert "damping that saturates" not in words   # a level at rest above the sliding one: a contact that sticks
+    at_none = sticking | {"velocity_weakening_front": -53.5}   # a level at rest of -0.3 N: "0 N", never "-0 N"
+    words = sel.description(np.array([fitted[c.coefficient] for c in sel.stable]), at_none)
+    assert "front 53 N sliding and 0 N at rest" in words and "-0 N" not in words
     rising = {k: v for k, v in fitted.items() if "creep" not in k}
     words = sel.description(np.array([fitted[c.coefficient] for c in sel.stable]), rising)
     assert "grows with the sliding velocity over about 13 mm/s as a damping that saturates there does" in words

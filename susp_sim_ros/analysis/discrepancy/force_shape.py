@@ -485,7 +485,7 @@ def _friction_law_words(sel: Selection, values: dict) -> str:
     for a in AXLES:
         level, weak = num(Column("sign_velocity", a).coefficient), num(Column(WEAKENING, a).coefficient)
         if level is not None and weak is not None:
-            levels.append(f"{a} {level:.0f} N sliding and {level + weak:.0f} N at rest")
+            levels.append(f"{a} {_newtons(level)} sliding and {_newtons(level + weak)} at rest")
             rising.append(weak < 0.0)
     vs = num(STRIBECK_VELOCITY)
     if levels:
@@ -493,7 +493,7 @@ def _friction_law_words(sel: Selection, values: dict) -> str:
     creep = [(a, num(Column(CREEP, a).coefficient)) for a in AXLES]
     vc = num(CREEP_VELOCITY)
     if vc is not None and any(c is not None for _, c in creep):
-        at = ", ".join(f"{a} {c:.0f} N" for a, c in creep if c is not None)
+        at = ", ".join(f"{a} {_newtons(c)}" for a, c in creep if c is not None)
         out.append(f"creeping (viscous) below {1e3 * vc:.1f} mm/s ({at} at it)")
     xp = num(PRESLIDING)
     if xp is not None:
@@ -506,6 +506,11 @@ def _friction_law_words(sel: Selection, values: dict) -> str:
                    f"damper rig at 1-50 mm/s tells them apart (a friction holds at each reversal, a damping "
                    f"starts from none)")
     return f"the friction's law as fitted: {', '.join(out)}" if out else ""
+
+
+def _newtons(v: float) -> str:
+    """A force [N] to the newton, a value that rounds to none without a sign ("0 N", never "-0 N")."""
+    return f"{round(v):d} N"
 
 
 def _progressive_words(sel: Selection, values: dict, axles: set[str]) -> str:
