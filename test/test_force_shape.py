@@ -1090,26 +1090,40 @@ def test_a_zone_damping_is_offered_to_the_regression_only_where_the_settings_say
     np.testing.assert_allclose(both[2], both[0] + both[1])
 
 
-def test_a_zone_with_one_end_beyond_the_drives_reach_is_worded_as_the_stop_they_saw():
-    """A learned zone damping whose rebound end lies beyond the deepest rebound the drives reach on its axle is, as
-    far as they tell, a stop in bump (its rebound side is zero in every drive) and is worded so, with the reach and
-    the drive that would tell; the bump end beyond the deepest bump, a stop in rebound; both ends reached, a zone.
-    The reach is the deepest of the axle's two corners over every drive (:func:`drives_reach`)."""
+def test_a_force_beyond_a_gap_is_worded_with_the_drives_reach_and_a_zone_with_one_end_beyond_it_as_a_stop():
+    """A learned force met beyond a gap says how deep beyond it the drives reach (the range the fitted force is seen
+    over: a damping's with oil in the damper, a spring's in every drive). A zone damping whose rebound end lies
+    beyond the deepest rebound the drives reach with oil on its axle is, as far as they tell, a stop in bump (its
+    rebound side is zero in every drive) and is worded so, with the reach and the drive that would tell; the bump
+    end beyond the deepest bump, a stop in rebound. The reach is the deepest of the axle's two corners over every
+    drive, with oil over the drives whose damper there holds oil (:func:`drives_reach`)."""
     sel = fs.Selection({("zone_damping", "rear"): 1.0}, [fs.Column("zone_damping", "rear", 0.02)],
                        np.array([150.0]), np.array([1.0]), 24)
     shapes = {"contact_gap": 0.020, "rebound_gap": 0.053}
     zone = "a damping met beyond 20 mm of bump and 53 mm of rebound"
     assert zone in sel.description(shapes=shapes)   # no reach given: the zone as fitted
-    # the rear's rebound reaches 38 mm, the front's 60 mm: only the rear's reach counts for a rear zone
-    words = sel.description(shapes=shapes, reach={"front": (0.03, 0.060), "rear": (0.045, 0.038)})
+
+    def reach(rear_oil, rear=(0.05, 0.06)):   # the front's and the rear's every drive's reach apart from the oil's
+        return fs.Reach({"front": (0.03, 0.07), "rear": rear}, {"front": (0.03, 0.060), "rear": rear_oil})
+
+    words = sel.description(shapes=shapes, reach=reach((0.045, 0.038)))
     assert zone not in words and "a damping met beyond 20 mm of bump" in words
     assert "rebound end, 53.0 mm, lies beyond the deepest rebound the drives reach with oil in the damper (38.0 mm)" \
         in words
     assert "a stop in bump" in words and "rear more damping 100 %" in words
-    words = sel.description(shapes={"contact_gap": 0.050, "rebound_gap": 0.010}, reach={"rear": (0.045, 0.038)})
+    words = sel.description(shapes={"contact_gap": 0.050, "rebound_gap": 0.010}, reach=reach((0.045, 0.038)))
     assert "a damping met beyond 10 mm of rebound" in words and "a stop in rebound" in words
     assert "deepest bump the drives reach with oil in the damper (45.0 mm)" in words
-    assert zone in sel.description(shapes=shapes, reach={"rear": (0.045, 0.060)})   # both ends reached
+    words = sel.description(shapes=shapes, reach=reach((0.045, 0.060)))   # both ends reached
+    assert zone in words
+    assert "seen in these drives to 45 mm of bump and 60 mm of rebound with oil in the damper" in words
+    # a spring beyond a gap: every drive's reach (a spring acts without oil); beyond the reach, met in none
+    bumper = fs.Selection({("bump_contact", "rear"): 1.0}, [fs.Column("bump_contact", "rear", 0.03)],
+                          np.array([150.0]), np.array([1.0]), 24)
+    words = bumper.description(shapes={"contact_gap": 0.031}, reach=reach((0.02, 0.02)))
+    assert "a spring met beyond 31 mm of bump" in words and "seen in these drives to 50 mm of bump (" in words
+    words = bumper.description(shapes={"contact_gap": 0.031}, reach=reach((0.02, 0.02), rear=(0.029, 0.02)))
+    assert "beyond the deepest bump these drives reach (29.0 mm): met in none of them" in words
 
     class Evaluator:   # the deflections of two drives, FL FR RL RR: the rear's deepest rebound on RR in drive 2,
         # whose rear dampers hold no oil
@@ -1129,9 +1143,11 @@ def test_a_zone_with_one_end_beyond_the_drives_reach_is_worded_as_the_stop_they_
     class Fit:
         structure, x = None, np.zeros(0)
 
-    assert fs.drives_reach(Finder(), Fit()) == {"front": (0.010, 0.020), "rear": (0.030, 0.041)}
+    got = fs.drives_reach(Finder(), Fit())
+    assert got.every == {"front": (0.010, 0.020), "rear": (0.030, 0.041)}
     # with oil: the rear's rebound of the oil-empty drive 2 does not count, nor its bump (2 mm, below drive 1's)
-    assert fs.drives_reach(Finder(), Fit(), with_oil=True) == {"front": (0.010, 0.020), "rear": (0.030, 0.005)}
+    assert got.with_oil == {"front": (0.010, 0.020), "rear": (0.030, 0.005)}
+    assert got.of("zone_damping", "rear") == (0.030, 0.005) and got.of("bump_contact", "rear") == (0.030, 0.041)
 
 
 def test_a_damping_beyond_a_gap_is_offered_to_the_regression_only_where_the_settings_say():

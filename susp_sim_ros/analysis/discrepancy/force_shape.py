@@ -212,6 +212,10 @@ POSITION_DAMPING = ("bump_damping", "rebound_damping")
 #: a damping met beyond a gap on either side of static (one coefficient for a soft zone's two ends): offered only
 #: where ``library.zone_damping`` is set
 ZONE_DAMPING = "zone_damping"
+#: the forces met beyond a gap, by the side of static their gap lies on (a zone's on both): how deep beyond it the
+#: drives reach is said with them (:func:`_reach_words`)
+GAP_SIDES = {"bump_contact": "bump", "bump_damping": "bump", "rebound_contact": "rebound",
+             "rebound_damping": "rebound", ZONE_DAMPING: "both"}
 #: a spring of one sense in bump and rebound: offered only where ``library.deflection_squared`` is set
 EVEN_SPRING = "deflection_squared"
 #: the spring features a smooth progressive part (:data:`PROGRESSIVE`) is fitted beside (:func:`spring_law`) and
@@ -393,13 +397,14 @@ class Selection:
         return [] if any(r is None for r in rivals) else sorted(set(r for r in rivals if r))
 
     def description(self, coef: np.ndarray | None = None, shapes: dict | None = None,
-                    reach: dict[str, tuple[float, float]] | None = None) -> str:
+                    reach: Reach | None = None) -> str:
         """One sentence in words, strongest dependence first, each with its axles, sense (from ``coef``,
         the fitted coefficients in :attr:`stable` order, when given; else the regression's) and share; a
         knee or free play at its fitted value in ``shapes`` (``{"knee_velocity": m/s, "free_play": m}``)
         when given, else at the value the regression selected; a damper force's rebound ratio and a friction's
         fitted law (levels sliding and at rest, creep, presliding travel) when ``shapes`` has them. ``reach``
-        (:func:`drives_reach`): a zone damping with one end beyond the drives' reach on each of its axles is
+        (:func:`drives_reach`): a force met beyond a gap says how deep beyond it the drives reach
+        (:func:`_reach_words`), a zone damping with one end beyond the drives' reach on each of its axles is
         worded as the stop the drives saw (:data:`ZONE_ONE_END`)."""
         coef = self.coef if coef is None else np.asarray(coef, float)
         shapes = shapes or {}
@@ -412,9 +417,8 @@ class Selection:
             value = float(shapes[shape]) if shape in shapes else c.shape or 0.0
             rebound = float(shapes.get(REBOUND_GAP, value)) if feature == ZONE_DAMPING else value
             w = WORDS[feature].format(knee=value, gap_mm=1e3 * value, rgap_mm=1e3 * rebound, tau=value)
-            if feature == ZONE_DAMPING and reach:
-                w = _zone_words(w, value, rebound, [reach[self.stable[k].axle] for k in ks if self.stable[k].axle
-                                                    in reach])
+            if feature in GAP_SIDES and reach is not None:
+                w = _reach_words(w, feature, value, rebound, [reach.of(feature, self.stable[k].axle) for k in ks])
             if feature in DAMPER_OIL and REBOUND_RATIO in shapes:
                 w += f", in rebound {float(shapes[REBOUND_RATIO]):.1f}x what it gives in compression"
             more, less = SENSE[feature]
@@ -433,37 +437,57 @@ class Selection:
                f"{f'{axles[0]} axle only' if len(axles) == 1 else 'both axles'}."
 
 
-def _zone_words(words: str, gap: float, rebound_gap: float, reach: list[tuple[float, float]]) -> str:
-    """A zone damping's ``words`` or, when one of its ends (``gap`` of bump, ``rebound_gap`` of rebound [m])
-    lies beyond the deepest bump or rebound ``reach`` (per axle it acts on, :func:`drives_reach`) on every
-    one of its axles, the stop the drives saw (:data:`ZONE_ONE_END`: the other end's side of the force is
-    zero in every drive, so nothing in them tells a zone from a stop)."""
-    if not reach:
-        return words
+@dataclass(frozen=True)
+class Reach:
+    """How deep the drives reach, per axle ``(bump, rebound)`` [m, both >= 0]: the deepest deflections from static
+    of the model as run, either corner of the axle, in every drive (``every``) and in the drives whose damper at
+    that corner holds oil (``with_oil``: a force of the damper's oil acts in no other)."""
+
+    every: dict[str, tuple[float, float]]
+    with_oil: dict[str, tuple[float, float]]
+
+    def of(self, feature: str, axle: str) -> tuple[float, float]:
+        """The reach that tells what ``feature`` does on ``axle``: with oil for a damping, else every drive's."""
+        return (self.with_oil if feature in DAMPINGS else self.every)[axle]
+
+
+def _reach_words(words: str, feature: str, gap: float, rebound_gap: float, reach: list[tuple[float, float]]) -> str:
+    """The ``words`` of a force met beyond a gap (``gap`` of bump, ``rebound_gap`` of rebound [m]) with how deep
+    beyond it the drives reach (``reach``: per axle it acts on, :meth:`Reach.of`): the range the fitted force is
+    seen over, and beyond it an extrapolation. A zone with one end beyond the reach on every one of its axles is the
+    stop the drives saw (:data:`ZONE_ONE_END`: its other side is zero in every drive, so nothing in them tells a
+    zone from a stop)."""
     bump, rebound = max(b for b, _ in reach), max(r for _, r in reach)
-    if rebound_gap > rebound and gap < bump:
-        return ZONE_ONE_END["bump"].format(gap_mm=1e3 * gap, rgap_mm=1e3 * rebound_gap, reach_mm=1e3 * rebound)
-    if gap > bump and rebound_gap < rebound:
-        return ZONE_ONE_END["rebound"].format(gap_mm=1e3 * gap, rgap_mm=1e3 * rebound_gap, reach_mm=1e3 * bump)
-    return words
+    oil = " with oil in the damper" if feature in DAMPINGS else ""
+    if feature == ZONE_DAMPING:
+        if rebound_gap > rebound and gap < bump:
+            return ZONE_ONE_END["bump"].format(gap_mm=1e3 * gap, rgap_mm=1e3 * rebound_gap, reach_mm=1e3 * rebound)
+        if gap > bump and rebound_gap < rebound:
+            return ZONE_ONE_END["rebound"].format(gap_mm=1e3 * gap, rgap_mm=1e3 * rebound_gap, reach_mm=1e3 * bump)
+        return (f"{words}, seen in these drives to {1e3 * bump:.0f} mm of bump and {1e3 * rebound:.0f} mm of "
+                f"rebound{oil}")
+    depth = bump if GAP_SIDES[feature] == "bump" else rebound
+    if gap >= depth:
+        return (f"{words}, beyond the deepest {GAP_SIDES[feature]} these drives reach{oil} ({1e3 * depth:.1f} mm): "
+                f"met in none of them")
+    return f"{words}, seen in these drives to {1e3 * depth:.0f} mm of {GAP_SIDES[feature]}{oil}"
 
 
-def drives_reach(f, fit, with_oil: bool = False) -> dict[str, tuple[float, float]]:
-    """Per axle the deepest bump and the deepest rebound [m, both >= 0] the model of ``fit`` (a
-    :class:`~.fit.FitResult`) reaches in the drives of the fitted finder ``f``: its simulated deflections
-    from static, either corner of the axle; ``with_oil``: only in drives where that corner's damper holds oil
-    (a force of the damper's oil, :data:`~susp_sim_ros.model.learned_force.FEATURES`, acts in no other). How
-    far the drives tell what a force met beyond a gap does."""
+def drives_reach(f, fit) -> Reach:
+    """How deep the drives of the fitted finder ``f`` reach with the model of ``fit`` (a
+    :class:`~.fit.FitResult`): its simulated deflections from static (:class:`Reach`). How far the drives tell
+    what a force met beyond a gap does."""
     names = [f"DEFL_{w}" for w in CORNER_NAMES]
     ev = f.evaluator_
-    oil = ev.rows(fit.structure, fit.x)[:, P_INDEX["OIL"]:P_INDEX["OIL"] + len(CORNER_NAMES)] if with_oil else None
-    bump, rebound = np.zeros(len(CORNER_NAMES)), np.zeros(len(CORNER_NAMES))
+    oil = ev.rows(fit.structure, fit.x)[:, P_INDEX["OIL"]:P_INDEX["OIL"] + len(CORNER_NAMES)]
+    deep = {k: np.zeros((2, len(CORNER_NAMES))) for k in ("every", "with_oil")}   # (bump, rebound) per corner
     for r in range(len(f.cases_)):
         d = ev.simulate_outputs(fit.structure, fit.x, r, names)
-        met = np.ones(len(CORNER_NAMES), bool) if oil is None else oil[r] > 0.0
-        bump = np.where(met, np.maximum(bump, d.max(axis=0)), bump)
-        rebound = np.where(met, np.maximum(rebound, -d.min(axis=0)), rebound)
-    return {a: (float(bump[list(ij)].max()), float(rebound[list(ij)].max())) for a, ij in AXLE_CORNERS.items()}
+        here = np.vstack([d.max(axis=0), -d.min(axis=0)])
+        deep["every"] = np.maximum(deep["every"], here)
+        deep["with_oil"] = np.where(oil[r] > 0.0, np.maximum(deep["with_oil"], here), deep["with_oil"])
+    return Reach(**{k: {a: (float(v[0, list(ij)].max()), float(v[1, list(ij)].max())) for a, ij in AXLE_CORNERS.items()}
+                    for k, v in deep.items()})
 
 
 def _friction_law_words(sel: Selection, values: dict) -> str:

@@ -103,10 +103,10 @@ def term_entries(f) -> list[dict]:
 
 def _learned_description(f, res, sel: force_shape.Selection, x: np.ndarray, params: dict) -> str:
     """The learned term's words at its fitted values: the sense of each dependence from the fitted
-    coefficients (the joint fit may flip a sign), its shapes as fitted, and a zone damping against the reach
-    of the drives as run with it, with oil in the damper (:func:`~.force_shape.drives_reach`, simulated only
-    for a zone)."""
-    reach = force_shape.drives_reach(f, res, with_oil=True) if force_shape.ZONE_DAMPING in sel.dependences else None
+    coefficients (the joint fit may flip a sign), its shapes as fitted, and a force met beyond a gap against the
+    reach of the drives as run with it (:func:`~.force_shape.drives_reach`, simulated only for such a force)."""
+    gapped = any(d in force_shape.GAP_SIDES for d in sel.dependences)
+    reach = force_shape.drives_reach(f, res) if gapped else None
     return sel.description(x[:len(sel.stable)], params, reach)
 
 
