@@ -58,6 +58,25 @@ def test_the_summary_counts_the_cases_within_each_issues_line():
     assert s["targets_met"]["max_heldout_over_structure_level"] is False
 
 
+def test_the_summary_also_counts_each_physics_case_against_the_structure_runs_of_its_own_seed():
+    """Beside the pooled level (the target's), each physics case is held to the median of the structure runs of its
+    own seed (the same noise draws): a seed-2 case at 1.24 is 1.08 x the pooled level 1.15 but 1.03 x its seed's
+    1.20; a case whose seed has no structure run is not scored so. The target stays on the pooled level."""
+    cases = [_case("structure/a", "none", 1.10), _case("structure/b", "none", 1.20, seed=2),
+             _case("structure/a", "none", 1.0, seed=4), _case("structure/b", "none", 1.4, seed=4),
+             _case("viscous/x", "viscous", 1.24, named=["extra_viscous_damping"], expected=["extra_viscous_damping"],
+                   seed=2),
+             _case("viscous/x", "viscous", 1.10, named=["extra_viscous_damping"], expected=["extra_viscous_damping"],
+                   seed=3)]
+    s = BENCH.summarise_family(cases)
+    assert s["structure_level_heldout_over_noise"] == pytest.approx(1.15)
+    assert s["physics_cases_within_structure_level"] == 1 and s["physics_cases_scored"] == 2   # seed 3's 1.10 only
+    assert s["structure_level_by_seed"] == pytest.approx({"1": 1.10, "2": 1.20, "4": 1.2})
+    assert s["heldout_over_seed_structure_level"] == pytest.approx({"viscous/x#2": 1.24 / 1.20})
+    assert s["physics_cases_within_seed_structure_level"] == 1 and s["physics_cases_scored_by_seed"] == 1
+    assert s["targets_met"]["max_heldout_over_structure_level"] is False   # the target's figure is the pooled one
+
+
 def test_merge_takes_the_later_run_of_a_case_and_re_summarises():
     """Parts of one run made apart are one run; a case re-run after them replaces its earlier result."""
     first = _run([_case("structure/a", "none", 1.1), _case("viscous/x", "viscous", 2.0, verdict_right=False)])
