@@ -118,19 +118,16 @@ WORDS = {"constant": "a constant force offset", "deflection": "spring-like (grow
             for t, part in (("sin", "sine"), ("cos", "cosine")) for k in (1, 2)}}
 
 
-#: a zone whose one end lies beyond the drives' reach (:func:`drives_reach`) is, as far as the drives tell, a damping
-#: met beyond its other end only: a stop (Dixon, The Shock Absorber Handbook, 2007, ch. 9 on hydraulic stops)
-ZONE_ONE_END = {
-    "bump": "a damping met beyond {gap_mm:.0f} mm of bump, growing with the depth, as far as the damper holds oil; "
-            "its rebound end, {rgap_mm:.1f} mm, lies beyond the deepest rebound the drives reach with oil in the "
-            "damper ({reach_mm:.1f} mm), so as far as these drives tell it is a stop in bump (a hydraulic compression "
-            "stop, a position-sensitive damper's bump end); a drive deeper in rebound tells whether a soft zone "
-            "ends there",
-    "rebound": "a damping met beyond {rgap_mm:.0f} mm of rebound, growing with the depth, as far as the damper "
-               "holds oil; its bump end, {gap_mm:.1f} mm, lies beyond the deepest bump the drives reach with oil in "
-               "the damper ({reach_mm:.1f} mm), so as far as these drives tell it is a stop in rebound (a hydraulic "
-               "rebound stop, a position-sensitive damper's rebound end); a drive deeper in bump tells whether a "
-               "soft zone ends there"}
+#: a zone whose one end (``far``: rebound or bump) lies beyond the drives' reach (:func:`drives_reach`) is, as far as
+#: the drives tell, a damping met beyond its other end (``near``) only: a stop (Dixon, The Shock Absorber Handbook,
+#: 2007, ch. 9 on hydraulic stops)
+ZONE_ONE_END = ("a damping met beyond {near_mm:.0f} mm of {near}, growing with the depth, as far as the damper holds "
+                "oil; its {far} end, {far_mm:.1f} mm, lies beyond the deepest {far} the drives reach with oil in the "
+                "damper ({reach_mm:.1f} mm), so as far as these drives tell it is a stop in {near} (a hydraulic "
+                "{stage} stop, a position-sensitive damper's {near} end); a drive deeper in {far} tells whether a soft "
+                "zone ends there")
+#: the damper stage a stop on each side of static acts in
+STOP_STAGE = {"bump": "compression", "rebound": "rebound"}
 
 #: the dampings of the vocabulary: the damping law family's members (:data:`LAW_OF`)
 DAMPINGS = ("deflection_velocity", "velocity_squared", "velocity_beyond_knee", "bump_damping", "rebound_damping",
@@ -460,10 +457,11 @@ def _reach_words(words: str, feature: str, gap: float, rebound_gap: float, reach
     bump, rebound = max(b for b, _ in reach), max(r for _, r in reach)
     oil = " with oil in the damper" if feature in DAMPINGS else ""
     if feature == ZONE_DAMPING:
-        if rebound_gap > rebound and gap < bump:
-            return ZONE_ONE_END["bump"].format(gap_mm=1e3 * gap, rgap_mm=1e3 * rebound_gap, reach_mm=1e3 * rebound)
-        if gap > bump and rebound_gap < rebound:
-            return ZONE_ONE_END["rebound"].format(gap_mm=1e3 * gap, rgap_mm=1e3 * rebound_gap, reach_mm=1e3 * bump)
+        gaps, deepest = {"bump": gap, "rebound": rebound_gap}, {"bump": bump, "rebound": rebound}
+        for near, far in (("bump", "rebound"), ("rebound", "bump")):
+            if gaps[far] > deepest[far] and gaps[near] < deepest[near]:
+                return ZONE_ONE_END.format(near=near, far=far, near_mm=1e3 * gaps[near], far_mm=1e3 * gaps[far],
+                                           reach_mm=1e3 * deepest[far], stage=STOP_STAGE[near])
         return (f"{words}, seen in these drives to {1e3 * bump:.0f} mm of bump and {1e3 * rebound:.0f} mm of "
                 f"rebound{oil}")
     depth = bump if GAP_SIDES[feature] == "bump" else rebound
