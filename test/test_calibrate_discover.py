@@ -4,6 +4,7 @@ calibration instead of invented physics, on drives from the independent simulato
 values; docs/independent_sim.md lists every difference)."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -410,6 +411,48 @@ def test_a_value_the_held_drive_carries_most_of_is_its_own_even_when_the_others_
     assert others > 50.0 and others < HELD_SHARE * float(np.sum(strong.jac[:, 0] ** 2))
     assert _informed_only_by(strong, held, pw=1.0) == [0]
     assert _informed_only_by(fit(0.5), held, pw=1.0) == []  # the others carry 4/5 of it: refitted
+
+
+def test_a_fold_calibrates_on_its_drive_with_the_other_drives_information_as_prior_without_a_jump():
+    """``heldout.fold_prior_from_other_drives``: a fold's prior for each calibration value on its held-out
+    drive is centred at the fold's value and as precise as the other drives and the value's own prior make
+    it (``finder._fold_prior``). A value the other drives do not tell keeps its own prior sd; one they tell
+    much of is pinned; and across the share at which the held-value rule jumps (``HELD_SHARE``) the prior
+    moves by a few per cent, not from "held" to "refitted"."""
+    from types import SimpleNamespace
+    from susp_sim_ros.analysis.discrepancy.candidates import CALIBRATION
+    from susp_sim_ros.analysis.discrepancy.finder import HELD_SHARE, _fold_prior, _informed_only_by
+    from susp_sim_ros.analysis.discrepancy.fit import FitResult
+    rng = np.random.default_rng(7)
+    psd = np.array([2.0, 0.5])
+    st = SimpleNamespace(prior=lambda: (np.array([0, 1]), np.zeros(2), psd), prior_gain=1.0, data_weight=1.0,
+                         names=[CALIBRATION], offsets=np.array([0, 2]))
+    held = np.r_[np.ones(100, bool), np.zeros(400, bool)]
+    a, b = rng.normal(size=(2, 100)), rng.normal(size=(2, 400))
+
+    def fit(train_scale: float) -> FitResult:
+        # value 0: the held rows tell it (scale 3), the others as scaled; value 1: only the others, strongly
+        J = np.vstack([np.column_stack([3.0 * a[0], np.zeros(100)]),
+                       np.column_stack([train_scale * b[0], 4.0 * b[1]])])
+        return FitResult(structure=st, x=np.zeros(2), rss=500.0, n=500, k_bic=2, bic=0.0, success=True,
+                         message="", nfev=1, residual=np.zeros(500), jac=J, n_eff=500.0)
+
+    x_fold = np.array([0.3, -0.2])
+    cal, (idx, mean, sd) = _fold_prior(fit(0.0), held, x_fold)
+    assert cal == [0, 1] and idx.tolist() == [0, 1]
+    np.testing.assert_array_equal(mean, x_fold)
+    assert sd[0] == pytest.approx(psd[0], rel=1e-9)       # the others tell nothing: the drive's own prior
+    # the others pin it (16 x 400 against the prior's 4): it stays at the fold's value
+    assert sd[1] == pytest.approx(1.0 / math.sqrt(16.0 * 400 + psd[1] ** -2), rel=0.1) and sd[1] < 0.03 * psd[1]
+
+    def share(train_scale: float) -> float:
+        J = fit(train_scale).jac
+        return float(np.sum(J[~held, 0] ** 2) / np.sum(J[:, 0] ** 2))
+    below, above = 1.40, 1.60   # the others' share of value 0 either side of HELD_SHARE
+    assert share(below) < HELD_SHARE < share(above)
+    assert _informed_only_by(fit(below), held, pw=1.0) == [0] and _informed_only_by(fit(above), held, pw=1.0) == []
+    sd_below, sd_above = _fold_prior(fit(below), held, x_fold)[1][2][0], _fold_prior(fit(above), held, x_fold)[1][2][0]
+    assert sd_above < sd_below < 1.2 * sd_above
 
 
 def test_a_term_level_the_held_drive_alone_tells_is_owned_by_it():

@@ -263,6 +263,20 @@ def test_values_only_the_held_out_drive_informs_are_calibrated_on_it(bump_rear_a
     assert y[1] > 10.0 and float(r1 @ r1) < 0.8 * float(r0 @ r0)
 
 
+def test_a_drive_calibration_with_a_given_prior_is_held_by_a_narrow_one_and_free_under_a_wide_one(bump_rear_amp):
+    """The prior a leave-one-drive-out fold passes for its values (``fit_structure(prior=...)``, the fold's
+    posterior; ``finder._fold_prior``) replaces the structure's own: centred at the fold's value, a narrow
+    one keeps the value there, a wide one lets the drive move it to what it tells (rear 24 N)."""
+    from susp_sim_ros.analysis.discrepancy.finder import _recalibrate_on_drive
+    ev = Evaluator(extended_model("passat_b8_like", "dahl_only"), [bump_rear_amp])
+    st = Structure(["friction_amplitude"])
+    x = st.neutral()
+    x[:2] = 5.0
+    narrow = _recalibrate_on_drive(ev, st, x, 0, [1], (np.array([1]), np.array([5.0]), np.array([1e-3])))
+    wide = _recalibrate_on_drive(ev, st, x, 0, [1], (np.array([1]), np.array([5.0]), np.array([1e3])))
+    assert abs(narrow[1] - 5.0) < 0.05 and wide[1] > 10.0
+
+
 def test_amplitude_friction_found_on_a_single_rear_empty_bump(bump_rear_amp):
     f = DiscrepancyFinder(variant="full", heldout=False,
                           candidates=["friction_amplitude", "extra_viscous_damping", "time_offset",

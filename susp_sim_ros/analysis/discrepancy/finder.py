@@ -45,7 +45,7 @@ from ...model import Model, load_variant, load_vehicle
 from ...model.layout import U_INDEX
 from ...model.paper import MANEUVER_KINDS
 from ...model.response import Response
-from ...model.params import TermSetting
+from ...model.params import TermSetting, load_settings
 from ...model.terms import get_term
 from ...progress import progress
 from .calibration import (STEP_OF_SD, CalParam, calibration_candidate, calibration_entries, calibration_params,
@@ -1685,10 +1685,18 @@ class DiscrepancyFinder:
         new drive, not with a joint value fitted next to other values than the fold's. Each fold keeps
         the training values (``params``), the values calibrated on the drive (``calibrated_on_drive``)
         and its RMSE with the joint values instead (``rmse_after_joint_values_deg_s``; pooled:
-        ``after_joint_values_deg_s``)."""
+        ``after_joint_values_deg_s``).
+
+        With ``heldout.fold_prior_from_other_drives`` (``config/discrepancy.yaml``) no value is held: every
+        fold refits all values on the other drives, then calibrates every calibration value on the held-out
+        drive with what the other drives tell of it as its prior (:func:`_fold_prior`), the Bayesian update
+        of the fold's posterior by the new drive. A value the other drives pin stays at the fold's value, one
+        they do not tell is the drive's own calibration within its prior, and the values between are
+        weighed as they are informed: no share at which the rule jumps (:data:`HELD_SHARE`)."""
         R = len(ev.cases)
         if R == 1:
             return self._heldout_halves(ev, final)
+        update = bool(load_settings("discrepancy.yaml")["heldout.fold_prior_from_other_drives"])
         folds = []
         labels = final.structure.labels()
         before_sig: dict[str, list] = {}
@@ -1696,12 +1704,16 @@ class DiscrepancyFinder:
         prim_b = prim_a = prim_j = prim_n = 0.0
         for h in range(R):
             train = tuple(r for r in range(R) if r != h)
-            if final.structure.n_params and train:
+            prior = None
+            if final.structure.n_params and train and update:
+                x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV).x
+                own, prior = _fold_prior(final, _drive_rows(ev, final, h), x)
+            elif final.structure.n_params and train:
                 own = _informed_only_by(final, _drive_rows(ev, final, h))
                 x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV, fixed=own).x
             else:
                 x, own = final.x, []
-            x_pred = _recalibrate_on_drive(ev, final.structure, x, h, own)
+            x_pred = _recalibrate_on_drive(ev, final.structure, x, h, own, prior)
             e_after = ev.case_residuals(final.structure, x_pred, [h])[h]
             e_joint = ev.case_residuals(final.structure, x, [h])[h] if own else e_after
             e_before = self.base_residuals_[h]
@@ -1882,11 +1894,9 @@ def _data_information(fit: FitResult, held: np.ndarray, pw: float | None = None
     with the priors in (the Schur complement of the Gauss-Newton information, less the parameter's own
     prior), and that prior information; ``pw``: the prior rows' weight (default: the structure's)."""
     assert fit.jac is not None
-    tr = ~held
     pidx, _, psd = fit.structure.prior()
     if pw is None:
-        ne_t = max(fit.n_eff * tr.sum() / len(held), 1.0)
-        pw = math.sqrt(tr.sum() / ne_t) * fit.structure.prior_gain
+        pw = _training_prior_weight(fit, held)
     prior_info = np.zeros(len(fit.x))
     prior_info[pidx] = (pw / psd) ** 2
 
@@ -1896,6 +1906,13 @@ def _data_information(fit: FitResult, held: np.ndarray, pw: float | None = None
 
     Jh = fit.jac[held]   # the training rows' product is all rows' less the held rows' (they are few)
     return data_info(fit.gram - Jh.T @ Jh), data_info(fit.gram), prior_info
+
+
+def _training_prior_weight(fit: FitResult, held: np.ndarray) -> float:
+    """The weight of the prior rows against the rows outside ``held`` (their count over their effective
+    count, :func:`n_effective`, taken in proportion to the fit's; as :func:`fit.fit_structure` weighs)."""
+    tr = int((~held).sum())
+    return math.sqrt(tr / max(fit.n_eff * tr / len(held), 1.0)) * fit.structure.prior_gain
 
 
 def _owned_by(fit: FitResult, held: np.ndarray, cols: Sequence[int]) -> list[int]:
@@ -1909,13 +1926,40 @@ def _owned_by(fit: FitResult, held: np.ndarray, cols: Sequence[int]) -> list[int
     return [int(j) for j in cols if info[j] < HELD_SHARE * info_all[j]]
 
 
-def _recalibrate_on_drive(ev: Evaluator, st: Structure, x: np.ndarray, r: int, own: Sequence[int]) -> np.ndarray:
+def _recalibrate_on_drive(ev: Evaluator, st: Structure, x: np.ndarray, r: int, own: Sequence[int],
+                          prior: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """``x`` with the values ``own`` (indices: those only drive ``r`` informs) fitted on drive ``r`` alone,
-    with their priors, every other value fixed at ``x``; ``x`` itself without such values."""
+    with their priors (``prior``: (indices, means, sds) in their place), every other value fixed at ``x``;
+    ``x`` itself without such values."""
     if not len(own):
         return x
     others = np.setdiff1d(np.arange(st.n_params), np.asarray(own, np.int64))
-    return fit_structure(ev, st, x, (r,), max_nfev=HELDOUT_NFEV, fixed=others.tolist()).x
+    return fit_structure(ev, st, x, (r,), max_nfev=HELDOUT_NFEV, fixed=others.tolist(), prior=prior).x
+
+
+def _fold_prior(fit: FitResult, held: np.ndarray, x_fold: np.ndarray
+                ) -> tuple[list[int], tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
+    """The calibration values of ``fit`` (indices) and the prior a leave-one-drive-out fold calibrates them
+    with on its held-out drive (the rows ``held``): centred at the fold's values ``x_fold``, each as
+    precise as the other drives and its own prior make it (the Schur complement of :func:`_data_information`
+    plus the prior information, a Laplace approximation of the fold's posterior, one value at a time; Gelman
+    et al., *Bayesian Data Analysis*, 3rd ed., 2013, sec. 4.1). In the prior rows' currency of the training
+    rows: sd = pw_t / sqrt(info + prior info), which is the value's own prior sd where the other drives tell
+    nothing of it. The physics terms' values and shapes stay at the fold's (they are what is predicted)."""
+    st = fit.structure
+    if CALIBRATION not in st.names or fit.jac is None or not len(fit.x):
+        return [], None
+    k = st.names.index(CALIBRATION)
+    cal = list(range(int(st.offsets[k]), int(st.offsets[k + 1])))
+    pidx = st.prior()[0]
+    cal = [j for j in cal if j in set(pidx.tolist())]
+    if not cal:
+        return [], None
+    info, _, prior_info = _data_information(fit, held)
+    pw_t = _training_prior_weight(fit, held)
+    idx = np.asarray(cal, np.int64)
+    sd = pw_t / np.sqrt(np.maximum(info[idx] + prior_info[idx], 1e-300))
+    return cal, (idx, np.asarray(x_fold, float)[idx], sd)
 
 
 def _held_in_both(a: FitResult, b: FitResult, held: np.ndarray) -> tuple[list[int], list[int]]:
@@ -1941,8 +1985,7 @@ def _fold_step(fit: FitResult, held: np.ndarray, pw: float | None = None,
     pidx, pmu, psd = st.prior()
     lo, hi = st.bounds()
     if pw is None:
-        ne_t = max(fit.n_eff * tr.sum() / len(r), 1.0)
-        pw = math.sqrt(tr.sum() / ne_t) * st.prior_gain
+        pw = _training_prior_weight(fit, held)
     hold = set(_informed_only_by(fit, held, pw) if fixed is None else fixed)
     free = [j for j in range(len(x)) if j not in hold]
     A, b = J[tr][:, free], -r[tr]

@@ -289,10 +289,12 @@ class FitResult:
 
 def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
                   idx: Sequence[int] | None = None, max_nfev: int = 30,
-                  fixed: Sequence[int] = ()) -> FitResult:
+                  fixed: Sequence[int] = (),
+                  prior: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> FitResult:
     """Least-squares fit of ``st``'s parameters over drives ``idx`` (all by default); the parameters
     ``fixed`` (indices) stay at their ``x0`` values (their Jacobian columns are not simulated and are
-    zero in the result)."""
+    zero in the result). ``prior``: (indices, means, sds) in place of the structure's own normal priors
+    (:meth:`Structure.prior`), weighted as those are."""
     idx = tuple(range(len(ev.cases))) if idx is None else tuple(idx)
     x0 = st.neutral() if x0 is None else np.asarray(x0, float)
     lo, hi = st.bounds()
@@ -318,7 +320,7 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
     k = n_params_bic(ev, st, idx)
     if st.n_params == 0:
         return _without_parameters(ev, st, idx, n, k, ne)
-    pidx, pmu, psd, pw, prior_jac = _prior_system(st, n, ne)
+    pidx, pmu, psd, pw, prior_jac = _prior_system(st, n, ne, prior)
 
     x0 = np.clip(x0, lo, hi)
 
@@ -363,10 +365,11 @@ def _without_parameters(ev: Evaluator, st: Structure, idx: tuple[int, ...], n: i
                      ne)
 
 
-def _prior_system(st: Structure, n: int, ne: float):
-    """The prior's parameter indices, means and sds, the weight of its residual rows (the data counted at
-    their effective size, :func:`n_effective`) and their Jacobian."""
-    pidx, pmu, psd = st.prior()
+def _prior_system(st: Structure, n: int, ne: float,
+                  prior: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None):
+    """The prior's parameter indices, means and sds (``prior``, or the structure's), the weight of its
+    residual rows (the data counted at their effective size, :func:`n_effective`) and their Jacobian."""
+    pidx, pmu, psd = st.prior() if prior is None else prior
     pw = math.sqrt(n / ne) * st.prior_gain
     prior_jac = np.zeros((len(pidx), st.n_params))
     prior_jac[np.arange(len(pidx)), pidx] = pw / psd
