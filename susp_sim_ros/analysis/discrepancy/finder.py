@@ -1692,7 +1692,8 @@ class DiscrepancyFinder:
         drive with what the other drives tell of it as its prior (:func:`_fold_prior`), the Bayesian update
         of the fold's posterior by the new drive. A value the other drives pin stays at the fold's value, one
         they do not tell is the drive's own calibration within its prior, and the values between are
-        weighed as they are informed: no share at which the rule jumps (:data:`HELD_SHARE`)."""
+        weighed as they are informed: no share at which the rule jumps (:data:`HELD_SHARE`). A fold's
+        ``rmse_after_joint_values_deg_s`` is then its RMSE at the fold's values before that calibration."""
         R = len(ev.cases)
         if R == 1:
             return self._heldout_halves(ev, final)
