@@ -426,7 +426,7 @@ def test_a_fold_calibrates_on_its_drive_with_the_other_drives_information_as_pri
     rng = np.random.default_rng(7)
     psd = np.array([2.0, 0.5])
     st = SimpleNamespace(prior=lambda: (np.array([0, 1]), np.zeros(2), psd), prior_gain=1.0, data_weight=1.0,
-                         names=[CALIBRATION], offsets=np.array([0, 2]))
+                         names=[CALIBRATION], offsets=np.array([0, 2]), span=lambda name: range(0, 2))
     held = np.r_[np.ones(100, bool), np.zeros(400, bool)]
     a, b = rng.normal(size=(2, 100)), rng.normal(size=(2, 400))
 

@@ -584,7 +584,8 @@ def test_the_shape_is_read_against_the_calibration_with_its_far_shifts_undone():
         return CalParam(name, name, "all", None, "1", prior, lo, hi, "test")
 
     informed = [par("damper", 1.0, 0.9, 1.1), par("mass", 1400.0, 1260.0, 1540.0), par("arb", 15e3, 12e3, 18e3)]
-    structure = SimpleNamespace(names=[CALIBRATION, "a_term"], offsets=[0, 3, 4])
+    structure = SimpleNamespace(names=[CALIBRATION, "a_term"], offsets=[0, 3, 4],
+                                span=lambda name: range(0, 3))
     fit = SimpleNamespace(structure=structure, x=np.array([0.75, 1430.0, 17000.0, 42.0]))
     finder = DiscrepancyFinder.__new__(DiscrepancyFinder)   # only the calibration's informed values set
     finder.informed_ = informed

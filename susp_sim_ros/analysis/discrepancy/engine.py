@@ -68,9 +68,14 @@ class Structure:
     def n_params(self) -> int:
         return int(self.offsets[-1])
 
-    def part(self, x: np.ndarray, name: str) -> np.ndarray:
+    def span(self, name: str) -> range:
+        """The indices of term ``name``'s parameters in the joint vector."""
         k = self.names.index(name)
-        return x[self.offsets[k]:self.offsets[k + 1]]
+        return range(int(self.offsets[k]), int(self.offsets[k + 1]))
+
+    def part(self, x: np.ndarray, name: str) -> np.ndarray:
+        s = self.span(name)
+        return x[s.start:s.stop]
 
     def neutral(self) -> np.ndarray:
         return np.concatenate([c.neutral() for c in self.cands]) if self.cands else np.zeros(0)
@@ -116,9 +121,9 @@ class Structure:
         file's); ``x`` itself when the structure has no ``name``."""
         if name not in self.names:
             return x
-        k = self.names.index(name)
+        s = self.span(name)
         out = np.array(x, float, copy=True)
-        out[self.offsets[k]:self.offsets[k + 1]] = self.cands[k].neutral()
+        out[s.start:s.stop] = self.cands[self.names.index(name)].neutral()
         return out
 
     def embed(self, other: "Structure", x_other: np.ndarray) -> np.ndarray:

@@ -376,7 +376,7 @@ class DiscrepancyFinder:
         st = fit.structure
         if CALIBRATION not in st.names or not self.informed_:
             return []
-        a = int(st.offsets[st.names.index(CALIBRATION)])
+        a = st.span(CALIBRATION).start
         out = []
         for i, p in enumerate(self.informed_):
             z = float((fit.x[a + i] - p.prior) / p.sd)
@@ -392,7 +392,7 @@ class DiscrepancyFinder:
         st = fit.structure
         if CALIBRATION not in st.names or fit.jac is None:
             return {}
-        a = int(st.offsets[st.names.index(CALIBRATION)])
+        a = st.span(CALIBRATION).start
         cal = range(a, a + len(self.informed_))
         edges = np.cumsum([0] + [self.evaluator_.n_res[q] for q in fit.idx])
         rows_of: dict[str, np.ndarray] = {}
@@ -444,7 +444,7 @@ class DiscrepancyFinder:
             if not cand.physical(st.part(f.x, name)):
                 continue
             seen.add(name)
-            a = int(st.offsets[st.names.index(CALIBRATION)])
+            a = st.span(CALIBRATION).start
             t0, t1 = int(st.offsets[k]), int(st.offsets[k + 1])
             # the term's size against the value, its law's shape as fitted (an exponent free beside them
             # would share the covariance and hide the trade of size against value)
@@ -524,7 +524,7 @@ class DiscrepancyFinder:
                 continue
             seen.add(name)
             labels = st.labels()
-            a = int(st.offsets[st.names.index(CALIBRATION)]) if CALIBRATION in st.names else -1
+            a = st.span(CALIBRATION).start if CALIBRATION in st.names else -1
             own_values: list[str] = []
             for h in owners:
                 own_values += [f"{self.informed_[j - a].field}:{self.informed_[j - a].where}"
@@ -683,7 +683,7 @@ class DiscrepancyFinder:
         st, x = self.result_.structure, self.result_.x
         cand = st.cands[st.names.index(name)]
         keys = [self.consider_keys_[self.consider_names_.index(r)] for r in rivals]
-        a, b = st.offsets[st.names.index(name)], st.offsets[st.names.index(name) + 1]
+        a, b = st.span(name).start, st.span(name).stop
         entry = self._competing_entry(cand, rivals, [f"a measurement of {', '.join(keys)} (held at the vehicle "
                                                      "file's value)"] if keys else [], why)
         entry.update({"value": {p.name: float(v) for p, v in zip(cand.params, x[a:b])},
@@ -1065,7 +1065,7 @@ class DiscrepancyFinder:
         cand = force_shape.learned_candidate(sel, progressive=False)
         st = cur.structure.with_(cand)
         x0 = st.embed(cur.structure, cur.x)
-        a = st.offsets[st.names.index(cand.name)]
+        a = st.span(cand.name).start
         lo, hi = st.bounds()
         k = len(sel.coef)
         x0[a:a + k] = np.clip(sel.coef, lo[a:a + k], hi[a:a + k])
@@ -1547,7 +1547,7 @@ class DiscrepancyFinder:
         x2 = np.concatenate([np.concatenate([st.part(x, CALIBRATION) if has_cal else np.zeros(0),
                                              [p.prior for p in held]]) if n == CALIBRATION else st.part(x, n)
                              for n in st2.names])
-        return st2, x2, int(st2.offsets[st2.names.index(CALIBRATION)]) + len(self.informed_)
+        return st2, x2, st2.span(CALIBRATION).start + len(self.informed_)
 
     def _data_weight(self, fit: FitResult) -> tuple[float, dict]:
         """How much the drives may pull the calibration away from its priors, chosen by leave-one-drive-
@@ -1581,8 +1581,7 @@ class DiscrepancyFinder:
         params, informed = self.calibration_params_, self.informed_
         vals = {}
         if informed and CALIBRATION in fit.structure.names:
-            k = fit.structure.names.index(CALIBRATION)
-            a = fit.structure.offsets[k]
+            a = fit.structure.span(CALIBRATION).start
             lo, hi = self._ci95(fit)
             vals = {p.name: (fit.x[a + j], lo[a + j], hi[a + j]) for j, p in enumerate(informed)}
         x_all = np.array([vals.get(p.name, (p.prior,))[0] for p in params])
@@ -1706,12 +1705,14 @@ class DiscrepancyFinder:
         for h in range(R):
             train = tuple(r for r in range(R) if r != h)
             prior = None
-            if final.structure.n_params and train and update:
-                x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV).x
-                own, prior = _fold_prior(final, _drive_rows(ev, final, h), x)
-            elif final.structure.n_params and train:
-                own = _informed_only_by(final, _drive_rows(ev, final, h))
-                x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV, fixed=own).x
+            if final.structure.n_params and train:
+                held = _drive_rows(ev, final, h)
+                if update:
+                    x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV).x
+                    own, prior = _fold_prior(final, held, x)
+                else:
+                    own = _informed_only_by(final, held)
+                    x = fit_structure(ev, final.structure, final.x, train, max_nfev=HELDOUT_NFEV, fixed=own).x
             else:
                 x, own = final.x, []
             x_pred = _recalibrate_on_drive(ev, final.structure, x, h, own, prior)
@@ -1950,17 +1951,14 @@ def _fold_prior(fit: FitResult, held: np.ndarray, x_fold: np.ndarray
     st = fit.structure
     if CALIBRATION not in st.names or fit.jac is None or not len(fit.x):
         return [], None
-    k = st.names.index(CALIBRATION)
-    cal = list(range(int(st.offsets[k]), int(st.offsets[k + 1])))
-    pidx = st.prior()[0]
-    cal = [j for j in cal if j in set(pidx.tolist())]
-    if not cal:
+    span = st.span(CALIBRATION)
+    idx = np.intersect1d(np.arange(span.start, span.stop), st.prior()[0])
+    if not len(idx):
         return [], None
-    info, _, prior_info = _data_information(fit, held)
     pw_t = _training_prior_weight(fit, held)
-    idx = np.asarray(cal, np.int64)
+    info, _, prior_info = _data_information(fit, held, pw_t)
     sd = pw_t / np.sqrt(np.maximum(info[idx] + prior_info[idx], 1e-300))
-    return cal, (idx, np.asarray(x_fold, float)[idx], sd)
+    return idx.tolist(), (idx, np.asarray(x_fold, float)[idx], sd)
 
 
 def _held_in_both(a: FitResult, b: FitResult, held: np.ndarray) -> tuple[list[int], list[int]]:
