@@ -12,28 +12,18 @@ from susp_sim_ros.analysis.discrepancy import finder as fm
 from susp_sim_ros.analysis.discrepancy import force_shape
 from susp_sim_ros.analysis.discrepancy.calibration import CalParam
 from susp_sim_ros.analysis.discrepancy.candidates import CALIBRATION, PHYSICS, CandParam, Candidate
+from susp_sim_ros.analysis.discrepancy.engine import Structure
 from susp_sim_ros.analysis.discrepancy.report import structure_level, verdict
 
 RATE = CalParam("wheel_rate", "suspension.wheel_rate", "rear", 1, "N/m", 24000.0, 23960.0, 24040.0, "test")
 EMPTY = CalParam("damper_measured_empty", "damper_measured_empty", "rear", 1, "-", 1.0, 0.7, 1.3, "test", True)
 
 
-class _Structure:
-    """The parts of a fitted structure the competition reads: calibration (2 values), then one term."""
-
-    def __init__(self, term: Candidate):
-        cal = Candidate(CALIBRATION, "calibration", "calibration",
-                        (CandParam("k", "N/m", 0.0, -1e5, 1e5, 1.0), CandParam("e", "-", 0.0, -1.0, 1.0, 0.1)))
-        self.cands = (cal, term)
-        self.names = (CALIBRATION, term.name)
-        self.offsets = np.array([0, 2, 3])
-
-    def part(self, x, name):
-        k = self.names.index(name)
-        return x[self.offsets[k]:self.offsets[k + 1]]
-
-    def neutral(self):
-        return np.zeros(3)
+def _structure(term: Candidate) -> Structure:
+    """The fitted structure the competition reads: calibration (2 values), then one term."""
+    cal = Candidate(CALIBRATION, "calibration", "calibration",
+                    (CandParam("k", "N/m", 0.0, -1e5, 1e5, 1.0), CandParam("e", "-", 0.0, -1.0, 1.0, 0.1)))
+    return Structure([cal, term])
 
 
 def _trial(name: str, decoys_beaten: bool, seed: int = 0):
@@ -46,7 +36,7 @@ def _trial(name: str, decoys_beaten: bool, seed: int = 0):
     term = Candidate(name, PHYSICS, "spring-like (grows with the deflection), rear axle",
                      (CandParam("c_deflection", "N", 0.0, -1e4, 1e4, 10.0),), axle_of=("rear",),
                      reveal_with="drives that excite the dependences it names: deflection:rear")
-    f = SimpleNamespace(structure=_Structure(term), x=np.array([24000.0, 1.0, 100.0]), jac=jac,
+    f = SimpleNamespace(structure=_structure(term), x=np.array([24000.0, 1.0, 100.0]), jac=jac,
                         information=lambda *a: jac.T @ jac, bic=900.0, rss=300.0, n=n)
     before = SimpleNamespace(bic=1000.0, rss=600.0, n=n)
     checks = {"decoys_beaten": decoys_beaten, "passed": False, "heldout_gain_fraction_of_excess": -0.2}
