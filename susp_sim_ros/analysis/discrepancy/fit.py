@@ -30,6 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
+from ...model.params import load_settings
 from .data import segment_starts
 from .engine import Evaluator, Structure
 
@@ -287,14 +288,33 @@ class FitResult:
         return self.x - 1.96 * se, self.x + 1.96 * se
 
 
+def broyden_update(J: np.ndarray, s: np.ndarray, y: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """Broyden's rank-one secant update of the Jacobian ``J`` for the step ``s`` that changed the residual by
+    ``y``: the least change of ``J`` in the norm scaled by ``scale`` (each parameter's typical step) with
+    ``J_new s = y`` (Broyden, Math. Comp. 19, 1965; Dennis and Schnabel, *Numerical Methods for Unconstrained
+    Optimization and Nonlinear Equations*, 1996, sec. 8.1). Columns of parameters the step leaves alone stay."""
+    w = s / scale ** 2
+    sw = float(s @ w)
+    if not sw > 0.0:
+        return J
+    return J + np.outer(y - J @ s, w / sw)
+
+
 def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
                   idx: Sequence[int] | None = None, max_nfev: int = 30,
                   fixed: Sequence[int] = (),
-                  prior: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> FitResult:
+                  prior: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+                  broyden_updates: int | None = None) -> FitResult:
     """Least-squares fit of ``st``'s parameters over drives ``idx`` (all by default); the parameters
     ``fixed`` (indices) stay at their ``x0`` values (their Jacobian columns are not simulated and are
     zero in the result). ``prior``: (indices, means, sds) in place of the structure's own normal priors
-    (:meth:`Structure.prior`), weighted as those are."""
+    (:meth:`Structure.prior`), weighted as those are. ``broyden_updates``: how many of the solver's
+    Jacobians after a simulated one are Broyden updates of it (:func:`broyden_update`, from the residuals
+    the solver has at its accepted points) instead of simulated; 0: every one simulated; default:
+    ``fit.broyden_updates`` of ``config/discrepancy.yaml``. The fit's own Jacobian (``FitResult.jac``, which
+    intervals and the held-out checks read) is always simulated."""
+    if broyden_updates is None:
+        broyden_updates = int(load_settings("discrepancy.yaml")["fit.broyden_updates"])
     idx = tuple(range(len(ev.cases))) if idx is None else tuple(idx)
     x0 = st.neutral() if x0 is None else np.asarray(x0, float)
     lo, hi = st.bounds()
@@ -302,17 +322,24 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
     # the last point asked for: its key, raw and debiased residual, Jacobian once asked for. The
     # Jacobian is simulated only where the solver asks for it (accepted steps), not at rejected trials.
     last: dict = {}
+    # the point of the last Jacobian handed out: x, residual, Jacobian and the updates since a simulated one
+    prev: dict = {}
 
-    def resid(x, with_jac: bool = True):
+    def resid(x, with_jac: bool = True, simulated: bool = False):
         key = x.tobytes()
         if last.get("key") != key:
             last.clear()
-            last.update(key=key, raw=raw_residuals(ev, st, x[None], idx)[0], J=None)
+            last.update(key=key, raw=raw_residuals(ev, st, x[None], idx)[0], J=None, simulated=False)
             last["r"] = debias(ev, last["raw"], idx) if st.bias else last["raw"]
-        if with_jac and last["J"] is None:
-            J = np.zeros((last["raw"].size, st.n_params))
-            _, J[:, free] = fd_jacobian(ev, st, x, idx, r0=last["raw"], cols=free)
-            last["J"] = debias(ev, J, idx) if st.bias else J
+        if with_jac and (last["J"] is None or (simulated and not last["simulated"])):
+            if not simulated and prev and prev["updates"] < broyden_updates:
+                last["J"] = broyden_update(prev["J"], x - prev["x"], last["r"] - prev["r"], x_scale)
+                updates = prev["updates"] + 1
+            else:
+                J = np.zeros((last["raw"].size, st.n_params))
+                _, J[:, free] = fd_jacobian(ev, st, x, idx, r0=last["raw"], cols=free)
+                last["J"], last["simulated"], updates = (debias(ev, J, idx) if st.bias else J), True, 0
+            prev.update(x=x.copy(), r=last["r"], J=last["J"], updates=updates)
         return last["r"], last["J"]
 
     n = sum(ev.n_res[r] for r in idx)
@@ -348,7 +375,7 @@ def fit_structure(ev: Evaluator, st: Structure, x0: np.ndarray | None = None,
                         x_scale=x_scale[free], method="trf",
                         max_nfev=max_nfev, xtol=1e-4, ftol=1e-6)
     x = full_x(sol.x)
-    r, J = resid(x)
+    r, J = resid(x, simulated=True)
     rss = float(r @ r)
     return FitResult(st, x, rss, n, k, bic(rss, n, k, ne), bool(sol.success), str(sol.message),
                      int(sol.nfev), r, J, idx, ne)
