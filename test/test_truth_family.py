@@ -242,6 +242,18 @@ def test_the_recorded_structure_level_is_measured_on_development_forms():
     assert "development" in src and "structure_level.py" in src and "2026-" in src
 
 
+def test_the_recorded_structure_level_was_measured_under_the_fold_rule_as_shipped():
+    """The line is what structure alone leaves held out, and a fold's rule moves that (1.167 with a value held at
+    a share, 1.151 with the fold's posterior as prior): config/discrepancy.yaml's line names the rule it was
+    measured under, and it is the rule shipped beside it."""
+    import yaml
+    cfg = yaml.safe_load((ROOT / "config" / "discrepancy.yaml").read_text())
+    rule_on = cfg["heldout"]["fold_prior_from_other_drives"]["value"]
+    src = cfg["verdict"]["structure_level_over_noise"]["source"]
+    assert isinstance(rule_on, bool)
+    assert ("heldout.fold_prior_from_other_drives true" in src) == rule_on
+
+
 # ---- issue 26: the hidden force exposed, physics no candidate lists -----------------------------------
 UNLISTED = ("unlisted/damper_blow_off", "unlisted/arb_free_play", "unlisted/stribeck_friction",
             "unlisted/load_friction", "unlisted/damper_valve_stop_rear", "unlisted/load_friction_front",
