@@ -445,7 +445,8 @@ class DiscrepancyFinder:
                 continue
             seen.add(name)
             a = st.span(CALIBRATION).start
-            t0, t1 = int(st.offsets[k]), int(st.offsets[k + 1])
+            term = st.span(name)
+            t0, t1 = term.start, term.stop
             # the term's size against the value, its law's shape as fitted (an exponent free beside them
             # would share the covariance and hide the trade of size against value)
             gains = cand.gain_indices
@@ -683,10 +684,9 @@ class DiscrepancyFinder:
         st, x = self.result_.structure, self.result_.x
         cand = st.cands[st.names.index(name)]
         keys = [self.consider_keys_[self.consider_names_.index(r)] for r in rivals]
-        a, b = st.span(name).start, st.span(name).stop
         entry = self._competing_entry(cand, rivals, [f"a measurement of {', '.join(keys)} (held at the vehicle "
                                                      "file's value)"] if keys else [], why)
-        entry.update({"value": {p.name: float(v) for p, v in zip(cand.params, x[a:b])},
+        entry.update({"value": {p.name: float(v) for p, v in zip(cand.params, st.part(x, name))},
                       "effect": eff.as_json()})
         return [name], [entry], {name: why + ": not named"}
 
