@@ -13,7 +13,7 @@ import math
 import weakref
 
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 from numba import get_num_threads
@@ -72,6 +72,11 @@ class Structure:
         """The indices of term ``name``'s parameters in the joint vector."""
         k = self.names.index(name)
         return range(int(self.offsets[k]), int(self.offsets[k + 1]))
+
+    def slices(self) -> Iterator[tuple[Candidate, slice]]:
+        """Each term with the slice of its parameters in the joint vector, in order."""
+        for k, c in enumerate(self.cands):
+            yield c, slice(int(self.offsets[k]), int(self.offsets[k + 1]))
 
     def part(self, x: np.ndarray, name: str) -> np.ndarray:
         s = self.span(name)
@@ -247,9 +252,9 @@ class Evaluator:
         idx = range(len(self.cases)) if idx is None else idx
         P = self.Pn[list(idx)].copy()
         P0 = P.copy()
-        for k, c in enumerate(st.cands):
+        for c, part in st.slices():
             assert c.apply is not None  # every library and calibration candidate has one
-            c.apply(P, P0, x[st.offsets[k]:st.offsets[k + 1]], self.model)
+            c.apply(P, P0, x[part], self.model)
         return P
 
     # -- simulation ---------------------------------------------------------------------------------

@@ -439,8 +439,7 @@ class DiscrepancyFinder:
             if name in seen or CALIBRATION not in st.names or f.jac is None \
                     or (name == force_shape.TERM and not checks.get("decoys_beaten")):
                 continue
-            k = st.names.index(name)
-            cand = st.cands[k]
+            cand = st.cands[st.names.index(name)]
             if not cand.physical(st.part(f.x, name)):
                 continue
             seen.add(name)
@@ -506,11 +505,10 @@ class DiscrepancyFinder:
                     or checks.get("heldout_gain_fraction_of_excess", 1.0) >= MIN_HELDOUT_GAIN \
                     or checks.get("selected_in_fraction_of_refits", 0.0) < MIN_STABLE:
                 continue
-            k = st.names.index(name)
-            cand = st.cands[k]
+            cand = st.cands[st.names.index(name)]
             if not cand.physical(st.part(f.x, name)):
                 continue
-            levels = [int(st.offsets[k]) + j for j in cand.gain_indices]
+            levels = [st.span(name)[j] for j in cand.gain_indices]
             owners: dict[int, list[int]] = {}
             sq_old = sq_new = n_held = 0.0
             for h in range(R):
@@ -631,11 +629,11 @@ class DiscrepancyFinder:
         lo, hi = self.ci95_()
         lo_d, hi_d = self._ci95(self.result_, consider=False)
         drop, competing = [], []
-        for k, name in enumerate(st.names):
-            cand = BY_NAME.get(name)
+        for term, part in st.slices():
+            name, cand = term.name, BY_NAME.get(term.name)
             if cand is None or cand.kind != MEASUREMENT:
                 continue
-            a, b = st.offsets[k], st.offsets[k + 1]
+            a, b = part.start, part.stop
             if cand.effect_in_interval(lo_d[a:b], hi_d[a:b]):
                 drop.append(name)
             elif cand.effect_in_interval(lo[a:b], hi[a:b]):
@@ -707,10 +705,10 @@ class DiscrepancyFinder:
             if Jh.size and Jh.shape[0] == fit.jac.shape[0] else None
         folds = [f["params"] for f in (self.heldout_ or {}).get("folds", []) if len(f.get("params", [])) == len(fit.x)]
         out = {}
-        for k, cand in enumerate(st.cands):
+        for cand, part in st.slices():
             if cand.kind != PHYSICS or not cand.params:
                 continue
-            a, b = st.offsets[k], st.offsets[k + 1]
+            a, b = part.start, part.stop
             x0 = fit.x.copy()
             x0[a:b] = cand.neutral()
             r0 = raw_residuals(ev, st, x0[None], fit.idx)[0]

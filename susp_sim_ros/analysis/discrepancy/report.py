@@ -59,12 +59,12 @@ def term_entries(f) -> list[dict]:
     out = []
     acc = {a["name"]: a for a in f.accepted_}
     competing = {c["name"] for c in getattr(f, "competing_", [])}
-    for k, name in enumerate(st.names):
-        cand = st.cands[k]
+    for cand, part in st.slices():
+        name = cand.name
         if (name not in BY_NAME and name != force_shape.TERM) or name in competing:
             continue  # the calibration has its own table; a competing entry is listed as not identifiable
-        a, b = st.offsets[k], st.offsets[k + 1]
-        x = res.x[a:b]
+        a, b = part.start, part.stop
+        x = res.x[part]
         params = {p.name: _num(v) for p, v in zip(cand.params, x)}
         ci = {p.name: [_num(max(l, p.interval_floor(v))), _num(h)]
               for p, v, l, h in zip(cand.params, x, lo[a:b], hi[a:b])}
