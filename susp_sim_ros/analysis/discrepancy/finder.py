@@ -508,7 +508,8 @@ class DiscrepancyFinder:
             cand = st.cands[st.names.index(name)]
             if not cand.physical(st.part(f.x, name)):
                 continue
-            levels = [st.span(name)[j] for j in cand.gain_indices]
+            span = st.span(name)
+            levels = [span[j] for j in cand.gain_indices]
             owners: dict[int, list[int]] = {}
             sq_old = sq_new = n_held = 0.0
             for h in range(R):
@@ -633,18 +634,17 @@ class DiscrepancyFinder:
             name, cand = term.name, BY_NAME.get(term.name)
             if cand is None or cand.kind != MEASUREMENT:
                 continue
-            a, b = part.start, part.stop
-            if cand.effect_in_interval(lo_d[a:b], hi_d[a:b]):
+            if cand.effect_in_interval(lo_d[part], hi_d[part]):
                 drop.append(name)
-            elif cand.effect_in_interval(lo[a:b], hi[a:b]):
-                rivals = self._competitors(a, b)
+            elif cand.effect_in_interval(lo[part], hi[part]):
+                rivals = self._competitors(part.start, part.stop)
                 keys = [self.consider_keys_[self.consider_names_.index(r)] for r in rivals]
                 competing.append({
                     "name": name, "competes_with": rivals,
                     "reveal_with": f"a measurement of {', '.join(keys) or 'the held vehicle values'} (held at the "
                                    f"vehicle file's value; the drives do not pin it), then {cand.reveal_with}",
-                    "value": {p.name: float(v) for p, v in zip(cand.params, x[a:b])},
-                    "ci95": {p.name: [float(lo[a + j]), float(hi[a + j])] for j, p in enumerate(cand.params)},
+                    "value": {p.name: float(v) for p, v in zip(cand.params, x[part])},
+                    "ci95": {p.name: [float(l), float(h)] for p, l, h in zip(cand.params, lo[part], hi[part])},
                     "why": f"its 95 % interval holds no effect once {', '.join(rivals) or 'the held values'} "
                            "may lie anywhere in their priors: the drives cannot tell the two apart"})
         return drop, competing
@@ -708,16 +708,15 @@ class DiscrepancyFinder:
         for cand, part in st.slices():
             if cand.kind != PHYSICS or not cand.params:
                 continue
-            a, b = part.start, part.stop
             x0 = fit.x.copy()
-            x0[a:b] = cand.neutral()
+            x0[part] = cand.neutral()
             r0 = raw_residuals(ev, st, x0[None], fit.idx)[0]
             if st.bias:
                 r0 = debias(ev, r0, fit.idx)
-            jk = np.array(folds)[:, a:b] if len(folds) >= 3 else None
-            out[cand.name] = term_effect(r0 - fit.residual, fit.jac[:, a:b], cov[a:b, a:b],
-                                         cons[a:b] if cons is not None and cons.shape[0] == len(fit.x) else None,
-                                         jk, fit.x[a:b], None if cov_free is None else cov_free[a:b, a:b])
+            jk = np.array(folds)[:, part] if len(folds) >= 3 else None
+            out[cand.name] = term_effect(r0 - fit.residual, fit.jac[:, part], cov[part, part],
+                                         cons[part] if cons is not None and cons.shape[0] == len(fit.x) else None,
+                                         jk, fit.x[part], None if cov_free is None else cov_free[part, part])
         return out
 
     def _competitors(self, a: int, b: int) -> list[str]:

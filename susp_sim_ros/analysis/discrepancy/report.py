@@ -63,11 +63,10 @@ def term_entries(f) -> list[dict]:
         name = cand.name
         if (name not in BY_NAME and name != force_shape.TERM) or name in competing:
             continue  # the calibration has its own table; a competing entry is listed as not identifiable
-        a, b = part.start, part.stop
         x = res.x[part]
         params = {p.name: _num(v) for p, v in zip(cand.params, x)}
         ci = {p.name: [_num(max(l, p.interval_floor(v))), _num(h)]
-              for p, v, l, h in zip(cand.params, x, lo[a:b], hi[a:b])}
+              for p, v, l, h in zip(cand.params, x, lo[part], hi[part])}
         ev = dict(acc.get(name, {}))
         ev.pop("name", None)
         ev.update({"kind": cand.kind, "meaning": cand.meaning, "n_params": cand.n_params,
@@ -90,7 +89,7 @@ def term_entries(f) -> list[dict]:
             cand.meaning if sel is None else _learned_description(f, res, sel, x, params))
         ev["statement"] = statement(cand, params, ev, f, described)
         selected = sel.axles if sel is not None else ()
-        entry = {"name": name, "where": _where(cand, x, lo[a:b], hi[a:b], selected) if cand.n_params else "all",
+        entry = {"name": name, "where": _where(cand, x, lo[part], hi[part], selected) if cand.n_params else "all",
                  "params": params, "ci95": ci, "evidence": ev}
         if effect is not None:  # interface.md: the term's effect as a whole (issue 24, item 3)
             entry["effect"] = ev["effect"]
