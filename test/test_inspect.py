@@ -29,6 +29,22 @@ def test_bundled_bump_crossings_read_as_their_states(name, front, rear):
     assert res.elapsed_s_ < 30.0  # 2 s alone on this machine; the 10 s target is checked in the benchmark
 
 
+def test_the_oil_fit_takes_its_jacobian_updates_from_the_inspection_settings(monkeypatch):
+    """The oil fit's Broyden updates are the inspection's own setting (its figures were measured with every
+    Jacobian simulated), never the diagnosis's fit.broyden_updates (config/discrepancy.yaml), whichever that is."""
+    from susp_sim_ros.analysis.inspection import estimate
+    seen = []
+    real = estimate.fit_structure
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs.get("broyden_updates"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(estimate, "fit_structure", spy)
+    inspect_drives([BAGS / "bump_crossing_rear_empty.mcap"])
+    assert seen and set(seen) == {CFG["estimator"]["broyden_updates"]} == {0}
+
+
 @pytest.fixture(scope="module")
 def truth_paths(tmp_path_factory):
     """Independent-simulator drives: a perturbed car (within the class ranges) crossing a bump at 9 km/h

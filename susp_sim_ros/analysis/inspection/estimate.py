@@ -403,16 +403,22 @@ def _oil_groups(ident: dict) -> list[tuple[str, tuple[int, ...]]]:
     return groups
 
 
+def _broyden_updates(est: dict) -> int:
+    """The oil fit's Broyden updates per simulated Jacobian (``estimator.broyden_updates``; a settings file
+    of before that key: 0, every Jacobian simulated, as the fit always ran then)."""
+    return int(est.get("broyden_updates", 0))
+
+
 def _fit_oil(model: Model, ev: Evaluator, cal, groups: list, est: dict) -> tuple[Structure, FitResult, np.ndarray]:
     """The maximum a posteriori fit of nuisances, oil ``groups`` [-, 0..1] and sensor bias, and its
     covariance (with the ``consider`` parameters' share when configured); without any oil group the
     nuisances alone, one evaluation (nothing to estimate, the fit only supplies the structure)."""
     if groups:
         st = oil_structure(model, cal, groups, est)
-        fit = fit_structure(ev, st, max_nfev=int(est["max_nfev"]))
+        fit = fit_structure(ev, st, max_nfev=int(est["max_nfev"]), broyden_updates=_broyden_updates(est))
     else:
         st = Structure([calibration_candidate(model, cal), "sensor_bias"])
-        fit = fit_structure(ev, st, max_nfev=1)
+        fit = fit_structure(ev, st, max_nfev=1, broyden_updates=_broyden_updates(est))
     cov = fit.covariance()
     if groups and est.get("consider"):
         cov = cov + oil_consider_covariance(ev, fit, cal, nuisance_params(model, est["consider"]))
