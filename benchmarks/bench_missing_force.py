@@ -19,6 +19,7 @@ import sys
 import time
 from pathlib import Path
 
+import susp_sim_ros  # noqa: F401  before numpy: idle worker threads sleep (susp_sim_ros/idle_threads.py)
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # truth_generators/ beside the package

@@ -20,6 +20,7 @@ import platform
 import sys
 import time
 
+import susp_sim_ros  # noqa: F401  before numpy: idle worker threads sleep (susp_sim_ros/idle_threads.py)
 import numpy as np
 
 from susp_sim_ros.model import Model, simulate, simulate_batch

@@ -44,6 +44,7 @@ import threading
 import time
 from pathlib import Path
 
+import susp_sim_ros  # noqa: F401  before numpy: idle worker threads sleep (susp_sim_ros/idle_threads.py)
 import numpy as np
 
 # the host-stall probe lives beside the benchmarks (not installed); this file may be loaded from anywhere

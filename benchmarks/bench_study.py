@@ -44,6 +44,7 @@ import time
 from pathlib import Path
 
 import numba
+import susp_sim_ros  # noqa: F401  before numpy: idle worker threads sleep (susp_sim_ros/idle_threads.py)
 import numpy as np
 import yaml
 

@@ -30,6 +30,7 @@ import json
 import math
 import sys
 
+import susp_sim_ros  # noqa: F401  before numpy: idle worker threads sleep (susp_sim_ros/idle_threads.py)
 import numpy as np
 from scipy import stats
 

@@ -38,6 +38,12 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from . import idle_threads
+
+# before numpy and numba load their thread pools: idle worker threads sleep instead of spinning (the same
+# numbers, half the diagnosis's run time on two cores; idle_threads.py says why)
+idle_threads.apply()
+
 __version__ = "0.1.0"
 
 #: public name -> module that defines it

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+import susp_sim_ros  # noqa: F401  before any test module imports numpy: its idle-thread settings (idle_threads.py)
+
 # the repository root: the truth generators (truth_generators/) and benchmarks/ are not installed
 ROOT = str(Path(__file__).resolve().parents[1])
 if ROOT not in sys.path:

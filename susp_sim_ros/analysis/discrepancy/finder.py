@@ -637,7 +637,7 @@ class DiscrepancyFinder:
             if cand.effect_in_interval(lo_d[part], hi_d[part]):
                 drop.append(name)
             elif cand.effect_in_interval(lo[part], hi[part]):
-                rivals = self._competitors(part.start, part.stop)
+                rivals = self._competitors(part)
                 keys = [self.consider_keys_[self.consider_names_.index(r)] for r in rivals]
                 competing.append({
                     "name": name, "competes_with": rivals,
@@ -719,12 +719,13 @@ class DiscrepancyFinder:
                                          jk, fit.x[part], None if cov_free is None else cov_free[part, part])
         return out
 
-    def _competitors(self, a: int, b: int) -> list[str]:
-        """The held values (``PARAM:where``) that bring most of the consider variance of parameters a..b."""
+    def _competitors(self, part: slice) -> list[str]:
+        """The held values (``PARAM:where``) that bring most of the consider variance of the parameters in
+        ``part`` (a term's slice of the joint vector)."""
         contrib = getattr(self, "consider_contrib_", None)
         if contrib is None or not contrib.size:
             return []
-        return self._strongest_held(contrib[a:b].sum(axis=0))
+        return self._strongest_held(contrib[part].sum(axis=0))
 
     def _strongest_held(self, share: np.ndarray) -> list[str]:
         """The held values (``PARAM:where``) whose ``share`` (one per held value) make up at least

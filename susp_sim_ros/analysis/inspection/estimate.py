@@ -413,12 +413,13 @@ def _fit_oil(model: Model, ev: Evaluator, cal, groups: list, est: dict) -> tuple
     """The maximum a posteriori fit of nuisances, oil ``groups`` [-, 0..1] and sensor bias, and its
     covariance (with the ``consider`` parameters' share when configured); without any oil group the
     nuisances alone, one evaluation (nothing to estimate, the fit only supplies the structure)."""
+    updates = _broyden_updates(est)
     if groups:
         st = oil_structure(model, cal, groups, est)
-        fit = fit_structure(ev, st, max_nfev=int(est["max_nfev"]), broyden_updates=_broyden_updates(est))
+        fit = fit_structure(ev, st, max_nfev=int(est["max_nfev"]), broyden_updates=updates)
     else:
         st = Structure([calibration_candidate(model, cal), "sensor_bias"])
-        fit = fit_structure(ev, st, max_nfev=1, broyden_updates=_broyden_updates(est))
+        fit = fit_structure(ev, st, max_nfev=1, broyden_updates=updates)
     cov = fit.covariance()
     if groups and est.get("consider"):
         cov = cov + oil_consider_covariance(ev, fit, cal, nuisance_params(model, est["consider"]))
