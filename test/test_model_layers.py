@@ -17,7 +17,8 @@ def test_core_does_not_import_rclpy(module):
     assert r.returncode == 0, f"{module} pulled in rclpy (rc {r.returncode}): {r.stderr[-500:]}"
 
 
-#: the layers of docs/architecture.md, lowest first; top-level modules (errors, progress) are shared by all
+#: the layers of docs/architecture.md, lowest first; top-level modules (errors, progress,
+#: idle_threads) are shared by all
 LAYERS = {"model": 0, "io": 1, "control": 2, "runtime": 3, "analysis": 4, "cli": 5, "ros": 5}
 
 
@@ -72,7 +73,11 @@ def test_no_import_cycle_between_modules():
 
 
 def _layer(module: str) -> int:
+    """The layer of a module; the package itself (its ``__init__``, which imports only top-level modules
+    eagerly and re-exports the layers lazily) and the top-level modules are 0, shared by all."""
     parts = module.split(".")
+    if len(parts) < 2:
+        return 0
     return LAYERS.get(parts[1], 0) if len(parts) > 2 or parts[1] in LAYERS else 0
 
 
