@@ -41,7 +41,7 @@ from typing import Any
 from . import idle_threads
 
 # before numpy and numba load their thread pools: idle worker threads sleep instead of spinning (the same
-# numbers, half the diagnosis's run time on two cores; idle_threads.py says why)
+# numbers, a third less run time of a diagnosis on two cores; idle_threads.py says why)
 idle_threads.apply()
 
 __version__ = "0.1.0"

@@ -76,9 +76,7 @@ def _layer(module: str) -> int:
     """The layer of a module; the package itself (its ``__init__``, which imports only top-level modules
     eagerly and re-exports the layers lazily) and the top-level modules are 0, shared by all."""
     parts = module.split(".")
-    if len(parts) < 2:
-        return 0
-    return LAYERS.get(parts[1], 0) if len(parts) > 2 or parts[1] in LAYERS else 0
+    return LAYERS.get(parts[1], 0) if len(parts) > 1 else 0
 
 
 def test_no_upward_import_between_layers():
