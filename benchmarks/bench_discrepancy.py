@@ -103,7 +103,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder  # noqa: E402
 from susp_sim_ros.analysis.discrepancy.report import structure_level  # noqa: E402
 from truth_generators.family import FORMS as FORMS_BY_NAME  # noqa: E402
-from truth_generators.family import SPLIT_RECORDED, SPLITS, GeneratorForm, forms, make_case  # noqa: E402
+from truth_generators.family import (SPLIT_RECORDED, SPLITS, GeneratorForm, forms, make_case,  # noqa: E402
+                                     structure_twin)
 from truth_generators.independent_sim import (TruthCar, TruthFriction, TruthHidden,  # noqa: E402
                                                    TruthManeuver, TruthSensor, make_drive, write_drive)
 from susp_sim_ros.io.drive import ImuSeries  # noqa: E402
@@ -511,6 +512,33 @@ def _seed_paired(structure: list[dict], physics: list[dict], within: float) -> d
             "physics_cases_scored_by_seed": len(paired)}
 
 
+def _twin_paired(results: list[dict], within: float) -> dict[str, dict]:
+    """Beside issue 24's count, not instead of it: per split, each physics case against its own structure-only
+    case, the run of its form's structure twin (``truth_generators.family.structure_twin``: the same car, friction,
+    integrator, step, gyro biases and noise, the hidden physics off) at its seed and noise, where that run is among
+    ``results`` (of either split: the twin of a held-out physics form may be a development structure form).
+    ``heldout_over_structure_twin``: the case's held out after / noise over its twin's;
+    ``physics_cases_within_structure_twin`` of ``physics_cases_scored_by_twin`` within ``within``."""
+    runs = {(r["family_form"], int(r["seed"]), r["noise_deg_s"]): r["heldout_after_over_noise"] for r in results
+            if r["effect"] == "none"}
+    out: dict[str, dict] = {}
+    for r in results:
+        form = FORMS_BY_NAME.get(r["family_form"])
+        if form is None or r["effect"] == "none" or not (r["expected_physics"] or r["optional_physics"]):
+            continue
+        twin = structure_twin(form)
+        level = runs.get((twin.name, int(r["seed"]), r["noise_deg_s"])) if twin is not None else None
+        s = out.setdefault(r["split"], {"heldout_over_structure_twin": {}, "structure_twin_of": {}})
+        if level and r["heldout_after_over_noise"] is not None:
+            s["heldout_over_structure_twin"][r["case"]] = r["heldout_after_over_noise"] / level
+            s["structure_twin_of"][r["case"]] = f"{twin.name}#{r['seed']}"
+    for s in out.values():
+        ratios = s["heldout_over_structure_twin"]
+        s["physics_cases_within_structure_twin"] = sum(v <= within for v in ratios.values())
+        s["physics_cases_scored_by_twin"] = len(ratios)
+    return out
+
+
 def summarise_family(results: list[dict]) -> dict:
     """Issue 24's figures over one split's cases: named physics precision / recall, verdicts, terms named on
     structure-only runs, measurement findings whose interval contains zero, and the held-out RMSE after
@@ -727,6 +755,8 @@ def _family_output(family: str, results: list[dict], elapsed_s: float, **extra) 
     names = sorted({r["family_form"] for r in results})
     by_split = {sp: summarise_family([r for r in results if r["split"] == sp]) for sp in SPLITS
                 if any(r["split"] == sp for r in results)}
+    for sp, paired in _twin_paired(results, FAMILY_TARGETS["max_heldout_over_structure_level"]).items():
+        by_split[sp].update(paired)
     return {"family": family, "split_recorded": SPLIT_RECORDED,
             "split": {n: FORMS_BY_NAME[n].split if n in FORMS_BY_NAME else None for n in names},
             "noise_levels_deg_s": sorted({r["noise_deg_s"] for r in results}),
@@ -744,7 +774,9 @@ def _print_family(out: dict) -> None:
               f"{_fmt(s['max_heldout_over_structure_level'])} x level "
               f"({s['max_heldout_over_structure_level_case']}); within 1.05x of it "
               f"{s['physics_cases_within_structure_level']}/{s['physics_cases_scored']} (against the level of "
-              f"their own seed {s['physics_cases_within_seed_structure_level']}/{s['physics_cases_scored_by_seed']})"
+              f"their own seed {s['physics_cases_within_seed_structure_level']}/{s['physics_cases_scored_by_seed']}"
+              + (f", of their structure twin {s['physics_cases_within_structure_twin']}/"
+                 f"{s['physics_cases_scored_by_twin']}" if "physics_cases_scored_by_twin" in s else "") + ")"
               + (f"; unlisted: right leading {s['unlisted_named_with_right_leading_dependence']}/"
                  f"{s['unlisted_forms']}, within 1.1x of the line "
                  f"{_fmt(s['structure_line_heldout_over_noise'], '{:.3f}')} "

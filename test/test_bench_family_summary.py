@@ -77,6 +77,28 @@ def test_the_summary_also_counts_each_physics_case_against_the_structure_runs_of
     assert s["targets_met"]["max_heldout_over_structure_level"] is False   # the target's figure is the pooled one
 
 
+def test_the_output_also_counts_each_physics_case_against_its_structure_twin():
+    """Each physics case against its own structure-only case, the run of its form's structure twin at its seed
+    (``truth_generators.family.structure_twin``), found in either split: held-out ``unlisted/stribeck_friction``
+    #1 at 1.20 against development ``structure/nominal`` #1 at 1.10 is 1.09 x it; its seed 2 has no twin run and
+    is not scored so; ``lateral/other_structure`` has no twin in the family. The target stays on the pooled level."""
+    twin = {**_case("structure/nominal", "none", 1.10), "split": "development"}
+    cases = [twin, _case("structure/tyre_lag_0.25m", "none", 1.0),
+             _case("unlisted/stribeck_friction", "unlisted_force", 1.20, named=["unlisted_force"],
+                   expected=["unlisted_force"], leading_right=True),
+             _case("unlisted/stribeck_friction", "unlisted_force", 1.02, named=["unlisted_force"],
+                   expected=["unlisted_force"], leading_right=True, seed=2),
+             _case("lateral/other_structure", "lateral_force_friction", 1.05, named=["friction_lateral_force"],
+                   expected=["friction_lateral_force"])]
+    out = BENCH.merge_family([("a.json", _run(cases))])
+    s = out["by_split"]["held_out"]
+    assert s["heldout_over_structure_twin"] == pytest.approx({"unlisted/stribeck_friction#1": 1.20 / 1.10})
+    assert s["structure_twin_of"] == {"unlisted/stribeck_friction#1": "structure/nominal#1"}
+    assert s["physics_cases_within_structure_twin"] == 0 and s["physics_cases_scored_by_twin"] == 1
+    assert s["physics_cases_scored"] == 3
+    assert "heldout_over_structure_twin" not in out["by_split"]["development"]   # no physics case there
+
+
 def test_merge_takes_the_later_run_of_a_case_and_re_summarises():
     """Parts of one run made apart are one run; a case re-run after them replaces its earlier result."""
     first = _run([_case("structure/a", "none", 1.1), _case("viscous/x", "viscous", 2.0, verdict_right=False)])

@@ -36,14 +36,20 @@ lies in the span of its values (extra viscous damping in a measured-damper scale
 wheel rates, and some of either in the sprung mass and pitch inertia, which the body IMU sees mostly through
 their ratio to the rates). The corner and body parts give that back, so the total meets the target on seven
 of the twelve case/axle pairs (three with the corner part alone; none lost). The others are
-``xfail(strict=True)`` with their figures and reasons (the target is not loosened). What limits them: on the
-amplitude form the calibration scales sprung mass, pitch inertia, wheel rates and damper scales together by
--7 to -11 % (a common scale the body IMU hardly sees; the tyre rate does not follow it): its corner and
-body sides, 25-60 N band RMS each, cancel to 5-11 N, while the hidden friction is 7-18 N and the estimate's
-sd 18-20 N, so what is left is the size of the hidden force but not its shape. On the viscous front-empty
-front axle the body part (sprung mass +2 %, pitch inertia +4 %) works against the front damper scale's
-part (correlation -0.30 with the hidden force) and the estimate's 11 N band RMS, at its floor, does not make
-up the rest: RMS ratio 0.64.
+``xfail(strict=True)`` with their figures and reasons (the target is not loosened).
+
+What limits them (measured 2026-12-07, ``benchmarks/bench_missing_force.py --family``): the force the base
+model lacks is not the hidden force alone. The forms' **structure twin** (``family.structure_twin``:
+``structure/nominal``, the same car, friction, integrator, gyro biases and noise, the physics off) has an
+oil-empty damper weaker than the vehicle file's (its calibration reads the oil-empty scale 0.88 at the rear,
+0.83 at the front), so on each drive's oil-empty axle the base model lacks a force against the motion:
+0.94 x the amplitude friction's band RMS at the rear of the rear-empty crossing, 2.1 x at the front of the
+front-empty one, correlated -0.90 / -0.84 with it. On the amplitude form the two cancel (the truth's oil-empty
+axle, weaker damper plus extra friction, is about the file's), so what the base model lacks there is not the
+hidden friction, and an exact estimate of it could not meet the target either; on the viscous front-empty front
+axle it takes a third of the size (RMS ratio 0.65). Paired with the twin (the case's force minus the twin's,
+:func:`test_paired_with_its_structure_twin_the_estimate_reads_the_hidden_force`) the estimate reads the hidden
+force on nine of the twelve pairs, every viscous and gas pair among them.
 """
 from __future__ import annotations
 
@@ -52,93 +58,76 @@ import csv
 import numpy as np
 import pytest
 
-from susp_sim_ros.analysis.discrepancy import DiscrepancyFinder
+from benchmarks import bench_missing_force as BMF
 from susp_sim_ros.analysis.discrepancy import missing_force as mf
 from susp_sim_ros.analysis.discrepancy import missing_force_report as mfr
 from truth_generators import family
 
 SEED = 1
-#: the drives where each effect shows most: the oil-empty dampers unmask the hidden force of their axle
-DRIVES = ("bump_rear_empty", "bump_front_empty")
-#: development forms with amplitude friction, extra viscous damping and a gas spring (preload and rate)
-FORMS = ("amplitude/peak_saturating_axle", "viscous/linear", "gas/linear_rate")
-AXLES = ("front_N", "rear_N")
-MIN_CORRELATION = 0.9      # issue 26
-RMS_TOLERANCE = 0.2        # issue 26: estimate RMS within 20 % of the truth's
-_TRADE = ("the calibration scaled sprung mass, pitch inertia, wheel rates and damper scales together ({m}): "
-          "its corner and body sides cancel to {left} band RMS, the estimate sees {est} N (its sd {sd} N)")
+DRIVES = BMF.FAMILY_DRIVES
+FORMS = BMF.FAMILY_FORMS
+AXLES = BMF.AXLES
+AMPLITUDE = "amplitude/peak_saturating_axle"
+#: the structure twin of every form of FORMS (``family.structure_twin``)
+TWIN = "structure/nominal"
+#: the oil-empty axle of each drive
+EMPTY_AXLE = {"bump_rear_empty": "rear_N", "bump_front_empty": "front_N"}
+_TWIN_WHY = ("the structure twin's oil-empty damper is weaker than the file's: on this axle the base model lacks "
+             "{x} x the hidden force's band RMS against the motion, correlation {c} with it")
 #: measured (correlation, RMS ratio base-model total / truth) per form, drive and axle where the target is
-#: not met, in the band, with a reason
+#: not met, in the band, with a reason (2026-12-07, bench_missing_force.py --family)
 SHORT = {
-    ("amplitude/peak_saturating_axle", "bump_rear_empty", "front_N"): (
-        (0.57, 0.99), "hidden extra friction 7 N band RMS; "
-        + _TRADE.format(m="-9.5 / -9.8 / -10 / -10 %", left="5 N", est="4", sd="20")
-        + ": the right size, not the shape"),
-    ("amplitude/peak_saturating_axle", "bump_rear_empty", "rear_N"): (
-        (0.23, 0.52), "hidden extra friction 18 N band RMS; "
-        + _TRADE.format(m="-9.5 / -9.8 / -11 / -11 %", left="8 N", est="5", sd="18")),
-    ("amplitude/peak_saturating_axle", "bump_front_empty", "front_N"): (
-        (-0.54, 1.25), "hidden extra friction 10 N band RMS; "
-        + _TRADE.format(m="-7 / -7 / -8 / -14 %", left="11 N (anti-correlated)", est="5", sd="20")),
-    ("amplitude/peak_saturating_axle", "bump_front_empty", "rear_N"): (
-        (0.79, 0.88), "hidden extra friction 11 N band RMS; "
-        + _TRADE.format(m="-7 / -7 / -8 / -6 %", left="7 N", est="6", sd="18")
-        + ": size right, correlation short"),
+    (AMPLITUDE, "bump_rear_empty", "front_N"): (
+        (0.65, 1.01), "hidden extra friction 7 N band RMS, the size of the estimate's floor; the twin leaves as much "
+        "uncorrelated with it (1.03 x, correlation -0.07)"),
+    (AMPLITUDE, "bump_rear_empty", "rear_N"): (
+        (0.28, 0.48), "hidden extra friction 18 N band RMS; " + _TWIN_WHY.format(x="0.94", c="-0.90")
+        + ": the two cancel"),
+    (AMPLITUDE, "bump_front_empty", "front_N"): (
+        (-0.52, 1.04), "hidden extra friction 10 N band RMS; " + _TWIN_WHY.format(x="2.10", c="-0.84")
+        + ": what the base model lacks is against the friction"),
+    (AMPLITUDE, "bump_front_empty", "rear_N"): (
+        (0.80, 1.04), "hidden extra friction 11 N band RMS: size right, correlation short; the twin leaves 0.38 x "
+        "(correlation -0.12)"),
     ("viscous/linear", "bump_front_empty", "front_N"): (
-        (0.96, 0.64), "shape right, size short: the front oil-empty damper scale 1.27 takes 0.72 of the hidden "
-        "damping, the body part (sprung mass +2 %, pitch inertia +4 %) works against it (correlation -0.30), "
-        "corner and body parts together 0.58; the estimate adds 11 N band RMS, at its floor"),
+        (0.96, 0.65), "shape right, size short: " + _TWIN_WHY.format(x="0.37", c="-0.86")
+        + " (paired with the twin 0.95 / 1.00)"),
 }
-
-
-def _fit(form_name: str, drive: str, calibrate: bool = True):
-    """The finder fitted on ``drive`` of the form's case, its drive's :class:`~.missing_force_report.DriveForce`
-    (with the calibration's corner and body parts) and the hidden force per axle (n, 2) on the estimate's grid."""
-    form = family.FORMS[form_name]
-    recording = dict(family.make_case(form, SEED))[drive]
-    f = DiscrepancyFinder(variant=form.base, heldout=False, max_steps=0, calibrate=calibrate).fit([recording])
-    (c,) = f.cases_
-    d = mfr.estimate_drives(f, f.calibrated_fit_, calibration=True)[c.name]
-    truth = family.case_truth(form, SEED, drive)
-    t = d.est.t + c.t0_ns * 1e-9                        # the estimate's grid on the truth's clock
-    h = np.column_stack([np.interp(t, truth.t, truth.hidden[:, i]) for i in range(4)])
-    return f, d, np.column_stack([h[:, 0] + h[:, 1], h[:, 2] + h[:, 3]])   # FL+FR, RL+RR
-
-
-def _figures(d, hidden: np.ndarray) -> dict[str, dict[str, tuple[float, float]]]:
-    """(correlation, RMS ratio part / truth) per part (``estimate``: against the calibrated model,
-    ``calibration``: the calibration's corner part, ``body``: its body part, ``base_total``: the three
-    together) and axle, band-passed."""
-    dt = float(d.est.t[1] - d.est.t[0])
-    b, v = mf.band_passed(hidden, dt), d.est.valid
-    out = {}
-    for part, x in (("estimate", d.est.force), ("calibration", d.calibration), ("body", d.body),
-                    ("base_total", d.base_total)):
-        a = mf.band_passed(x[:, :2], dt)
-        out[part] = {ch: (float(np.corrcoef(a[v, j], b[v, j])[0, 1]) if np.std(a[v, j]) > 0 else 0.0,
-                          float(np.std(a[v, j]) / np.std(b[v, j]))) for j, ch in enumerate(AXLES)}
-    return out
+#: measured (correlation, RMS ratio of the case's force minus its twin's / truth) where the paired reading
+#: falls short, with a reason
+PAIRED_SHORT = {
+    (AMPLITUDE, "bump_rear_empty", "front_N"): (
+        (0.62, 1.18), "7 N band RMS of hidden friction against an estimate's sd of 18-20 N"),
+    (AMPLITUDE, "bump_front_empty", "front_N"): (
+        (0.92, 1.34), "the case's calibration trades more than the twin's (sprung mass -9 % against -4 %, the "
+        "wheel rates -10 % against -5 %): the pair is not the hidden force alone"),
+    (AMPLITUDE, "bump_front_empty", "rear_N"): (
+        (0.86, 1.02), "the same calibration trade, on the axle with the intact dampers"),
+}
 
 
 @pytest.fixture(scope="module")
 def fitted():
-    """One finder fit per case (form, drive, calibration on or off), reused by every test."""
+    """One finder fit per case (form, drive, calibration on or off), reused by every test: the finder, the
+    drive's force, the hidden force per axle, the band figures and the
+    :class:`~benchmarks.bench_missing_force.FamilyFit`."""
     cache: dict[tuple[str, str, bool], tuple] = {}
 
     def get(form_name: str, drive: str = DRIVES[0], calibrate: bool = True):
         key = (form_name, drive, calibrate)
         if key not in cache:
-            f, d, hidden = _fit(form_name, drive, calibrate)
-            cache[key] = (f, d, hidden, _figures(d, hidden))
+            fit = BMF.family_fit(family.FORMS[form_name], drive, SEED, calibrate)
+            cache[key] = (fit.finder, fit.force, fit.hidden, BMF.band_figures(fit), fit)
         return cache[key]
     return get
 
 
-def _cases():
+def _cases(short_of: dict):
+    """Every (form, drive, axle), those in ``short_of`` xfail (strict) with their measured figures and reason."""
     for form in FORMS:
         for drive in DRIVES:
             for ch in AXLES:
-                short = SHORT.get((form, drive, ch))
+                short = short_of.get((form, drive, ch))
                 marks: list = []
                 if short is not None:
                     (corr, ratio), why = short
@@ -147,10 +136,34 @@ def _cases():
                 yield pytest.param(form, drive, ch, marks=marks, id=f"{form}-{drive}-{ch}")
 
 
-@pytest.mark.parametrize(("form", "drive", "channel"), list(_cases()))
+@pytest.mark.parametrize(("form", "drive", "channel"), list(_cases(SHORT)))
 def test_force_the_base_model_lacks_matches_the_hidden_force_in_the_body_mode_band(fitted, form, drive, channel):
     corr, ratio = fitted(form, drive)[3]["base_total"][channel]
-    assert corr >= MIN_CORRELATION and abs(ratio - 1.0) <= RMS_TOLERANCE, (corr, ratio)
+    assert BMF.met(corr, ratio), (corr, ratio)
+
+
+@pytest.mark.parametrize(("form", "drive", "channel"), list(_cases(PAIRED_SHORT)))
+def test_paired_with_its_structure_twin_the_estimate_reads_the_hidden_force(fitted, form, drive, channel):
+    """Not the issue's target (above, unchanged): what the hidden physics adds to the force the base model lacks,
+    the case's minus its structure twin's (the same car, biases and noise, the physics off), meets the issue's
+    figures, so the shortfalls above are the twin's force, not the estimate's reading of the physics."""
+    assert family.structure_twin(family.FORMS[form]).name == TWIN
+    p = BMF.paired_figures(fitted(form, drive)[4], fitted(TWIN, drive)[4])[channel]
+    assert BMF.met(p["corr"], p["rms_ratio"]), p
+
+
+def test_the_structure_twin_lacks_a_force_against_the_motion_on_the_oil_empty_axle(fitted):
+    """Why the amplitude pairs miss the target: with the physics off, the generator's oil-empty damper is weaker
+    than the vehicle file's (the twin's calibration reads its scale below 0.9: measured 0.88 rear, 0.83 front),
+    so on the oil-empty axle the base model lacks a force against the motion, anti-correlated with the amplitude
+    form's hidden friction (measured -0.90 / -0.84) and at least 0.8 x its band RMS (0.94 / 2.10)."""
+    for drive, ch in EMPTY_AXLE.items():
+        twin = fitted(TWIN, drive)[4]
+        p = BMF.paired_figures(fitted(AMPLITUDE, drive)[4], twin)[ch]
+        assert p["twin_corr_with_hidden"] <= -0.8 and p["twin_rms_over_hidden"] >= 0.8, (drive, p)
+        (scale,) = [e["value"] for e in twin.finder.report()["calibration"]
+                    if e["param"] == "damper_measured_empty" and e["where"] == ch.split("_")[0]]
+        assert scale < 0.9, (drive, scale)
 
 
 #: (form, axle) whose calibration corner part falls short of the mechanism test below, measured, with why
@@ -198,9 +211,9 @@ def test_without_calibration_the_estimate_follows_the_hidden_viscous_force(fitte
     the calibration and the estimate's floor, not from the grid, the sign convention or the axle sums;
     and with nothing calibrated the calibration's corner and body parts are zero: the base-model total is
     the estimate."""
-    _, d, _, fig = fitted("viscous/linear", calibrate=False)
+    _, d, _, fig, _ = fitted("viscous/linear", calibrate=False)
     corr, ratio = fig["estimate"]["rear_N"]
-    assert corr >= 0.85 and abs(ratio - 1.0) <= RMS_TOLERANCE, (corr, ratio)
+    assert corr >= 0.85 and abs(ratio - 1.0) <= BMF.TARGETS["band_rms_ratio_within"], (corr, ratio)
     assert d.calibration is not None and not np.any(d.calibration)
     assert d.body is not None and not np.any(d.body)
     np.testing.assert_array_equal(d.base_total, d.est.force)
@@ -210,7 +223,7 @@ def test_the_calibrations_part_is_written_beside_the_missing_force(fitted, tmp_p
     """CSV (the interface's seven columns first, then the parts), JSON ``per_drive`` keys and the loop
     plot; the re-evaluated calibrated force reproduces the kernel's own along the run; the base-model total
     is the corner part, the body part and the estimate."""
-    f, d, _, _ = fitted("viscous/linear")
+    f, d, _, _, _ = fitted("viscous/linear")
     out = mfr.write(f, tmp_path, "case", plots=True)
     (name,) = out["per_drive"]
     entry = out["per_drive"][name]

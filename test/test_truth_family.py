@@ -430,6 +430,27 @@ def test_hidden_force_is_zero_when_nothing_is_hidden():
             assert np.all(r.hidden == 0.0), (name, lbl)
 
 
+def test_a_forms_structure_twin_draws_its_drives_with_the_physics_off():
+    """``structure_twin``: the structure-only form whose case is the physics form's with its hidden physics
+    off (the same car, gyro biases and noise): the physics form with ``TruthHidden()`` gives the twin's
+    drives to the bit; a form of another car or friction has another twin (or none)."""
+    amp = family.FORMS["amplitude/peak_saturating_axle"]
+    assert family.structure_twin(amp) is family.FORMS["structure/nominal"]
+    drive = family.CASE_DRIVES[2:3]   # the rear-empty bump crossing
+    (_, off), = family.make_case(replace(amp, hidden=ind.TruthHidden()), 2, drives=drive)
+    (_, twin), = family.make_case(family.FORMS["structure/nominal"], 2, drives=drive)
+    (_, on), = family.make_case(amp, 2, drives=drive)
+    for a in ("gyro", "accel"):
+        assert np.array_equal(getattr(off.imu, a), getattr(twin.imu, a))
+        assert not np.array_equal(getattr(on.imu, a), getattr(twin.imu, a))
+    assert family.structure_twin(family.FORMS["amplitude/rms_power_separate"]) is \
+        family.FORMS["structure/car_within_priors"]
+    assert family.structure_twin(family.FORMS["lateral/other_structure"]) is None
+    for f in family.forms():
+        if f.effect == "none":
+            assert family.structure_twin(f) is f, f.name
+
+
 def test_hidden_force_of_viscous_and_gas_forms_is_their_formula():
     r = family.case_truth(family.FORMS["viscous/linear"], 1, "bump_rear_empty")
     c = np.array([250.0, 250.0, 300.0, 300.0])

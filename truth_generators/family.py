@@ -17,6 +17,7 @@ Public API::
     CASE_DRIVES: the six drives of a case (bump crossing and sine steer; intact, front-empty, rear-empty)
     make_case(form, seed, gyro_noise_deg_s=0.05, drives=CASE_DRIVES) -> list[(label, TestDrive)]
     case_truth(form, seed, label) -> TruthResult     noise-free truth of one case drive (hidden force exposed)
+    structure_twin(form) -> GeneratorForm | None     the structure-only form: form's drives, its physics off
     bump_crossing(form, seed, oil, speed_kmh, height_m, gyro_noise_deg_s=0.1, car_band=None) -> TestDrive
 
 Every difference of a form from the product's model is in its ``description`` and in
@@ -507,6 +508,23 @@ def forms(split: str | None = None) -> list[GeneratorForm]:
     if split is not None and split not in SPLITS:
         raise ValueError(f"split must be one of {SPLITS}, got {split!r}")
     return [f for f in FORMS.values() if split is None or f.split == split]
+
+
+def _structure(form: GeneratorForm) -> tuple:
+    """What a form's drives are drawn with besides its hidden physics: car band and changes, friction, integrator
+    and step (a form's seed draws the car, the sensor's biases and noise from these alone, :func:`make_case`)."""
+    return (form.car_band, sorted(form.car_changes.items()), form.friction, form.integrator, form.step_s)
+
+
+def structure_twin(form: GeneratorForm) -> GeneratorForm | None:
+    """The structure-only form (effect ``none``) whose case of a seed is ``form``'s case of that seed with the
+    hidden physics off and the road recorded right: the same car, friction, integrator and step, so the same
+    gyro biases and sensor noise. What it leaves held out, or the force the model lacks on it, is what the
+    structure and the values of ``form``'s case leave without its physics. None when no structure-only form
+    of the family shares ``form``'s structure (e.g. ``lateral/other_structure``)."""
+    key = _structure(form)
+    return next((f for f in FORMS.values() if f.effect == "none" and f.recorded_road_scale == 1.0
+                 and _structure(f) == key), None)
 
 
 def maneuver(kind: str) -> TruthManeuver:
