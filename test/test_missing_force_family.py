@@ -117,7 +117,8 @@ def fitted():
         key = (form_name, drive, calibrate)
         if key not in cache:
             fit = BMF.family_fit(family.FORMS[form_name], drive, SEED, calibrate)
-            cache[key] = (fit.finder, fit.force, fit.hidden, BMF.band_figures(fit), fit)
+            figures = BMF.band_figures(fit) if np.any(fit.hidden) else None   # a structure twin hides nothing
+            cache[key] = (fit.finder, fit.force, fit.hidden, figures, fit)
         return cache[key]
     return get
 
