@@ -163,11 +163,10 @@ def run_family(seed: int = 1, forms=FAMILY_FORMS, drives=FAMILY_DRIVES) -> list[
                     twins[key] = family_fit(twin_form, drive, seed)
                 paired = paired_figures(case, twins[key])
             dt = float(case.force.est.t[1] - case.force.est.t[0])
-            v = case.force.est.valid
+            hidden_band = mf.band_passed(case.hidden, dt)[case.force.est.valid]
             for j, ch in enumerate(AXLES):
                 corr, ratio = fig["base_total"][ch]
-                row = {"form": name, "drive": drive, "axle": ch,
-                       "hidden_band_rms_N": float(np.std(mf.band_passed(case.hidden, dt)[v, j])),
+                row = {"form": name, "drive": drive, "axle": ch, "hidden_band_rms_N": float(np.std(hidden_band[:, j])),
                        "base_total": {"corr": corr, "rms_ratio": ratio, "met": met(corr, ratio)}}
                 if paired is not None:
                     p = paired[ch]
