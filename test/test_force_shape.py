@@ -1286,6 +1286,52 @@ def test_a_learned_term_is_extended_by_the_dependences_the_residual_it_leaves_ad
     assert cfg["fit.extend_learned"] is True
 
 
+def test_a_named_learned_term_is_offered_on_the_other_axle_for_the_fit_to_size():
+    """:func:`force_shape.other_axle_extended`: a named learned term whose later regression adds nothing stable is
+    offered with each law-family dependence also on the other axle, at the shape the design holds (one column per
+    key: its shapes held), the added coefficient at 0 and the old ones as fitted: the fit sizes it, not the
+    regression's share at the offer (a small rear gas charge the calibration took up, gas/unequal_axle_charges #2).
+    A dependence of no law family is not mirrored; one on both axles already gives nothing to offer."""
+    d = _design(seed=4, noise=0.5)
+    held = [c for c in d.columns if c.feature != "velocity_beyond_knee" or c.shape == 0.2]   # the knee held
+    design = fs.Design(d.X[:, [d.columns.index(c) for c in held]], d.y, d.groups, held)
+    keys = [c.key for c in held]
+    rear = held[keys.index(("velocity_beyond_knee", "rear"))]
+    front = held[keys.index(("velocity_beyond_knee", "front"))]
+    lawless = next(c for c in held if c.feature not in fs.LAW_OF and c.axle == "rear")
+    old = fs.Selection({rear.key: 0.8, lawless.key: 0.7}, [rear, lawless], np.array([2.0, 0.5]),
+                       np.array([0.8, 0.2]), 24)
+    alt = fs.other_axle_extended(old, np.array([2.2, 0.4]), design)
+    assert alt is not None and alt.stable == [rear, lawless, front]   # the front at the rear's knee, 0.2 m/s
+    np.testing.assert_array_equal(alt.coef, [2.2, 0.4, 0.0])
+    assert alt.frequency == old.frequency
+    assert fs.other_axle_extended(alt, alt.coef, design) is None   # on both axles already
+    only_lawless = fs.Selection({lawless.key: 0.9}, [lawless], np.array([1.0]), np.array([1.0]), 24)
+    assert fs.other_axle_extended(only_lawless, np.array([1.0]), design) is None
+    # on as shipped since the family's cases with a learned term ran with it (benchmarks/RESULTS.md, 2026-12-07)
+    assert fs.settings()["fit.other_axle_extends"] is True
+
+
+def test_an_axle_the_fit_added_keeps_its_place_only_with_its_share_of_the_fitted_force():
+    """:func:`force_shape.fitted_shares`: the extension's coefficients as fitted and each column's share of the
+    fitted force's variance; an added column (after the first ``n_old``) below ``selection.min_share`` of it
+    withdraws the offer, as :func:`force_shape.select` leaves such a dependence out."""
+    d = _design(seed=4, noise=0.5)
+    keys = [c.key for c in d.columns]
+    rear = d.columns[keys.index(("deflection", "rear"))]
+    front = d.columns[keys.index(("deflection", "front"))]
+    sel = fs.Selection({rear.key: 0.8}, [rear, front], np.array([2.0, 0.0]), np.array([1.0, 0.0]), 24)
+    sized = fs.fitted_shares(sel, np.array([2.0, 1.0]), d, 1)
+    assert sized is not None
+    np.testing.assert_array_equal(sized.coef, [2.0, 1.0])
+    contrib = d.X[:, [keys.index(rear.key), keys.index(front.key)]] * sized.coef
+    share = contrib.var(axis=0) / contrib.sum(axis=1).var()
+    np.testing.assert_allclose(sized.share, share / share.sum())
+    assert 0.05 < sized.share[1] < 0.5
+    assert fs.fitted_shares(sel, np.array([2.0, 0.2]), d, 1) is None   # about 1 % of the force: withdrawn
+    assert fs.fitted_shares(sel, np.array([0.2, 2.0]), d, 2) is not None   # nothing added: no share asked
+
+
 def test_the_forms_of_a_stable_law_family_are_offered_to_the_fit_with_their_shapes_and_coefficients():
     """:func:`force_shape.law_members`: a stable dependence of a law family is offered replaced by each other
     member of the family on its axle that a resample chose (with ``fit.law_members_whole_family`` off; on, by

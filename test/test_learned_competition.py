@@ -164,3 +164,53 @@ def test_the_form_of_a_stable_law_family_the_criterion_prefers_is_the_trial(monk
     f, (fit, kept), first = run(bics)
     assert fit is first and kept is sel and f.force_shape_[-1]["law_members"]["kept"] == ["bump_damping:front",
                                                                                           "deflection_velocity:rear"]
+
+
+def test_a_named_learned_term_is_offered_on_the_other_axle_when_its_residual_adds_nothing(monkeypatch):
+    """``fit.other_axle_extends`` (finder ``_extension_trial``): a named learned term (a valve above a knee at
+    the rear) whose later regression finds nothing stable is offered with the same feature on the front at its
+    knee, the front coefficient starting at 0 for the fit to size; the fitted front keeps its place only with
+    ``selection.min_share`` of the fitted force, else the offer is withdrawn (recorded either way). Off, nothing
+    is offered."""
+    cols = [force_shape.Column("velocity_beyond_knee", "rear", 0.2),
+            force_shape.Column("velocity_beyond_knee", "front", 0.2), force_shape.Column("deflection", "front")]
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(400, len(cols)))
+    design = force_shape.Design(X, 0.5 * X[:, 1] + rng.normal(0.0, 0.1, 400), np.repeat(np.arange(4), 100), cols)
+    old = force_shape.Selection({cols[0].key: 0.9}, cols[:1], np.array([2.0]), np.array([1.0]), 24)
+    cand = force_shape.learned_candidate(old, progressive=False)
+    cur = SimpleNamespace(structure=Structure([cand]), x=Structure([cand]).neutral())
+    cur.x[cur.structure.labels().index((force_shape.TERM, "velocity_beyond_knee_rear"))] = 2.0
+
+    def run(front_fitted: float, on: bool = True):
+        f = fm.DiscrepancyFinder()
+        f.learned_selection_, f.force_shape_ = old, [{"step": 1}]
+
+        def no_stable(ev, c, step, shapes=None):
+            f.shape_design_ = design
+            return None
+        monkeypatch.setattr(f, "_shape_selection", no_stable)
+
+        def fitted(ev, st, x0, idx, max_nfev):
+            x = np.array(x0, float)
+            x[st.labels().index((force_shape.TERM, "velocity_beyond_knee_front"))] = front_fitted
+            return SimpleNamespace(structure=st, x=x)
+        monkeypatch.setattr(fm, "fit_structure", fitted)
+        cfg = {**force_shape.settings(), "fit.other_axle_extends": on}
+        monkeypatch.setattr(force_shape, "settings", lambda: cfg)
+        return f, f._extension_trial(SimpleNamespace(cases=range(4)), cur, 2)
+
+    f, trial = run(0.5)
+    assert trial is not None and trial[0].add == (force_shape.TERM,)
+    assert [c.key for c in f.extension_selection_.stable] == [cols[0].key, cols[1].key]
+    np.testing.assert_allclose(f.extension_selection_.coef, [2.0, 0.5])
+    rec = f.force_shape_[-1]["extends"]
+    assert rec["how"] == "other_axle" and rec["added"] == ["velocity_beyond_knee:front"]
+    assert rec["fitted_coefficients"] == {"velocity_beyond_knee:rear": 2.0, "velocity_beyond_knee:front": 0.5}
+    assert list(rec["fitted_shares"]) == list(rec["fitted_coefficients"])
+    assert rec["fitted_shares"]["velocity_beyond_knee:front"] >= force_shape.settings()["selection.min_share"]
+    assert rec["description"] == f.extension_selection_.description() and "both axles" in rec["description"]
+    f, trial = run(0.02)   # a front of about 0.01 % of the fitted force: withdrawn
+    assert trial is None and f.force_shape_[-1]["extends"]["offered"] is False
+    f, trial = run(0.5, on=False)
+    assert trial is None and "extends" not in f.force_shape_[-1]

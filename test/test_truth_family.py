@@ -311,7 +311,7 @@ def test_existing_forms_keep_their_split_and_their_truth():
                    "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
                    "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
                    "gas/isothermal_charge_front", "gas/unequal_axle_charges", "unlisted/rising_rate_linkage",
-                   "unlisted/bypass_zone_rear", "unlisted/bypass_zone_front"}
+                   "unlisted/bypass_zone_rear", "unlisted/bypass_zone_front", "unlisted/rising_rate_front_led"}
     assert set(family.FORMS) - before == set(UNLISTED) | added_later
     assert all(family.split_of(n) == "held_out" for n in added_later)
     off = ind.TruthHidden()
@@ -345,16 +345,17 @@ def test_unlisted_forms_are_held_out_and_build_their_drives():
     assert "added 2026-11-27 (issue 26)" in text
     assert "added 2026-11-28 (issue 26)" in text
     assert "added 2026-11-29 (issue 26)" in text
-    assert doc["held_out"][-12:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
+    assert doc["held_out"][-13:] == ["road/bump_recorded_low", "gas/polytropic_charge_rear",   # appended after
                                      "unlisted/bump_stop_exponential_front",
                                      "unlisted/hydraulic_compression_stop_rear", "unlisted/creep_friction",
                                      "unlisted/hydraulic_rebound_stop_front", "unlisted/position_sensitive_damper",
                                      "gas/isothermal_charge_front", "gas/unequal_axle_charges",
                                      "unlisted/rising_rate_linkage", "unlisted/bypass_zone_rear",
-                                     "unlisted/bypass_zone_front"]
+                                     "unlisted/bypass_zone_front", "unlisted/rising_rate_front_led"]
     assert "added 2026-12-02 (issue 26)" in text and "added 2026-12-06 (issue 26)" in text
     assert "added 2026-12-01 (issues 24 and 26)" in text and "added 2026-12-01 (issue 24)" in text
-    assert doc["held_out"][-24:-12] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
+    assert "added 2026-12-07 (issue 24)" in text
+    assert doc["held_out"][-25:-13] == ["unlisted/load_friction", "unlisted/damper_valve_stop_rear",
                                     "unlisted/load_friction_front", "unlisted/position_friction",
                                     "unlisted/viscoelastic_bushing", "unlisted/bushing_two_branch_front",
                                     "unlisted/progressive_spring_rear", "unlisted/air_assist_front",
@@ -741,6 +742,29 @@ def test_the_rising_rate_form_is_an_even_spring_law_on_both_axles():
         a, b = family.case_truth(form, 1, lbl), family.case_truth(nominal, 1, lbl)
         best = max(best, float(np.degrees(np.sqrt(np.mean((a.gyro[:, :2] - b.gyro[:, :2]) ** 2, axis=0))).max()))
     assert best >= 3 * 0.05, best
+
+
+def test_the_front_led_rising_rate_form_carries_a_small_rear_part_of_the_same_law():
+    """``unlisted/rising_rate_front_led`` (held out, added 2026-12-07 before any run of the finder on it): the even
+    spring law of ``unlisted/rising_rate_linkage`` on both axles, the rear's k2 a quarter of the front's (140000 /
+    35000 N/m^2: +224 / +56 N at 40 mm either way, as its description states); on the bump crossing the hidden
+    force is that law at every corner, the rear's far smaller, yet the rear-empty bump crossing's pitch rate moves
+    by more than the cases' gyro noise against the same form without the rear part."""
+    form = family.FORMS["unlisted/rising_rate_front_led"]
+    assert form.split == "held_out" and form.effect == "unlisted_force" and form.expect == ("unlisted_force",)
+    assert form.leading == family.FORMS["unlisted/rising_rate_linkage"].leading
+    assert form.hidden.rising_rate_N_m2 == (140000.0, 35000.0)
+    row = np.zeros(ind.NW)
+    for k2, at40 in ((140000.0, 224.0), (35000.0, 56.0)):
+        row[ind.WRR] = k2
+        assert ind._hidden_springs(0.04, row) == pytest.approx(at40) == ind._hidden_springs(-0.04, row)
+    tr = family.case_truth(form, 1, "bump_intact")
+    for c, k2 in enumerate((140000.0,) * 2 + (35000.0,) * 2):
+        np.testing.assert_allclose(tr.hidden[:, c], k2 * tr.deflection[:, c] ** 2, atol=1e-9)
+    assert tr.hidden[:, 2:].max() < 0.5 * tr.hidden[:, :2].max()
+    front_only = dataclasses.replace(form, hidden=dataclasses.replace(form.hidden, rising_rate_N_m2=(140000.0, 0.0)))
+    a, b = family.case_truth(form, 1, "bump_rear_empty"), family.case_truth(front_only, 1, "bump_rear_empty")
+    assert float(np.degrees(np.sqrt(np.mean((a.gyro[:, 1] - b.gyro[:, 1]) ** 2)))) > 0.05
 
 
 def test_the_exponential_bump_stop_form_stiffens_beyond_its_gap_at_the_front():

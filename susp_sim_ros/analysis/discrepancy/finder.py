@@ -1163,14 +1163,23 @@ class DiscrepancyFinder:
         x_term = cur.structure.part(cur.x, term)
         held = {p.name: float(v) for p, v in zip(cand0.params, x_term) if p.shape and p.name in force_shape.HELD_SHAPES}
         sel = self._shape_selection(ev, cur, step, shapes=held)
-        if sel is None or not sel.stable or sel.input_led:
+        if sel is not None and sel.input_led:
             return None
-        merged = force_shape.extended(old, x_term[:len(old.stable)], sel.physics(), self.shape_design_)
+        fitted = x_term[:len(old.stable)]
+        merged = force_shape.extended(old, fitted, sel.physics(), self.shape_design_) \
+            if sel is not None and sel.stable else None
+        how = "stable_dependences"
+        if merged is None and force_shape.settings()["fit.other_axle_extends"]:
+            merged, how = force_shape.other_axle_extended(old, fitted, self.shape_design_), "other_axle"
         if merged is None:
             return None
-        self.force_shape_[-1]["extends"] = {"dependences": merged.dependences,
-                                            "added": [f"{c.feature}:{c.axle}" for c in merged.stable[len(old.stable):]],
-                                            "description": merged.description()}
+        record: dict[str, object] = {"dependences": merged.dependences, "how": how,
+                  "added": [f"{c.feature}:{c.axle}" for c in merged.stable[len(old.stable):]],
+                  "description": merged.description()}
+        if sel is not None:
+            self.force_shape_[-1]["extends"] = record
+        else:
+            self.force_shape_.append({"step": step, "extends": record})
         cand = force_shape.learned_candidate(merged, progressive=False)
         st = cur.structure.without(term).with_(cand)
         x0 = st.embed(cur.structure, cur.x)   # every value as fitted, the added ones at the regression's
@@ -1181,6 +1190,16 @@ class DiscrepancyFinder:
             if (term, c.coefficient) not in had:
                 x0[j] = float(np.clip(v, lo[j], hi[j]))
         fit = fit_structure(ev, st, x0, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
+        if how == "other_axle":   # sized by the fit: the added axle must carry its share of the fitted force
+            coef = st.part(fit.x, term)[:len(merged.stable)]
+            sized = force_shape.fitted_shares(merged, coef, self.shape_design_, len(old.stable))
+            record["fitted_coefficients"] = {f"{c.feature}:{c.axle}": float(v) for c, v in zip(merged.stable, coef)}
+            if sized is None:
+                record["offered"] = False
+                return None
+            merged = sized
+            record["fitted_shares"] = {f"{c.feature}:{c.axle}": float(q) for c, q in zip(merged.stable, merged.share)}
+            record["description"] = merged.description()
         if force_shape.spring_law(merged):
             fit = self._with_progressive_part(ev, fit, merged)
         self.extension_selection_ = merged

@@ -757,6 +757,53 @@ def extended(old: Selection, fitted: np.ndarray, new: Selection, design: Design,
     return Selection(frequency, cols, coef, share, old.resamples, law_frequency, _kept(old.by_law + new.by_law, cols))
 
 
+def other_axle_extended(old: Selection, fitted: np.ndarray, design: Design) -> Selection | None:
+    """The learned term's selection ``old`` (its coefficients as fitted: ``fitted``) with each of its
+    law-family dependences (:data:`LAW_OF`) also on the other axle, at the shape the term holds (``design``, the
+    regression against the residual the term leaves with its shapes held, has one column per key), the added
+    coefficients starting at 0, for the fit to size (``fit.other_axle_extends``; :func:`fitted_shares` then
+    applies ``selection.min_share`` to the fitted force). Not the regression's share at the offer: the residual
+    it reads is the one the calibration left with the other axle's force absent, and a calibration value of
+    that axle (its wheel rate, its oil-empty damper) has taken up what it could of that force, which only a fit
+    that frees both can give back. Why, in physical terms: the two axles' dampers, springs and stops are most
+    often of one design (:func:`other_axle`), and a force that is smaller on one axle (a twin-tube's low gas
+    charge beside a monotube's) stays below the stability selection's reach there. None when nothing is added,
+    or when listed terms would stand for every dependence of the result."""
+    have = {c.key for c in old.stable}
+    by_key = {c.key: c for c in design.columns}
+    added: list[Column] = []
+    for c in old.stable:
+        if law_key(c.key)[0] not in LAW_FAMILIES or c.axle not in AXLES:
+            continue
+        key = (c.feature, next(a for a in AXLES if a != c.axle))
+        if key in have or key not in by_key:
+            continue
+        added.append(by_key[key])
+        have.add(key)
+    if not added:
+        return None
+    cols = list(old.stable) + added
+    coef = np.concatenate([np.asarray(fitted, float), np.zeros(len(added))])
+    alt = Selection(old.frequency, cols, coef, np.concatenate([old.share, np.zeros(len(added))]), old.resamples,
+                    old.law_frequency, old.by_law)
+    return None if alt.listed_rivals() else alt
+
+
+def fitted_shares(sel: Selection, fitted: np.ndarray, design: Design, n_old: int,
+                  cfg: dict | None = None) -> Selection | None:
+    """``sel`` with its coefficients as fitted (``fitted``, in ``sel.stable`` order) and each column's share of
+    the fitted force's variance over ``design``'s rows (:func:`_shares`); None when a column after the first
+    ``n_old`` (those an extension added) carries less than ``selection.min_share`` of it, as :func:`select`
+    leaves such a dependence out."""
+    cfg = settings() if cfg is None else cfg
+    by_key = {c.key: j for j, c in enumerate(design.columns)}
+    coef = np.asarray(fitted, float)
+    share = _shares(design.X[:, [by_key[c.key] for c in sel.stable]], coef)
+    if (share[n_old:] < float(cfg["selection.min_share"])).any():
+        return None
+    return Selection(sel.frequency, list(sel.stable), coef, share, sel.resamples, sel.law_frequency, sel.by_law)
+
+
 def law_keys(sel: Selection) -> list[tuple[str, str]]:
     """The stable dependences of ``sel`` whose feature belongs to a law family (:data:`LAW_OF`: a spring,
     damping, friction or roll form of one axle), in the selection's order: those whose form the fit may
