@@ -1173,9 +1173,9 @@ class DiscrepancyFinder:
             merged, how = force_shape.other_axle_extended(old, fitted, self.shape_design_), "other_axle"
         if merged is None:
             return None
-        record: dict[str, object] = {"dependences": merged.dependences, "how": how,
-                  "added": [f"{c.feature}:{c.axle}" for c in merged.stable[len(old.stable):]],
-                  "description": merged.description()}
+        record: dict[str, object] = {
+            "dependences": merged.dependences, "how": how, "description": merged.description(),
+            "added": [f"{c.feature}:{c.axle}" for c in merged.stable[len(old.stable):]]}
         if sel is not None:
             self.force_shape_[-1]["extends"] = record
         else:

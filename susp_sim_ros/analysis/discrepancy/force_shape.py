@@ -757,6 +757,21 @@ def extended(old: Selection, fitted: np.ndarray, new: Selection, design: Design,
     return Selection(frequency, cols, coef, share, old.resamples, law_frequency, _kept(old.by_law + new.by_law, cols))
 
 
+def _mirrored(sel: Selection) -> list[tuple[Column, tuple[str, str]]]:
+    """Each stable dependence of ``sel`` of a law family (:data:`LAW_OF`) on one axle, with its (feature, other
+    axle) key, where ``sel`` does not hold that key already: what :func:`other_axle` and
+    :func:`other_axle_extended` offer."""
+    have = {c.key for c in sel.stable}
+    out = []
+    for c in sel.stable:
+        if law_key(c.key)[0] not in LAW_FAMILIES or c.axle not in AXLES:
+            continue
+        key = (c.feature, next(a for a in AXLES if a != c.axle))
+        if key not in have:
+            out.append((c, key))
+    return out
+
+
 def other_axle_extended(old: Selection, fitted: np.ndarray, design: Design) -> Selection | None:
     """The learned term's selection ``old`` (its coefficients as fitted: ``fitted``) with each of its
     law-family dependences (:data:`LAW_OF`) also on the other axle, at the shape the term holds (``design``, the
@@ -769,17 +784,8 @@ def other_axle_extended(old: Selection, fitted: np.ndarray, design: Design) -> S
     often of one design (:func:`other_axle`), and a force that is smaller on one axle (a twin-tube's low gas
     charge beside a monotube's) stays below the stability selection's reach there. None when nothing is added,
     or when listed terms would stand for every dependence of the result."""
-    have = {c.key for c in old.stable}
     by_key = {c.key: c for c in design.columns}
-    added: list[Column] = []
-    for c in old.stable:
-        if law_key(c.key)[0] not in LAW_FAMILIES or c.axle not in AXLES:
-            continue
-        key = (c.feature, next(a for a in AXLES if a != c.axle))
-        if key in have or key not in by_key:
-            continue
-        added.append(by_key[key])
-        have.add(key)
+    added = [by_key[key] for _, key in _mirrored(old) if key in by_key]
     if not added:
         return None
     cols = list(old.stable) + added
@@ -881,18 +887,13 @@ def other_axle(sel: Selection, design: Design, cfg: dict | None = None) -> Selec
     rear jounce bumper's 2 % at the front is no front bumper). None when nothing is added, or when listed
     terms stand for every dependence of the result (they compete already)."""
     cfg = settings() if cfg is None else cfg
-    have = {c.key for c in sel.stable}
     cols = list(sel.stable)
-    for c in sel.stable:
-        if law_key(c.key)[0] not in LAW_FAMILIES or c.axle not in AXLES:
-            continue
-        key = (c.feature, next(a for a in AXLES if a != c.axle))
+    for c, key in _mirrored(sel):
         offered = [d for d in design.columns if d.key == key]
-        if key in have or not offered:
+        if not offered:
             continue
         same = [d for d in offered if d.shape == c.shape]
         cols.append(same[0] if same else min(offered, key=lambda d: _fit_columns(design, cols + [d])[2]))
-        have.add(key)
     if len(cols) == len(sel.stable):
         return None
     A, coef, _ = _fit_columns(design, cols)
