@@ -380,6 +380,9 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         "gyro_noise_floors_over_true": {s: v / noise for s, v in gyro_floors.items()},
         "noise_floors": floors,
         "heldout_rmse_by_signal": rep.get("heldout_rmse_by_signal"),
+        # each drive held out in turn (finder._heldout): its primary gyro RMSE before and after, and after with
+        # the values only it informs at the joint fit's, deg/s; which drive a case's pooled figure comes from
+        "heldout_folds": heldout_folds(f.heldout_),
         "calibration_coverage": cov,
         "calibration": [{k: e[k] for k in ("param", "where", "unit", "prior", "value", "ci95", "informed")}
                         for e in rep.get("calibration", [])],
@@ -410,6 +413,17 @@ def _score(name: str, spec: dict, noise: float, paths: list, drive_desc: list, c
         res["iso8608_within_one_class"] = bool(est) and abs(ISO_CLASSES.index(est) -
                                                             ISO_CLASSES.index(spec["road_class"])) <= 1
     return res
+
+
+def heldout_folds(heldout: dict | None) -> list[dict]:
+    """Each drive held out in turn (``DiscrepancyFinder.heldout_``, leave-one-drive-out): its name, its primary
+    gyro RMSE before (the base model) and after (calibration and found terms refitted without it), and after with
+    the values only it informs at the joint fit's instead of calibrated on it, deg/s. Empty without held-out
+    figures."""
+    return [{"drive": fo["drive"], "before_deg_s": float(fo["rmse_before_deg_s"]),
+             "after_deg_s": float(fo["rmse_after_deg_s"]),
+             "after_joint_values_deg_s": float(fo.get("rmse_after_joint_values_deg_s", fo["rmse_after_deg_s"]))}
+            for fo in (heldout or {}).get("folds", [])]
 
 
 def _diagnostics(f) -> dict:

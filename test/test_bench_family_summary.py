@@ -178,3 +178,18 @@ def test_merge_of_any_json_is_a_family_output_or_a_clear_error(obj):
     else:
         assert out["cases"] == [] and out["by_split"] == {}
         json.dumps(out)
+
+
+def test_a_case_records_each_drive_held_out_in_turn():
+    """``heldout_folds``: each leave-one-drive-out fold's primary gyro RMSE before and after, and after with the
+    joint fit's values where the fold has them (else its after), deg/s, in the folds' order; none without held-out
+    figures (which drive a case's pooled held-out figure comes from)."""
+    folds = [{"drive": "bump_intact", "rmse_before_deg_s": 0.4, "rmse_after_deg_s": 0.06,
+              "rmse_after_joint_values_deg_s": 0.07, "params": [1.0]},
+             {"drive": "sine_rear_empty", "rmse_before_deg_s": 0.3, "rmse_after_deg_s": 0.09}]
+    rec = BENCH.heldout_folds({"folds": folds, "after_deg_s": 0.08})
+    assert rec == [{"drive": "bump_intact", "before_deg_s": 0.4, "after_deg_s": 0.06, "after_joint_values_deg_s": 0.07},
+                   {"drive": "sine_rear_empty", "before_deg_s": 0.3, "after_deg_s": 0.09,
+                    "after_joint_values_deg_s": 0.09}]
+    json.dumps(rec)
+    assert BENCH.heldout_folds(None) == [] == BENCH.heldout_folds({})
