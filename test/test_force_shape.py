@@ -72,6 +72,12 @@ def test_features_are_what_their_names_say():
     np.testing.assert_allclose(contact["rebound_contact"], np.minimum(D + gr, 0.0) / sh["deflection_ref"])
     assert np.any(D > g) and np.any((D < -gr) & (D > -g)) and np.any(np.abs(D) < gr)
     np.testing.assert_allclose(get["bump_contact"], np.maximum(D - sh["contact_gap"], 0.0) / sh["deflection_ref"])
+    # a contact's progressive part: the square of its depth beyond the gap, of the contact's sense
+    squares = {f: feature_series(f, D, V, FX, FY, DT, shape=gaps) for f in ("bump_contact_squared",
+                                                                             "rebound_contact_squared")}
+    np.testing.assert_allclose(squares["bump_contact_squared"], contact["bump_contact"] ** 2)
+    np.testing.assert_allclose(squares["rebound_contact_squared"], -contact["rebound_contact"] ** 2)
+    assert squares["bump_contact_squared"].max() > 0.0 > squares["rebound_contact_squared"].min()
     z = get["sign_velocity"]
     assert np.all(np.abs(z) <= 1.0 + 1e-12)
     moving = np.abs(V) > 0.02   # past the presliding travel the unit friction element has slid
@@ -197,7 +203,8 @@ def test_the_learned_relaxing_spring_in_the_kernel_is_its_feature_on_the_run():
     assert np.max(np.abs(res.values[:, 8] - plain["PITCH_RATE"])) > 1e-2 * np.max(np.abs(plain["PITCH_RATE"]))
 
 
-@pytest.mark.parametrize("feature", ["bump_contact", "rebound_contact"])
+@pytest.mark.parametrize("feature", ["bump_contact", "rebound_contact", "bump_contact_squared",
+                                     "rebound_contact_squared"])
 def test_the_learned_contact_spring_in_the_kernel_is_its_feature_on_the_run(feature):
     """The kernel's ``bump_contact`` / ``rebound_contact`` force along a bump crossing is its coefficient times
     the feature on the run's own deflections at the contact gap (none within it), and it changes the motion."""
@@ -827,6 +834,50 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     two_words = two.description(None, {"deflection_cubed_front": 1.0})
     assert two_words.count("progressive part") == 1
     assert two_words.index("progressive part") < two_words.index(fs.WORDS["deflection_squared"].split(",")[0])
+
+
+def test_a_contact_may_be_progressive_in_the_square_of_its_depth():
+    """``spring_law(sel, CONTACT_SQUARE)``: each stable contact's progressive part in the square of its depth
+    beyond its gap (``bump_contact_squared`` beside ``bump_contact``, ``rebound_contact_squared`` beside
+    ``rebound_contact``, once per axle and contact), nothing for an axle with only the even spring or none; the
+    candidate of that form carries those coefficients (neutral 0, the progressive step) in place of the cube, and
+    the words give each one's force at 40 mm of its sense beyond its gap (d_ref 10 mm: a coefficient of 2 N at a
+    gap of 20 mm gives 2 x (20 / 10)^2 = 8 N)."""
+    cfg = fs.settings()
+
+    def selection(*cols):
+        n = len(cols)
+        return fs.Selection({c.key: 1.0 for c in cols}, list(cols), np.full(n, 50.0), np.full(n, 1.0 / n), 24)
+
+    both = selection(fs.Column("bump_contact", "rear", 0.02), fs.Column("rebound_contact", "front", 0.01),
+                     fs.Column("deflection_squared", "front"), fs.Column("sign_velocity", "rear"))
+    assert fs.spring_law(both, fs.CONTACT_SQUARE) == [fs.Column("bump_contact_squared", "rear"),
+                                                        fs.Column("rebound_contact_squared", "front")]
+    assert fs.spring_law(both) == [fs.Column("deflection_cubed", "front"), fs.Column("deflection_cubed", "rear")]
+    assert fs.spring_law(selection(fs.Column("deflection_squared", "rear")), fs.CONTACT_SQUARE) == []
+    with pytest.raises(ValueError, match="progressive form 'quartic'"):
+        fs.spring_law(both, "quartic")
+    cand = fs.learned_candidate(both, cfg, progressive=fs.CONTACT_SQUARE)
+    names = [p.name for p in cand.params]
+    assert "deflection_cubed_rear" not in names and "deflection_cubed_front" not in names
+    k = names.index("bump_contact_squared_rear")
+    assert cand.params[k].neutral == 0.0 and cand.params[k].step == cfg["fit.progressive_step_N"]
+    assert cand.axle_of[k] == "rear" and names.index("rebound_contact_squared_front") > names.index(
+        "sign_velocity_rear")
+    full = load_variant("full")
+    model = Model("passat_b8_like", dataclasses.replace(full, terms=full.terms + (_learned(),)))
+    P = np.stack([model.params((1, 1, 1, 1))])
+    x = np.array([p.neutral for p in cand.params])
+    x[k] = 2.0
+    cand.apply(P, P.copy(), x, model)
+    np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "c_bump_contact_squared")], [0, 0, 2, 2])
+    assert [p.name for p in fs.learned_candidate(both, cfg, progressive=True).params] == [
+        p.name for p in fs.learned_candidate(both, cfg).params]
+    rear = selection(fs.Column("bump_contact", "rear", 0.02))
+    words = rear.description(np.array([80.0]), {"bump_contact_squared_rear": 2.0, "contact_gap": 0.02})
+    assert "progressive in the depth of its contact (its square: rear +8 N at 40 mm of bump)" in words
+    assert "cube" not in words
+    assert "progressive" not in rear.description(np.array([80.0]), {"contact_gap": 0.02})
 
 
 @pytest.mark.parametrize("switch", [False, True])

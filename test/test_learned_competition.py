@@ -214,3 +214,38 @@ def test_a_named_learned_term_is_offered_on_the_other_axle_when_its_residual_add
     assert trial is None and f.force_shape_[-1]["extends"]["offered"] is False
     f, trial = run(0.5, on=False)
     assert trial is None and "extends" not in f.force_shape_[-1]
+
+
+def test_a_contact_spring_s_progressive_part_competes_in_the_square_of_its_depth(monkeypatch):
+    """``fit.contact_square_competes`` (finder ``_with_progressive_part``): from the plain contact's fit, its
+    progressive part is freed as the cube of the deflection and, on, as the square of the contact's depth beyond
+    its gap; of the plain contact and the two the criterion's lowest is kept. Off, only the cube is tried; where
+    neither betters the plain contact, the plain contact stands."""
+    sel = force_shape.Selection({("bump_contact", "rear"): 0.9}, [force_shape.Column("bump_contact", "rear", 0.0)],
+                                np.array([40.0]), np.array([1.0]), 24)
+    st0 = Structure([force_shape.learned_candidate(sel, progressive=False)])
+    plain = SimpleNamespace(structure=st0, x=st0.neutral(), bic=100.0)
+    tried: list[str] = []
+
+    def run(bics: dict, on: bool):
+        tried.clear()
+
+        def fitted(ev, st, x0, idx, max_nfev):
+            labels = {name for _, name in st.labels()}
+            form = force_shape.CUBE if "deflection_cubed_rear" in labels else force_shape.CONTACT_SQUARE
+            assert ("bump_contact_squared_rear" in labels) is (form == force_shape.CONTACT_SQUARE)
+            tried.append(form)
+            return SimpleNamespace(structure=st, x=np.asarray(x0, float), bic=bics[form])
+        monkeypatch.setattr(fm, "fit_structure", fitted)
+        cfg = {**force_shape.settings(), "fit.contact_square_competes": on}
+        monkeypatch.setattr(force_shape, "settings", lambda: cfg)
+        return fm.DiscrepancyFinder()._with_progressive_part(SimpleNamespace(cases=range(3)), plain, sel)
+
+    got = run({force_shape.CUBE: 95.0, force_shape.CONTACT_SQUARE: 80.0}, on=True)
+    assert tried == [force_shape.CUBE, force_shape.CONTACT_SQUARE] and got.bic == 80.0
+    assert ("unlisted_force", "bump_contact_squared_rear") in got.structure.labels()
+    got = run({force_shape.CUBE: 95.0, force_shape.CONTACT_SQUARE: 80.0}, on=False)
+    assert tried == [force_shape.CUBE] and got.bic == 95.0
+    got = run({force_shape.CUBE: 90.0, force_shape.CONTACT_SQUARE: 99.0}, on=True)
+    assert got.bic == 90.0 and ("unlisted_force", "deflection_cubed_rear") in got.structure.labels()
+    assert run({force_shape.CUBE: 101.0, force_shape.CONTACT_SQUARE: 100.5}, on=True) is plain

@@ -88,6 +88,15 @@ with the feature vocabulary :data:`FEATURES` (interface.md, ``unlisted_force.dep
                             higher than the height it was laid out for);
                             the sum of ``bump_damping`` and ``rebound_damping`` at one coefficient, offered to
                             the regression only where ``config/force_shape.yaml`` ``library.zone_damping`` says so
+``bump_contact_squared``    (max(d - g, 0) / d_ref)^2: a contact spring's progressive part in the depth of its
+                            contact, rate 0 at the gap and growing with the squeeze (an elastomer bumper, closely
+                            wound coils coming to block one by one, a variable-pitch coil's rate rising from where
+                            its first coils close: Reimpell, Stoll and Betzler, The Automotive Chassis, 2nd ed.,
+                            2001, ch. 5): a law's shape beside a stable ``bump_contact``, not offered to the
+                            regression, fitted where ``config/force_shape.yaml``
+                            ``fit.contact_square_competes`` says so
+``rebound_contact_squared`` -(min(d + g_r, 0) / d_ref)^2: the same beside a stable ``rebound_contact``, of its
+                            sense (a rebound spring's progressive part)
 ==========================  =======================================================================
 
 Deflection ``d`` [m] from static equilibrium (positive in bump), deflection velocity ``v`` [m/s]. The
@@ -118,7 +127,7 @@ FEATURES = ("constant", "deflection", "deflection_cubed", "deflection_velocity",
             "velocity_beyond_knee", "sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force",
             "roll_deflection", "roll_free_play", "velocity_weakening", "relaxing_deflection", "bump_contact",
             "rebound_contact", "compression", "creep_damping", "bump_damping", "rebound_damping",
-            "deflection_squared", "zone_damping")
+            "deflection_squared", "zone_damping", "bump_contact_squared", "rebound_contact_squared")
 N_FEATURES = len(FEATURES)
 #: the features that are the unit Dahl element ``z`` times a level: friction-like, sliding over ``presliding``
 FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudinal_force", "compression")
@@ -127,7 +136,9 @@ WEAKENING = "velocity_weakening"
 #: a friction law's creep: a shape of a learned friction (viscous below a creep velocity), not a dependence
 CREEP = "creep_damping"
 #: features that shape a law rather than stand for a dependence (not offered to the regression)
-LAW_SHAPE_FEATURES = (WEAKENING, CREEP)
+#: a contact spring's progressive part in the depth of its contact, per contact: a shape of a learned spring law
+CONTACT_SQUARES = {"bump_contact": "bump_contact_squared", "rebound_contact": "rebound_contact_squared"}
+LAW_SHAPE_FEATURES = (WEAKENING, CREEP, *CONTACT_SQUARES.values())
 #: a friction level's growth with the compression: offered to the regression and, beside a stable plain
 #: friction level, fitted as a shape of its law too (analysis/discrepancy/force_shape.friction_law)
 LEVEL_GROWTH = "compression"
@@ -194,8 +205,12 @@ def _law_shape_feature(k, v, z, vs, vc):
 
 @njit(cache=True, inline="always")
 def _gap_or_relaxing_feature(k, d, u, oil, rel, dref, cgap, rgap):
-    """Features 13-15 and 18-21 of :data:`FEATURES` (a relaxing spring, springs and dampings met beyond a
-    contact gap, the spring of one sense in bump and rebound)."""
+    """Features 13-15 and 18-23 of :data:`FEATURES` (a relaxing spring, springs and dampings met beyond a
+    contact gap, the spring of one sense in bump and rebound, a contact's progressive part)."""
+    if k == 22:
+        return (max(d - cgap, 0.0) / dref) ** 2
+    if k == 23:
+        return -((min(d + rgap, 0.0) / dref) ** 2)
     if k == 20:
         return (d / dref) * (d / dref)
     if k == 21:
@@ -237,7 +252,8 @@ def learned_force_force(p, po, s, so, i, c):
             + (p[q + 56] * max(d - cgap, 0.0) + p[q + 60] * min(d + rgap, 0.0)) / dref
             + c[i, _C_OIL] * u * (p[q + 72] * max(d - cgap, 0.0) + p[q + 76] * max(-d - rgap, 0.0)
                                   + p[q + 84] * (max(d - cgap, 0.0) + max(-d - rgap, 0.0))) / dref
-            + p[q + 80] * x * x)
+            + p[q + 80] * x * x
+            + (p[q + 88] * max(d - cgap, 0.0) ** 2 - p[q + 92] * min(d + rgap, 0.0) ** 2) / (dref * dref))
 
 
 @njit(cache=True, inline="always")
@@ -321,7 +337,11 @@ _COEF_MEANING = {
     "deflection_squared": "force at d = +-d_ref of a spring whose rate grows through the stroke (one sense in bump "
                           "and rebound)",
     "zone_damping": "damping force at v = v_ref, d_ref beyond the contact gap on either side of static, of an "
-                    "intact damper"}
+                    "intact damper",
+    "bump_contact_squared": "progressive spring force d_ref of bump beyond the contact gap (grows with the square "
+                            "of the depth)",
+    "rebound_contact_squared": "progressive spring force d_ref of rebound beyond the contact gap (grows with the "
+                               "square of the depth)"}
 
 LEARNED_FORCE = register_term(PhysicsTerm(
     name="unlisted_force", component="axle",

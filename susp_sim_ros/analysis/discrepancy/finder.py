@@ -1223,12 +1223,25 @@ class DiscrepancyFinder:
         basin (a rebound spring beyond 15 mm: 1.12-1.15 -> 1.17-1.22x the noise held out, 2026-11-30).
         Whether the drives held out want the cube is judged once, on the final structure
         (:meth:`_final_progressive_part`), not here: at the step that offers it one drive sizes the cube,
-        true or not (a rising-rate linkage's, 2026-12-02)."""
-        cand = force_shape.learned_candidate(sel)
-        st = plain.structure.without(cand.name).with_(cand)
-        x1 = st.embed(plain.structure, plain.x)   # every value as fitted, the cube at neutral
-        freed = fit_structure(ev, st, x1, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
-        return freed if freed.bic < plain.bic else plain
+        true or not (a rising-rate linkage's, 2026-12-02).
+
+        With ``fit.contact_square_competes``, the progressive part in the square of each stable contact's depth
+        (:data:`.force_shape.CONTACT_SQUARE`) is freed from ``plain`` as well, and the three compete on the
+        criterion: a contact's own stiffening starts at its gap without a jump in rate, which the corner and a
+        cube from static read as a jump and a bend (a variable-pitch coil, an elastomer bumper)."""
+        forms = [force_shape.CUBE]
+        if force_shape.settings()["fit.contact_square_competes"] and force_shape.spring_law(
+                sel, force_shape.CONTACT_SQUARE):
+            forms.append(force_shape.CONTACT_SQUARE)
+        best = plain
+        for form in forms:
+            cand = force_shape.learned_candidate(sel, progressive=form)
+            st = plain.structure.without(cand.name).with_(cand)
+            x1 = st.embed(plain.structure, plain.x)   # every value as fitted, the progressive part at neutral
+            freed = fit_structure(ev, st, x1, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
+            if freed.bic < best.bic:
+                best = freed
+        return best
 
     def _final_progressive_part(self, ev: Evaluator, final: FitResult) -> tuple[FitResult, dict | None]:
         """With ``fit.progressive_part_held_out``: the final structure ``final`` (polished) against the same
@@ -1247,7 +1260,8 @@ class DiscrepancyFinder:
                 or term not in final.structure.names or len(ev.cases) < 2):
             return final, None
         labels = final.structure.labels()
-        if not any((term, c.coefficient) in labels for c in force_shape.spring_law(sel)):
+        if not any((term, c.coefficient) in labels for form in (force_shape.CUBE, force_shape.CONTACT_SQUARE)
+                   for c in force_shape.spring_law(sel, form)):
             return final, None
         st = final.structure.without(term).with_(force_shape.learned_candidate(sel, progressive=False))
         plain = fit_structure(ev, st, st.embed(final.structure, final.x), tuple(range(len(ev.cases))),

@@ -66,8 +66,9 @@ from itertools import combinations_with_replacement
 import numpy as np
 
 from ...model.input_force import INPUT_FEATURES, INPUT_FORCE, INPUT_KIND
-from ...model.learned_force import DAMPER_OIL, FEATURES, FRICTION_LIKE, LAW_SHAPE_FEATURES, LEARNED_FORCE, \
-    LEVEL_GROWTH, PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING, CREEP, CREEP_VELOCITY, shape_defaults
+from ...model.learned_force import CONTACT_SQUARES, DAMPER_OIL, FEATURES, FRICTION_LIKE, LAW_SHAPE_FEATURES, \
+    LEARNED_FORCE, LEVEL_GROWTH, PRESLIDING, REBOUND_RATIO, STRIBECK_VELOCITY, WEAKENING, CREEP, CREEP_VELOCITY, \
+    shape_defaults
 from ...model.layout import P_INDEX
 from ...model.params import AXLE_CORNERS, CORNER_NAMES, load_settings
 from .candidates import PHYSICS, CandParam, Candidate, axle_map
@@ -165,6 +166,9 @@ LAW_FAMILIES = frozenset(LAW_OF.values())
 #: springs met beyond a gap of bump or rebound, and a spring law's smooth progressive part (:func:`spring_law`)
 CONTACTS = ("bump_contact", "rebound_contact")
 PROGRESSIVE = "deflection_cubed"
+#: the forms of a spring law's progressive part (:func:`spring_law`): the cube of the deflection, or the square of
+#: each stable contact's depth beyond its gap (``fit.contact_square_competes``)
+CUBE, CONTACT_SQUARE = "cube", "contact_square"
 #: the bump deflection [m] at which the words give a progressive part's force: a bump crossing's (30-60 mm)
 WORDS_DEFLECTION_M = 0.04
 
@@ -540,14 +544,27 @@ def _progressive_words(sel: Selection, values: dict, axles: set[str]) -> str:
     """Words on a spring law's fitted progressive part on ``axles`` (:func:`spring_law`; ``values`` the
     fitted coefficients by name, each its force at the learned term's deflection_ref): its force at
     :data:`WORDS_DEFLECTION_M` of bump; none when not fitted."""
-    cube = (WORDS_DEFLECTION_M / float(shape_defaults()["deflection_ref"])) ** 3
+    dref = float(shape_defaults()["deflection_ref"])
+    cube = (WORDS_DEFLECTION_M / dref) ** 3
     out = []
     for c in (c for c in spring_law(sel) if c.axle in axles):
         v = values.get(c.coefficient)
         if isinstance(v, (int, float)) and v != 0.0:
             out.append(f"{c.axle} {'+' if v > 0 else '-'}{abs(float(v)) * cube:.0f} N at "
                        f"{1e3 * WORDS_DEFLECTION_M:.0f} mm")
-    return f", with a smooth progressive part (the cube of the deflection: {', '.join(out)})" if out else ""
+    words = f", with a smooth progressive part (the cube of the deflection: {', '.join(out)})" if out else ""
+    out = []
+    for c in (c for c in spring_law(sel, CONTACT_SQUARE) if c.axle in axles):
+        v = values.get(c.coefficient)
+        if isinstance(v, (int, float)) and v != 0.0:
+            bump = c.feature == CONTACT_SQUARES["bump_contact"]
+            gap = float(values.get("contact_gap" if bump else REBOUND_GAP, values.get("contact_gap", 0.0)))
+            at = abs(float(v)) * (max(WORDS_DEFLECTION_M - gap, 0.0) / dref) ** 2
+            out.append(f"{c.axle} {'+' if v > 0 else '-'}{at:.0f} N at {1e3 * WORDS_DEFLECTION_M:.0f} mm of "
+                       f"{'bump' if bump else 'rebound'}")
+    if out:
+        words += f", progressive in the depth of its contact (its square: {', '.join(out)})"
+    return words
 
 
 @dataclass(frozen=True)
@@ -964,7 +981,7 @@ def _fitted_shapes(sel: Selection, cfg: dict) -> dict[str, float]:
     return shapes
 
 
-def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool = True) -> Candidate:
+def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool | str = True) -> Candidate:
     """The learned term as a finder candidate: one coefficient [N] per stable (feature, axle), neutral 0,
     and the knee / free play it selected as a free shape value (neutral: the selected value; range: the
     config's, the plausible range of the physics, not a band around the library value the regression picked,
@@ -975,7 +992,8 @@ def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool
     after the stable ones). A stable force of the
     damper's oil (an orifice, a valve) brings its rebound ratio (:func:`damper_law`), a stable contact spring
     its smooth progressive part (:func:`spring_law`, a coefficient neutral 0 after those of the friction law;
-    left out with ``progressive`` False: the finder fits the plain contact first)."""
+    left out with ``progressive`` False: the finder fits the plain contact first; ``progressive`` a form of
+    :func:`spring_law`, that form, True its cube)."""
     cfg = settings() if cfg is None else cfg
     bound = float(cfg["fit.coefficient_bound_N"])
     params = []
@@ -995,11 +1013,12 @@ def learned_candidate(sel: Selection, cfg: dict | None = None, progressive: bool
         params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound, float(cfg[step_key]),
                                 f"coefficient of {c.feature}, {c.axle} axle: {words}"))
         axle_of.append(c.axle)
-    bending = spring_law(sel) if progressive else []
+    bending = spring_law(sel, CUBE if progressive is True else str(progressive)) if progressive else []
     for c in bending:
+        what = ("the contact spring's smooth progressive part, its force at d_ref" if c.feature == PROGRESSIVE else
+                "the contact's progressive part in the square of its depth, its force at d_ref beyond the gap")
         params.append(CandParam(c.coefficient, "N", 0.0, -bound, bound, float(cfg["fit.progressive_step_N"]),
-                                f"coefficient of {c.feature}, {c.axle} axle: the contact spring's smooth "
-                                f"progressive part, its force at d_ref"))
+                                f"coefficient of {c.feature}, {c.axle} axle: {what}"))
         axle_of.append(c.axle)
     law = law + bending
     shapes = _fitted_shapes(sel, cfg)
@@ -1082,7 +1101,7 @@ def friction_law(sel: Selection, cfg: dict) -> tuple[list[Column], dict[str, tup
     return [Column(WEAKENING, a) for a in plain] + growth + creep, shapes
 
 
-def spring_law(sel: Selection) -> list[Column]:
+def spring_law(sel: Selection, form: str = CUBE) -> list[Column]:
     """The smooth progressive part of a learned spring law, fitted beside it: on each axle where a spring met
     beyond a gap (:data:`CONTACTS`) or the spring of one sense in bump and rebound (:data:`EVEN_SPRING`) is
     stable and the cube of the deflection is not, a ``deflection_cubed`` coefficient (neutral 0). A contact
@@ -1096,7 +1115,18 @@ def spring_law(sel: Selection) -> list[Column]:
     (d / h)^2 + ...)), so the square alone reads a law that grows in bump and falls in rebound as one of one
     sense. The resamples split their votes between the members of the spring family (:data:`LAW_OF`) and the
     stable set keeps one member per axle; the fit then decides how much of the cube the drives want, under
-    every test of the trial."""
+    every test of the trial.
+
+    ``form`` :data:`CONTACT_SQUARE`: the progressive part of each stable contact in the square of its depth
+    beyond its gap instead (``bump_contact_squared``, ``rebound_contact_squared``: none on an axle with the
+    even spring only). The cube bends the law from static on both sides; a contact's own stiffening starts at
+    its gap with no jump in rate (an elastomer bumper squeezed, a variable-pitch coil whose rate rises from
+    where its first coils close), which the corner and a cube from static read as a jump and a bend."""
+    if form == CONTACT_SQUARE:
+        return list(dict.fromkeys(Column(CONTACT_SQUARES[c.feature], c.axle) for c in sel.stable
+                                  if c.feature in CONTACT_SQUARES))
+    if form != CUBE:
+        raise ValueError(f"unknown progressive form {form!r}; known: {CUBE}, {CONTACT_SQUARE}")
     stable = {c.key for c in sel.stable}
     axles = sorted({c.axle for c in sel.stable if c.feature in SMOOTH_LAW_SPRINGS},
                    key=AXLES.index)
