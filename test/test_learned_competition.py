@@ -170,8 +170,8 @@ def test_a_named_learned_term_is_offered_on_the_other_axle_when_its_residual_add
     """``fit.other_axle_extends`` (finder ``_extension_trial``): a named learned term (a valve above a knee at
     the rear) whose later regression finds nothing stable is offered with the same feature on the front at its
     knee, the front coefficient starting at 0 for the fit to size; the fitted front keeps its place only with
-    ``selection.min_share`` of the fitted force, else the offer is withdrawn (recorded either way). Off, nothing
-    is offered."""
+    ``fit.other_axle_min_share`` of the fitted force, else the offer is withdrawn (recorded either way; 0 as
+    shipped: the trial's tests judge it). Off, nothing is offered."""
     cols = [force_shape.Column("velocity_beyond_knee", "rear", 0.2),
             force_shape.Column("velocity_beyond_knee", "front", 0.2), force_shape.Column("deflection", "front")]
     rng = np.random.default_rng(3)
@@ -182,7 +182,7 @@ def test_a_named_learned_term_is_offered_on_the_other_axle_when_its_residual_add
     cur = SimpleNamespace(structure=Structure([cand]), x=Structure([cand]).neutral())
     cur.x[cur.structure.labels().index((force_shape.TERM, "velocity_beyond_knee_rear"))] = 2.0
 
-    def run(front_fitted: float, on: bool = True):
+    def run(front_fitted: float, on: bool = True, min_share: float = 0.05):
         f = fm.DiscrepancyFinder()
         f.learned_selection_, f.force_shape_ = old, [{"step": 1}]
 
@@ -196,7 +196,7 @@ def test_a_named_learned_term_is_offered_on_the_other_axle_when_its_residual_add
             x[st.labels().index((force_shape.TERM, "velocity_beyond_knee_front"))] = front_fitted
             return SimpleNamespace(structure=st, x=x)
         monkeypatch.setattr(fm, "fit_structure", fitted)
-        cfg = {**force_shape.settings(), "fit.other_axle_extends": on}
+        cfg = {**force_shape.settings(), "fit.other_axle_extends": on, "fit.other_axle_min_share": min_share}
         monkeypatch.setattr(force_shape, "settings", lambda: cfg)
         return f, f._extension_trial(SimpleNamespace(cases=range(4)), cur, 2)
 
@@ -208,10 +208,12 @@ def test_a_named_learned_term_is_offered_on_the_other_axle_when_its_residual_add
     assert rec["how"] == "other_axle" and rec["added"] == ["velocity_beyond_knee:front"]
     assert rec["fitted_coefficients"] == {"velocity_beyond_knee:rear": 2.0, "velocity_beyond_knee:front": 0.5}
     assert list(rec["fitted_shares"]) == list(rec["fitted_coefficients"])
-    assert rec["fitted_shares"]["velocity_beyond_knee:front"] >= force_shape.settings()["selection.min_share"]
+    assert rec["fitted_shares"]["velocity_beyond_knee:front"] >= 0.05
     assert rec["description"] == f.extension_selection_.description() and "both axles" in rec["description"]
     f, trial = run(0.02)   # a front of about 0.01 % of the fitted force: withdrawn
     assert trial is None and f.force_shape_[-1]["extends"]["offered"] is False
+    f, trial = run(0.02, min_share=0.0)   # the same with no share asked: offered, for the trial's tests to judge
+    assert trial is not None and "offered" not in f.force_shape_[-1]["extends"]
     f, trial = run(0.5, on=False)
     assert trial is None and "extends" not in f.force_shape_[-1]
 

@@ -794,7 +794,7 @@ def other_axle_extended(old: Selection, fitted: np.ndarray, design: Design) -> S
     law-family dependences (:data:`LAW_OF`) also on the other axle, at the shape the term holds (``design``, the
     regression against the residual the term leaves with its shapes held, has one column per key), the added
     coefficients starting at 0, for the fit to size (``fit.other_axle_extends``; :func:`fitted_shares` then
-    applies ``selection.min_share`` to the fitted force). Not the regression's share at the offer: the residual
+    applies ``fit.other_axle_min_share`` to the fitted force). Not the regression's share at the offer: the residual
     it reads is the one the calibration left with the other axle's force absent, and a calibration value of
     that axle (its wheel rate, its oil-empty damper) has taken up what it could of that force, which only a fit
     that frees both can give back. Why, in physical terms: the two axles' dampers, springs and stops are most
@@ -816,13 +816,13 @@ def fitted_shares(sel: Selection, fitted: np.ndarray, design: Design, n_old: int
                   cfg: dict | None = None) -> Selection | None:
     """``sel`` with its coefficients as fitted (``fitted``, in ``sel.stable`` order) and each column's share of
     the fitted force's variance over ``design``'s rows (:func:`_shares`); None when a column after the first
-    ``n_old`` (those an extension added) carries less than ``selection.min_share`` of it, as :func:`select`
-    leaves such a dependence out."""
+    ``n_old`` (those an extension added) carries less than ``fit.other_axle_min_share`` of it (``cfg``, default
+    ``config/force_shape.yaml``; 0 as shipped: the trial's tests judge the added axle, its share is only said)."""
     cfg = settings() if cfg is None else cfg
     by_key = {c.key: j for j, c in enumerate(design.columns)}
     coef = np.asarray(fitted, float)
     share = _shares(design.X[:, [by_key[c.key] for c in sel.stable]], coef)
-    if (share[n_old:] < float(cfg["selection.min_share"])).any():
+    if (share[n_old:] < float(cfg["fit.other_axle_min_share"])).any():
         return None
     return Selection(sel.frequency, list(sel.stable), coef, share, sel.resamples, sel.law_frequency, sel.by_law)
 
