@@ -880,6 +880,30 @@ def test_a_contact_may_be_progressive_in_the_square_of_its_depth():
     assert "progressive" not in rear.description(np.array([80.0]), {"contact_gap": 0.02})
 
 
+def test_a_contact_s_square_has_a_start_from_static():
+    """``square_from_static``: each contact's corner (coefficient c beyond gap g) replaced by the square from static
+    that meets its force at twice the gap, c d_ref / (4 g), its gap at 0 (a rebound contact's own gap where the term
+    holds one), the corner's coefficient at 0; a variable-pitch coil k2 max(d, 0)^2 read as a corner beyond 18 mm
+    starts near its truth. Nothing for a contact at static or without a fitted value."""
+    k2, g, dref = 150000.0, 0.018, 0.01   # the truth's square, the plain fit's corner, the term's d_ref
+    corner = k2 * (2 * g) ** 2 / g * dref   # the corner through the square's force at 2 g: its force at d_ref beyond g
+    sel = fs.Selection({("bump_contact", "rear"): 1.0, ("rebound_contact", "front"): 1.0},
+                       [fs.Column("bump_contact", "rear", g), fs.Column("rebound_contact", "front", 0.01)],
+                       np.array([corner, 20.0]), np.array([0.7, 0.3]), 24)
+    moved = fs.square_from_static(sel, {"bump_contact_rear": corner, "rebound_contact_front": 20.0, "contact_gap": g,
+                                        "rebound_gap": 0.01})
+    assert moved["bump_contact_squared_rear"] == pytest.approx(k2 * dref ** 2)   # 15 N at d_ref: the truth
+    assert moved["rebound_contact_squared_front"] == pytest.approx(
+        20.0 * dref / 0.04)
+    assert moved["bump_contact_rear"] == moved["rebound_contact_front"] == moved["contact_gap"] == moved[
+        "rebound_gap"] == 0.0
+    one_gap = fs.square_from_static(sel, {"bump_contact_rear": corner, "rebound_contact_front": 20.0,
+                                          "contact_gap": g})
+    assert "rebound_gap" not in one_gap and one_gap["rebound_contact_squared_front"] == pytest.approx(
+        20.0 * dref / (4 * g))
+    assert fs.square_from_static(sel, {"bump_contact_rear": corner, "contact_gap": 0.0}) == {}
+
+
 @pytest.mark.parametrize("switch", [False, True])
 def test_a_progressive_part_is_kept_where_the_final_structure_predicts_the_drives_held_out_better(monkeypatch,
                                                                                                  switch):

@@ -7,6 +7,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from susp_sim_ros.analysis.discrepancy import finder as fm
 from susp_sim_ros.analysis.discrepancy import force_shape
@@ -251,3 +252,22 @@ def test_a_contact_spring_s_progressive_part_competes_in_the_square_of_its_depth
     got = run({force_shape.CUBE: 90.0, force_shape.CONTACT_SQUARE: 99.0}, on=True)
     assert got.bic == 90.0 and ("unlisted_force", "deflection_cubed_rear") in got.structure.labels()
     assert run({force_shape.CUBE: 101.0, force_shape.CONTACT_SQUARE: 100.5}, on=True) is plain
+    # a corner well into the stroke: the square is fitted from it and from static too (square_from_static)
+    sel = force_shape.Selection({("bump_contact", "rear"): 0.9}, [force_shape.Column("bump_contact", "rear", 0.018)],
+                                np.array([40.0]), np.array([1.0]), 24)
+    st0 = Structure([force_shape.learned_candidate(sel, progressive=False)])
+    x_plain = st0.neutral()
+    x_plain[st0.labels().index((force_shape.TERM, "bump_contact_rear"))] = 40.0
+    plain = SimpleNamespace(structure=st0, x=x_plain, bic=100.0)
+    starts: list[tuple[list, np.ndarray]] = []
+
+    def fitted(ev, st, x0, idx, max_nfev):
+        starts.append((st.labels(), np.array(x0)))
+        return SimpleNamespace(structure=st, x=np.array(x0), bic=99.0 - len(starts))
+    monkeypatch.setattr(fm, "fit_structure", fitted)
+    got = fm.DiscrepancyFinder()._with_progressive_part(SimpleNamespace(cases=range(3)), plain, sel)
+    assert len(starts) == 3 and got.x is not None and got.bic == 96.0   # cube, square from the corner, from static
+    labels, x2 = starts[2]
+    at = {name: x2[j] for j, (_, name) in enumerate(labels)}
+    assert at["contact_gap"] == 0.0 and at["bump_contact_rear"] == 0.0
+    assert at["bump_contact_squared_rear"] == pytest.approx(40.0 * 0.01 / (4 * 0.018))

@@ -1226,7 +1226,8 @@ class DiscrepancyFinder:
         true or not (a rising-rate linkage's, 2026-12-02).
 
         With ``fit.contact_square_competes``, the progressive part in the square of each stable contact's depth
-        (:data:`.force_shape.CONTACT_SQUARE`) is freed from ``plain`` as well, and the three compete on the
+        (:data:`.force_shape.CONTACT_SQUARE`) is freed from ``plain`` as well, and from the square from static
+        that meets each corner at twice its gap (:func:`.force_shape.square_from_static`), and all compete on the
         criterion: a contact's own stiffening starts at its gap without a jump in rate, which the corner and a
         cube from static read as a jump and a bend (a variable-pitch coil, an elastomer bumper)."""
         forms = [force_shape.CUBE]
@@ -1238,9 +1239,20 @@ class DiscrepancyFinder:
             cand = force_shape.learned_candidate(sel, progressive=form)
             st = plain.structure.without(cand.name).with_(cand)
             x1 = st.embed(plain.structure, plain.x)   # every value as fitted, the progressive part at neutral
-            freed = fit_structure(ev, st, x1, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
-            if freed.bic < best.bic:
-                best = freed
+            starts = [x1]
+            if form == force_shape.CONTACT_SQUARE:   # and from static (force_shape.square_from_static)
+                labels = st.labels()
+                own = {name: j for j, (t, name) in enumerate(labels) if t == cand.name}
+                moved = force_shape.square_from_static(sel, {name: float(x1[j]) for name, j in own.items()})
+                if moved:
+                    x2 = x1.copy()
+                    for name, v in moved.items():
+                        x2[own[name]] = v
+                    starts.append(x2)
+            for x0 in starts:
+                freed = fit_structure(ev, st, x0, tuple(range(len(ev.cases))), max_nfev=TRIAL_NFEV)
+                if freed.bic < best.bic:
+                    best = freed
         return best
 
     def _final_progressive_part(self, ev: Evaluator, final: FitResult) -> tuple[FitResult, dict | None]:

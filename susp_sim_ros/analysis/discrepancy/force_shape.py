@@ -1133,6 +1133,29 @@ def spring_law(sel: Selection, form: str = CUBE) -> list[Column]:
     return [Column(PROGRESSIVE, a) for a in axles if (PROGRESSIVE, a) not in stable]
 
 
+def square_from_static(sel: Selection, values: dict[str, float]) -> dict[str, float]:
+    """A second start for the fit of ``sel``'s contacts progressive in the square of their depth
+    (:data:`CONTACT_SQUARE`), from the plain contacts' fitted ``values`` (by the learned candidate's parameter
+    names): each contact's gap at 0 and its corner replaced by the square from static that meets the corner's force
+    at twice its gap (c_sq = c d_ref / (4 g), the corner's coefficient c, gap g > 0). A variable-pitch coil's
+    k2 max(d, 0)^2 is read by the plain fit as a corner well into the stroke (a spring met beyond 18 mm of bump),
+    and freed from there the square stays a bend of that corner: the two are apart in the fit's landscape.
+    The values to change, by name; none when every contact is at static already."""
+    dref = float(shape_defaults()["deflection_ref"])
+    out: dict[str, float] = {}
+    for c in sel.stable:
+        if c.feature not in CONTACT_SQUARES:
+            continue
+        gap = REBOUND_GAP if c.feature in REBOUND_GAPPED and REBOUND_GAP in values else "contact_gap"
+        g = float(values.get(gap, 0.0))
+        if g <= 0.0 or c.coefficient not in values:
+            continue
+        out[Column(CONTACT_SQUARES[c.feature], c.axle).coefficient] = float(values[c.coefficient]) * dref / (4.0 * g)
+        out[c.coefficient] = 0.0
+        out[gap] = 0.0
+    return out
+
+
 def damper_law(sel: Selection, cfg: dict) -> dict[str, tuple[float, float, list[str]]]:
     """The shape of a learned force of the damper's oil (:data:`DAMPER_OIL`: an orifice, a valve), fitted
     beside its coefficients: none stable, none. Else its rebound ratio, the force in rebound over the force
