@@ -878,6 +878,10 @@ def test_a_contact_may_be_progressive_in_the_square_of_its_depth():
     assert "progressive in the depth of its contact (its square: rear +8 N at 40 mm of bump)" in words
     assert "cube" not in words
     assert "progressive" not in rear.description(np.array([80.0]), {"contact_gap": 0.02})
+    # the sense of a contact whose square carries it: its whole force at 40 mm, not its corner's sign
+    carried = rear.description(np.array([-7.0]), {"bump_contact_squared_rear": 67.0, "contact_gap": 0.022})
+    assert "(rear stiffer 100 %)" in carried
+    assert "(rear softer 100 %)" in rear.description(np.array([-7.0]), {"contact_gap": 0.022})
 
 
 def test_a_contact_s_square_has_a_start_from_static():

@@ -424,8 +424,8 @@ class Selection:
             if feature in DAMPER_OIL and REBOUND_RATIO in shapes:
                 w += f", in rebound {float(shapes[REBOUND_RATIO]):.1f}x what it gives in compression"
             more, less = SENSE[feature]
-            where = ", ".join(f"{self.stable[k].axle} {more if coef[k] > 0 else less} "
-                              f"{100 * self.share[k]:.0f} %" for k in ks)
+            senses = [more if _sense(self.stable[k], coef[k], value, shapes) > 0 else less for k in ks]
+            where = ", ".join(f"{self.stable[k].axle} {s} {100 * self.share[k]:.0f} %" for k, s in zip(ks, senses))
             if feature in SMOOTH_LAW_SPRINGS:   # the part once per axle, with the strongest spring there
                 axles_here = {self.stable[k].axle for k in ks} - worded
                 w += _progressive_words(self, shapes, axles_here)
@@ -538,6 +538,19 @@ def _friction_law_words(sel: Selection, values: dict) -> str:
 def _newtons(v: float) -> str:
     """A force [N] to the newton, a value that rounds to none without a sign ("0 N", never "-0 N")."""
     return f"{round(v):d} N"
+
+
+def _sense(c: Column, coef: float, gap: float, values: dict) -> float:
+    """The sign the words give the dependence ``c`` of fitted coefficient ``coef``: the coefficient's, or for a
+    contact with its square fitted (:data:`CONTACT_SQUARE`, in ``values`` by name) its whole force
+    :data:`WORDS_DEFLECTION_M` beyond static in its sense, beyond its ``gap`` (a corner fitted slightly negative under
+    a square that carries the contact is a stiffer contact, not a softer one)."""
+    square = values.get(Column(CONTACT_SQUARES[c.feature], c.axle).coefficient) if c.feature in CONTACT_SQUARES \
+        else None
+    if not isinstance(square, (int, float)) or square == 0.0:
+        return float(coef)
+    depth = max(WORDS_DEFLECTION_M - gap, 0.0) / float(shape_defaults()["deflection_ref"])
+    return float(coef) * depth + float(square) * depth * depth
 
 
 def _progressive_words(sel: Selection, values: dict, axles: set[str]) -> str:
