@@ -776,6 +776,24 @@ def _flat_road():
     return RoadProfile(np.array([0.0, 100.0]), np.zeros(2), np.zeros(2))
 
 
+def _selection(*cols):
+    """A selection of ``cols``, each stable, at 50 N with equal shares."""
+    n = len(cols)
+    return fs.Selection({c.key: 1.0 for c in cols}, list(cols), np.full(n, 50.0), np.full(n, 1.0 / n), 24)
+
+
+def _written(cand, k: int, value: float, coefficient: str) -> tuple[np.ndarray, np.ndarray]:
+    """The learned candidate ``cand`` applied to the ``full`` car with a learned term, its parameter ``k`` at
+    ``value`` and every other at neutral: the values it wrote to the term's ``coefficient`` (per corner) and x."""
+    full = load_variant("full")
+    model = Model("passat_b8_like", dataclasses.replace(full, terms=full.terms + (_learned(),)))
+    P = np.stack([model.params((1, 1, 1, 1))])
+    x = np.array([p.neutral for p in cand.params])
+    x[k] = value
+    cand.apply(P, P.copy(), x, model)
+    return P[0, model.term_param_slice(fs.TERM, coefficient)], x
+
+
 def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fit():
     """A stable spring met beyond a gap (bump or rebound contact) or of one sense in bump and rebound brings the
     cube of the deflection on its axle into the learned trial (force_shape.spring_law): a coefficient neutral 0
@@ -785,20 +803,17 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     or an even spring."""
     cfg = fs.settings()
 
-    def selection(*cols):
-        n = len(cols)
-        return fs.Selection({c.key: 1.0 for c in cols}, list(cols), np.full(n, 50.0), np.full(n, 1.0 / n), 24)
-
-    contact = selection(fs.Column("rebound_contact", "rear", 0.02), fs.Column("sign_velocity", "front"))
+    contact = _selection(fs.Column("rebound_contact", "rear", 0.02), fs.Column("sign_velocity", "front"))
     assert fs.spring_law(contact) == [fs.Column("deflection_cubed", "rear")]
-    assert fs.spring_law(selection(fs.Column("bump_contact", "rear", 0.0), fs.Column("deflection_cubed", "rear"))) == []
-    assert fs.spring_law(selection(fs.Column("sign_velocity", "rear"), fs.Column("deflection", "front"))) == []
-    both = selection(fs.Column("bump_contact", "front", 0.0), fs.Column("rebound_contact", "rear", 0.02))
+    assert fs.spring_law(_selection(fs.Column("bump_contact", "rear", 0.0),
+                                    fs.Column("deflection_cubed", "rear"))) == []
+    assert fs.spring_law(_selection(fs.Column("sign_velocity", "rear"), fs.Column("deflection", "front"))) == []
+    both = _selection(fs.Column("bump_contact", "front", 0.0), fs.Column("rebound_contact", "rear", 0.02))
     assert fs.spring_law(both) == [fs.Column("deflection_cubed", "front"), fs.Column("deflection_cubed", "rear")]
     # the even spring is a smooth law's first term beyond the static rate, the cube its next (a gas column)
-    even = selection(fs.Column("deflection_squared", "front"), fs.Column("sign_velocity", "rear"))
+    even = _selection(fs.Column("deflection_squared", "front"), fs.Column("sign_velocity", "rear"))
     assert fs.spring_law(even) == [fs.Column("deflection_cubed", "front")]
-    squared_and_cubed = selection(fs.Column("deflection_squared", "rear"), fs.Column("deflection_cubed", "rear"))
+    squared_and_cubed = _selection(fs.Column("deflection_squared", "rear"), fs.Column("deflection_cubed", "rear"))
     assert fs.spring_law(squared_and_cubed) == []
 
     cand = fs.learned_candidate(contact, cfg)
@@ -810,13 +825,8 @@ def test_a_learned_contact_spring_brings_its_smooth_progressive_part_into_the_fi
     cubic = cand.params[k]
     assert cubic.neutral == 0.0 and not cubic.shape and cubic.step == cfg["fit.progressive_step_N"]
     assert cand.axle_of[k] == "rear" and k in cand.gain_indices
-    full = load_variant("full")
-    model = Model("passat_b8_like", dataclasses.replace(full, terms=full.terms + (_learned(),)))
-    P = np.stack([model.params((1, 1, 1, 1))])
-    x = np.array([p.neutral for p in cand.params])
-    x[k] = 3.0
-    cand.apply(P, P.copy(), x, model)
-    np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "c_deflection_cubed")], [0, 0, 3, 3])
+    written, x = _written(cand, k, 3.0, "c_deflection_cubed")
+    np.testing.assert_array_equal(written, [0, 0, 3, 3])
     assert cand.term_params(x, None)["c_deflection_cubed"] == {"front": 0.0, "rear": 3.0}
     plain = fs.learned_candidate(contact, cfg, progressive=False)   # the finder's first stage: the contact alone
     assert [p.name for p in plain.params] == [n for n in names if n != "deflection_cubed_rear"]
@@ -845,16 +855,12 @@ def test_a_contact_may_be_progressive_in_the_square_of_its_depth():
     gap of 20 mm gives 2 x (20 / 10)^2 = 8 N)."""
     cfg = fs.settings()
 
-    def selection(*cols):
-        n = len(cols)
-        return fs.Selection({c.key: 1.0 for c in cols}, list(cols), np.full(n, 50.0), np.full(n, 1.0 / n), 24)
-
-    both = selection(fs.Column("bump_contact", "rear", 0.02), fs.Column("rebound_contact", "front", 0.01),
+    both = _selection(fs.Column("bump_contact", "rear", 0.02), fs.Column("rebound_contact", "front", 0.01),
                      fs.Column("deflection_squared", "front"), fs.Column("sign_velocity", "rear"))
     assert fs.spring_law(both, fs.CONTACT_SQUARE) == [fs.Column("bump_contact_squared", "rear"),
                                                         fs.Column("rebound_contact_squared", "front")]
     assert fs.spring_law(both) == [fs.Column("deflection_cubed", "front"), fs.Column("deflection_cubed", "rear")]
-    assert fs.spring_law(selection(fs.Column("deflection_squared", "rear")), fs.CONTACT_SQUARE) == []
+    assert fs.spring_law(_selection(fs.Column("deflection_squared", "rear")), fs.CONTACT_SQUARE) == []
     with pytest.raises(ValueError, match="progressive form 'quartic'"):
         fs.spring_law(both, "quartic")
     cand = fs.learned_candidate(both, cfg, progressive=fs.CONTACT_SQUARE)
@@ -864,16 +870,10 @@ def test_a_contact_may_be_progressive_in_the_square_of_its_depth():
     assert cand.params[k].neutral == 0.0 and cand.params[k].step == cfg["fit.progressive_step_N"]
     assert cand.axle_of[k] == "rear" and names.index("rebound_contact_squared_front") > names.index(
         "sign_velocity_rear")
-    full = load_variant("full")
-    model = Model("passat_b8_like", dataclasses.replace(full, terms=full.terms + (_learned(),)))
-    P = np.stack([model.params((1, 1, 1, 1))])
-    x = np.array([p.neutral for p in cand.params])
-    x[k] = 2.0
-    cand.apply(P, P.copy(), x, model)
-    np.testing.assert_array_equal(P[0, model.term_param_slice(fs.TERM, "c_bump_contact_squared")], [0, 0, 2, 2])
+    np.testing.assert_array_equal(_written(cand, k, 2.0, "c_bump_contact_squared")[0], [0, 0, 2, 2])
     assert [p.name for p in fs.learned_candidate(both, cfg, progressive=True).params] == [
         p.name for p in fs.learned_candidate(both, cfg).params]
-    rear = selection(fs.Column("bump_contact", "rear", 0.02))
+    rear = _selection(fs.Column("bump_contact", "rear", 0.02))
     words = rear.description(np.array([80.0]), {"bump_contact_squared_rear": 2.0, "contact_gap": 0.02})
     assert "progressive in the depth of its contact (its square: rear +8 N at 40 mm of bump)" in words
     assert "cube" not in words

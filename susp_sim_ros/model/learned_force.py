@@ -135,9 +135,9 @@ FRICTION_LIKE = ("sign_velocity", "peak_deflection", "lateral_force", "longitudi
 WEAKENING = "velocity_weakening"
 #: a friction law's creep: a shape of a learned friction (viscous below a creep velocity), not a dependence
 CREEP = "creep_damping"
-#: features that shape a law rather than stand for a dependence (not offered to the regression)
 #: a contact spring's progressive part in the depth of its contact, per contact: a shape of a learned spring law
 CONTACT_SQUARES = {"bump_contact": "bump_contact_squared", "rebound_contact": "rebound_contact_squared"}
+#: features that shape a law rather than stand for a dependence (not offered to the regression)
 LAW_SHAPE_FEATURES = (WEAKENING, CREEP, *CONTACT_SQUARES.values())
 #: a friction level's growth with the compression: offered to the regression and, beside a stable plain
 #: friction level, fitted as a shape of its law too (analysis/discrepancy/force_shape.friction_law)

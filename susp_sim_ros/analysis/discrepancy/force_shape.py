@@ -415,7 +415,7 @@ class Selection:
         for feature in self.dependences:
             ks = [k for k in np.argsort(-self.share) if self.stable[k].feature == feature]
             c = self.stable[ks[0]]
-            shape = REBOUND_GAP if feature in REBOUND_GAPPED and REBOUND_GAP in shapes else _SHAPE_OF.get(feature)
+            shape = _gap_name(feature, shapes)
             value = float(shapes[shape]) if shape in shapes else c.shape or 0.0
             rebound = float(shapes.get(REBOUND_GAP, value)) if feature == ZONE_DAMPING else value
             w = WORDS[feature].format(knee=value, gap_mm=1e3 * value, rgap_mm=1e3 * rebound, tau=value)
@@ -540,6 +540,17 @@ def _newtons(v: float) -> str:
     return f"{round(v):d} N"
 
 
+def _gap_name(feature: str, values: dict) -> str | None:
+    """The learned term's shape parameter ``feature`` is met beyond or shaped by (:data:`_SHAPE_OF`): for a feature met
+    in rebound the rebound gap where ``values`` (by name) hold one apart, else its own shape."""
+    return REBOUND_GAP if feature in REBOUND_GAPPED and REBOUND_GAP in values else _SHAPE_OF.get(feature)
+
+
+def _words_depth(gap: float) -> float:
+    """The depth beyond a contact's ``gap`` [m] at :data:`WORDS_DEFLECTION_M` from static, over d_ref (0 within it)."""
+    return max(WORDS_DEFLECTION_M - gap, 0.0) / float(shape_defaults()["deflection_ref"])
+
+
 def _sense(c: Column, coef: float, gap: float, values: dict) -> float:
     """The sign the words give the dependence ``c`` of fitted coefficient ``coef``: the coefficient's, or for a
     contact with its square fitted (:data:`CONTACT_SQUARE`, in ``values`` by name) its whole force
@@ -549,7 +560,7 @@ def _sense(c: Column, coef: float, gap: float, values: dict) -> float:
         else None
     if not isinstance(square, (int, float)) or square == 0.0:
         return float(coef)
-    depth = max(WORDS_DEFLECTION_M - gap, 0.0) / float(shape_defaults()["deflection_ref"])
+    depth = _words_depth(gap)
     return float(coef) * depth + float(square) * depth * depth
 
 
@@ -557,8 +568,7 @@ def _progressive_words(sel: Selection, values: dict, axles: set[str]) -> str:
     """Words on a spring law's fitted progressive part on ``axles`` (:func:`spring_law`; ``values`` the
     fitted coefficients by name, each its force at the learned term's deflection_ref): its force at
     :data:`WORDS_DEFLECTION_M` of bump; none when not fitted."""
-    dref = float(shape_defaults()["deflection_ref"])
-    cube = (WORDS_DEFLECTION_M / dref) ** 3
+    cube = (WORDS_DEFLECTION_M / float(shape_defaults()["deflection_ref"])) ** 3
     out = []
     for c in (c for c in spring_law(sel) if c.axle in axles):
         v = values.get(c.coefficient)
@@ -571,8 +581,8 @@ def _progressive_words(sel: Selection, values: dict, axles: set[str]) -> str:
         v = values.get(c.coefficient)
         if isinstance(v, (int, float)) and v != 0.0:
             bump = c.feature == CONTACT_SQUARES["bump_contact"]
-            gap = float(values.get("contact_gap" if bump else REBOUND_GAP, values.get("contact_gap", 0.0)))
-            at = abs(float(v)) * (max(WORDS_DEFLECTION_M - gap, 0.0) / dref) ** 2
+            gap = float(values.get(_gap_name("bump_contact" if bump else "rebound_contact", values) or "", 0.0))
+            at = abs(float(v)) * _words_depth(gap) ** 2
             out.append(f"{c.axle} {'+' if v > 0 else '-'}{at:.0f} N at {1e3 * WORDS_DEFLECTION_M:.0f} mm of "
                        f"{'bump' if bump else 'rebound'}")
     if out:
@@ -1159,7 +1169,7 @@ def square_from_static(sel: Selection, values: dict[str, float]) -> dict[str, fl
     for c in sel.stable:
         if c.feature not in CONTACT_SQUARES:
             continue
-        gap = REBOUND_GAP if c.feature in REBOUND_GAPPED and REBOUND_GAP in values else "contact_gap"
+        gap = _gap_name(c.feature, values) or "contact_gap"
         g = float(values.get(gap, 0.0))
         if g <= 0.0 or c.coefficient not in values:
             continue
